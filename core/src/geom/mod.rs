@@ -1,0 +1,260 @@
+//! Geometry: triangle meshes, point sets, volumes, bounds, adjacency, topology
+//! (components, boundary loops, genus) and load-time repair.
+
+pub mod adjacency;
+pub mod repair;
+pub mod topology;
+
+use glam::{Vec2, Vec3};
+
+pub use adjacency::Adjacency;
+pub use repair::{RepairOptions, RepairReport, Weld};
+pub use topology::{ComponentTopology, Topology};
+
+/// Axis-aligned bounding box.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Aabb {
+    pub min: Vec3,
+    pub max: Vec3,
+}
+
+impl Aabb {
+    /// The empty box (min > max); growing it by any point gives that point.
+    pub const EMPTY: Aabb = Aabb {
+        min: Vec3::splat(f32::INFINITY),
+        max: Vec3::splat(f32::NEG_INFINITY),
+    };
+
+    pub fn from_points<'a>(points: impl IntoIterator<Item = &'a Vec3>) -> Aabb {
+        points.into_iter().fold(Aabb::EMPTY, |b, p| b.grow(*p))
+    }
+
+    pub fn grow(self, p: Vec3) -> Aabb {
+        Aabb {
+            min: self.min.min(p),
+            max: self.max.max(p),
+        }
+    }
+
+    pub fn union(self, o: Aabb) -> Aabb {
+        Aabb {
+            min: self.min.min(o.min),
+            max: self.max.max(o.max),
+        }
+    }
+
+    pub fn is_empty(&self) -> bool {
+        !(self.min.x <= self.max.x && self.min.y <= self.max.y && self.min.z <= self.max.z)
+    }
+
+    pub fn center(&self) -> Vec3 {
+        (self.min + self.max) * 0.5
+    }
+
+    pub fn extent(&self) -> Vec3 {
+        if self.is_empty() {
+            Vec3::ZERO
+        } else {
+            self.max - self.min
+        }
+    }
+
+    /// Length of the diagonal; object-space tolerances are fractions of it.
+    pub fn diagonal(&self) -> f32 {
+        self.extent().length()
+    }
+
+    /// Distance from `p` to the box (0 inside): a lower bound for anything inside it.
+    pub fn distance(&self, p: Vec3) -> f32 {
+        let d = (self.min - p).max(p - self.max).max(Vec3::ZERO);
+        d.length()
+    }
+}
+
+/// A triangle mesh with optional per-vertex attributes and a per-triangle part id
+/// (OBJ objects, glTF mesh instances, builtin sub-shapes).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct TriMesh {
+    pub positions: Vec<Vec3>,
+    pub triangles: Vec<[u32; 3]>,
+    pub normals: Option<Vec<Vec3>>,
+    /// Linear RGB in 0..=1.
+    pub colors: Option<Vec<Vec3>>,
+    pub uvs: Option<Vec<Vec2>>,
+    /// One id per triangle; `None` means a single part.
+    pub parts: Option<Vec<u32>>,
+}
+
+impl TriMesh {
+    pub fn new(positions: Vec<Vec3>, triangles: Vec<[u32; 3]>) -> Self {
+        Self {
+            positions,
+            triangles,
+            ..Self::default()
+        }
+    }
+
+    pub fn bounds(&self) -> Aabb {
+        Aabb::from_points(&self.positions)
+    }
+
+    pub fn triangle(&self, t: usize) -> [Vec3; 3] {
+        self.triangles[t].map(|v| self.positions[v as usize])
+    }
+
+    pub fn triangle_area(&self, t: usize) -> f32 {
+        let [a, b, c] = self.triangle(t);
+        0.5 * (b - a).cross(c - a).length()
+    }
+
+    pub fn area(&self) -> f64 {
+        (0..self.triangles.len())
+            .map(|t| self.triangle_area(t) as f64)
+            .sum()
+    }
+
+    pub fn part(&self, t: usize) -> u32 {
+        self.parts.as_ref().map_or(0, |p| p[t])
+    }
+
+    /// Area-weighted vertex normals, for shading meshes that came without normals.
+    pub fn vertex_normals(&self) -> Vec<Vec3> {
+        let mut n = vec![Vec3::ZERO; self.positions.len()];
+        for tri in &self.triangles {
+            let [a, b, c] = tri.map(|v| self.positions[v as usize]);
+            let face = (b - a).cross(c - a);
+            for v in tri {
+                n[*v as usize] += face;
+            }
+        }
+        n.iter().map(|v| v.normalize_or_zero()).collect()
+    }
+
+    /// Number of vertices referenced by at least one triangle.
+    pub fn used_vertex_count(&self) -> usize {
+        let mut used = vec![false; self.positions.len()];
+        for t in &self.triangles {
+            for v in t {
+                used[*v as usize] = true;
+            }
+        }
+        used.iter().filter(|u| **u).count()
+    }
+
+    /// Appends `other`, offsetting its indices; its parts are renumbered after ours.
+    pub fn append(&mut self, other: &TriMesh) {
+        let base = self.positions.len() as u32;
+        let part_base = self.part_count();
+        let n_self_v = self.positions.len();
+        let n_self_t = self.triangles.len();
+        merge_attr(
+            &mut self.normals,
+            n_self_v,
+            &other.normals,
+            other.positions.len(),
+            Vec3::Z,
+        );
+        merge_attr(
+            &mut self.colors,
+            n_self_v,
+            &other.colors,
+            other.positions.len(),
+            Vec3::ONE,
+        );
+        merge_attr(
+            &mut self.uvs,
+            n_self_v,
+            &other.uvs,
+            other.positions.len(),
+            Vec2::ZERO,
+        );
+        if self.parts.is_some() || other.parts.is_some() || n_self_t > 0 {
+            let parts = self.parts.get_or_insert_with(|| vec![0; n_self_t]);
+            parts.extend((0..other.triangles.len()).map(|t| part_base + other.part(t)));
+        }
+        self.positions.extend_from_slice(&other.positions);
+        self.triangles
+            .extend(other.triangles.iter().map(|t| t.map(|v| v + base)));
+    }
+
+    /// Number of distinct part ids (max + 1).
+    pub fn part_count(&self) -> u32 {
+        match &self.parts {
+            Some(p) => p.iter().copied().max().map_or(0, |m| m + 1),
+            None => u32::from(!self.triangles.is_empty()),
+        }
+    }
+}
+
+/// Keeps an optional attribute array aligned with the positions when appending.
+fn merge_attr<T: Copy>(
+    mine: &mut Option<Vec<T>>,
+    n_mine: usize,
+    theirs: &Option<Vec<T>>,
+    n_theirs: usize,
+    fill: T,
+) {
+    if mine.is_none() && theirs.is_none() {
+        return;
+    }
+    let m = mine.get_or_insert_with(|| vec![fill; n_mine]);
+    match theirs {
+        Some(t) => m.extend_from_slice(t),
+        None => m.extend(std::iter::repeat_n(fill, n_theirs)),
+    }
+}
+
+/// A point set with optional per-point attributes.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct PointSet {
+    pub positions: Vec<Vec3>,
+    pub normals: Option<Vec<Vec3>>,
+    /// Linear RGB in 0..=1.
+    pub colors: Option<Vec<Vec3>>,
+    pub radii: Option<Vec<f32>>,
+}
+
+impl PointSet {
+    pub fn bounds(&self) -> Aabb {
+        Aabb::from_points(&self.positions)
+    }
+}
+
+/// A scalar volume on a regular grid, x fastest, then y, then z.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Volume {
+    pub dims: [usize; 3],
+    /// Voxel size along x, y, z (may be anisotropic).
+    pub spacing: Vec3,
+    pub origin: Vec3,
+    pub data: Vec<f32>,
+}
+
+impl Volume {
+    pub fn value(&self, x: usize, y: usize, z: usize) -> f32 {
+        self.data[x + self.dims[0] * (y + self.dims[1] * z)]
+    }
+
+    /// Physical bounds of the sample points.
+    pub fn bounds(&self) -> Aabb {
+        let ext = Vec3::new(
+            self.dims[0].saturating_sub(1) as f32,
+            self.dims[1].saturating_sub(1) as f32,
+            self.dims[2].saturating_sub(1) as f32,
+        ) * self.spacing;
+        Aabb {
+            min: self.origin,
+            max: self.origin + ext,
+        }
+    }
+
+    /// (min, max) of the finite samples.
+    pub fn value_range(&self) -> (f32, f32) {
+        self.data
+            .iter()
+            .filter(|v| v.is_finite())
+            .fold((f32::INFINITY, f32::NEG_INFINITY), |(lo, hi), v| {
+                (lo.min(*v), hi.max(*v))
+            })
+    }
+}

@@ -1,0 +1,20 @@
+//! lodstudio-core: geometry, model I/O, distance measurement and the
+//! level-of-detail methods of lodstudio. No GUI crates live here.
+//!
+//! Every long operation takes a [`progress::Progress`] handle so a caller (the
+//! studio's worker threads, the CLI) can show the stage, the fraction done and
+//! cancel at once.
+
+pub mod builtins;
+pub mod distance;
+pub mod geom;
+pub mod implicit;
+pub mod io;
+pub mod isosurface;
+pub mod progress;
+pub mod rng;
+pub mod stats;
+
+pub use geom::{Aabb, PointSet, TriMesh, Volume};
+pub use io::{LoadError, Loaded, Model};
+pub use progress::Progress;
