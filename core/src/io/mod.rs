@@ -1,0 +1,310 @@
+//! Model I/O: format detection (by content, then extension), the readers, gzip,
+//! and repair on load.
+//!
+//! Readers work on bytes and never trust a header count: every count is checked
+//! against the bytes that remain before anything is allocated from it.
+
+mod error;
+pub mod gltf;
+pub mod obj;
+pub mod off;
+pub mod ply;
+pub mod volume;
+
+use std::path::{Path, PathBuf};
+
+pub use error::{LoadError, Location, ParseError, ParseResult};
+pub use volume::{RawSpec, ScalarType};
+
+use crate::geom::{PointSet, RepairOptions, RepairReport, TriMesh, Volume};
+use crate::progress::Progress;
+
+/// Largest decompressed size accepted from a gzip stream (a bomb is an error, not an OOM).
+pub const MAX_DECOMPRESSED: u64 = 4 << 30;
+
+/// What a file holds.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Model {
+    Mesh(TriMesh),
+    Points(PointSet),
+    Volume(Volume),
+}
+
+impl Model {
+    pub fn kind(&self) -> &'static str {
+        match self {
+            Model::Mesh(_) => "mesh",
+            Model::Points(_) => "points",
+            Model::Volume(_) => "volume",
+        }
+    }
+}
+
+/// A loaded, repaired model with what was done to it.
+#[derive(Debug, Clone)]
+pub struct Loaded {
+    pub model: Model,
+    pub format: Format,
+    pub repairs: RepairReport,
+}
+
+/// File formats lodstudio reads.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Format {
+    Obj,
+    Gltf,
+    Glb,
+    Ply,
+    Off,
+    Nrrd,
+    Nifti,
+    Inr,
+    Raw,
+    Builtin,
+}
+
+impl Format {
+    pub fn name(self) -> &'static str {
+        match self {
+            Format::Obj => "OBJ",
+            Format::Gltf => "glTF",
+            Format::Glb => "GLB",
+            Format::Ply => "PLY",
+            Format::Off => "OFF",
+            Format::Nrrd => "NRRD",
+            Format::Nifti => "NIfTI-1",
+            Format::Inr => "INRIMAGE-4",
+            Format::Raw => "raw volume",
+            Format::Builtin => "built-in",
+        }
+    }
+}
+
+/// Options for [`load`].
+#[derive(Debug, Clone, Default)]
+pub struct LoadOptions {
+    pub repair: RepairOptions,
+    /// Layout of a headerless raw volume; required to read one.
+    pub raw: Option<RawSpec>,
+}
+
+/// Loads a file or a `builtin:NAME`, detects its format, and repairs meshes.
+pub fn load(path: &Path, opts: &LoadOptions, progress: &Progress) -> Result<Loaded, LoadError> {
+    if let Some(name) = path.to_str().and_then(|s| s.strip_prefix("builtin:")) {
+        let model = crate::builtins::build(name, progress)?;
+        return Ok(finish(model, Format::Builtin, opts));
+    }
+    progress.stage("reading file");
+    let bytes = std::fs::read(path).map_err(|source| LoadError::Io {
+        file: path.to_path_buf(),
+        source,
+    })?;
+    load_bytes(path, &bytes, opts, progress)
+}
+
+/// Loads from bytes already in memory; `path` names the file in errors, gives
+/// the extension hint and the folder that external glTF buffers are read from.
+pub fn load_bytes(
+    path: &Path,
+    bytes: &[u8],
+    opts: &LoadOptions,
+    progress: &Progress,
+) -> Result<Loaded, LoadError> {
+    let malformed = |e: ParseError| LoadError::malformed(path, e);
+    let unzipped;
+    let mut data = bytes;
+    if is_gzip(data) {
+        progress.stage("decompressing");
+        unzipped = gunzip(data, MAX_DECOMPRESSED).map_err(malformed)?;
+        data = &unzipped;
+    }
+    progress.check()?;
+    let format = detect(path, data, opts.raw.is_some())?;
+    progress.stage(&format!("parsing {}", format.name()));
+    let model = match format {
+        Format::Obj => Model::Mesh(obj::read(data, progress).map_err(malformed)?),
+        Format::Gltf | Format::Glb => {
+            let base = path.parent().map(Path::to_path_buf);
+            Model::Mesh(gltf::read(data, base.as_deref()).map_err(malformed)?)
+        }
+        Format::Ply => ply::read(data, progress).map_err(malformed)?,
+        Format::Off => off::read(data, progress).map_err(malformed)?,
+        Format::Nrrd => Model::Volume(volume::read_nrrd(data).map_err(malformed)?),
+        Format::Nifti => Model::Volume(volume::read_nifti(data).map_err(malformed)?),
+        Format::Inr => Model::Volume(volume::read_inr(data).map_err(malformed)?),
+        Format::Raw => {
+            let spec = opts.raw.as_ref().ok_or_else(|| LoadError::UnknownFormat {
+                file: path.to_path_buf(),
+                why: "a raw volume needs its dimensions and scalar type".into(),
+            })?;
+            Model::Volume(volume::read_raw(data, spec).map_err(malformed)?)
+        }
+        Format::Builtin => unreachable!("detect never answers Builtin"),
+    };
+    progress.check()?;
+    let loaded = finish(model, format, opts);
+    check_not_empty(path, &loaded)?;
+    Ok(loaded)
+}
+
+fn finish(model: Model, format: Format, opts: &LoadOptions) -> Loaded {
+    match model {
+        Model::Mesh(mesh) => {
+            let (mesh, repairs) = crate::geom::repair::repair_mesh(mesh, &opts.repair);
+            Loaded {
+                model: Model::Mesh(mesh),
+                format,
+                repairs,
+            }
+        }
+        Model::Points(points) => {
+            let (points, repairs) = crate::geom::repair::repair_points(points);
+            Loaded {
+                model: Model::Points(points),
+                format,
+                repairs,
+            }
+        }
+        Model::Volume(v) => Loaded {
+            model: Model::Volume(v),
+            format,
+            repairs: RepairReport::default(),
+        },
+    }
+}
+
+fn check_not_empty(path: &Path, loaded: &Loaded) -> Result<(), LoadError> {
+    let why = match &loaded.model {
+        Model::Mesh(m) if m.triangles.is_empty() => "no valid triangles",
+        Model::Points(p) if p.positions.is_empty() => "no valid points",
+        Model::Volume(v) if v.data.is_empty() => "no voxels",
+        _ => return Ok(()),
+    };
+    Err(LoadError::Empty {
+        file: path.to_path_buf(),
+        why: why.into(),
+    })
+}
+
+pub fn is_gzip(data: &[u8]) -> bool {
+    data.starts_with(&[0x1f, 0x8b])
+}
+
+/// Decompresses a gzip stream, refusing to produce more than `limit` bytes.
+pub fn gunzip(data: &[u8], limit: u64) -> ParseResult<Vec<u8>> {
+    use std::io::Read;
+    let mut out = Vec::new();
+    let mut dec = flate2::read::MultiGzDecoder::new(data).take(limit + 1);
+    dec.read_to_end(&mut out)
+        .map_err(|e| ParseError::file(format!("expected a valid gzip stream ({e})")))?;
+    if out.len() as u64 > limit {
+        return Err(ParseError::file(format!(
+            "expected at most {limit} bytes after decompression"
+        )));
+    }
+    Ok(out)
+}
+
+/// Detects the format by content first, then by extension.
+pub fn detect(path: &Path, data: &[u8], raw_given: bool) -> Result<Format, LoadError> {
+    let unknown = |why: &str| LoadError::UnknownFormat {
+        file: path.to_path_buf(),
+        why: why.into(),
+    };
+    if data.is_empty() {
+        return Err(LoadError::Empty {
+            file: path.to_path_buf(),
+            why: "the file is empty".into(),
+        });
+    }
+    if raw_given {
+        return Ok(Format::Raw);
+    }
+    if data.starts_with(b"glTF") {
+        return Ok(Format::Glb);
+    }
+    if data.starts_with(b"ply") && matches!(data.get(3), Some(b'\n' | b'\r')) {
+        return Ok(Format::Ply);
+    }
+    if data.starts_with(b"NRRD000") {
+        return Ok(Format::Nrrd);
+    }
+    if data.starts_with(b"#INRIMAGE-4#{") {
+        return Ok(Format::Inr);
+    }
+    if volume::is_nifti(data) {
+        return Ok(Format::Nifti);
+    }
+    let head = &data[..data.len().min(4096)];
+    let first_token = head
+        .split(|b| b.is_ascii_whitespace())
+        .find(|t| !t.is_empty() && !t.starts_with(b"#"))
+        .unwrap_or(&[]);
+    if matches!(
+        first_token,
+        b"OFF" | b"COFF" | b"NOFF" | b"CNOFF" | b"STOFF" | b"NCOFF"
+    ) {
+        return Ok(Format::Off);
+    }
+    let trimmed = head.trim_ascii_start();
+    if trimmed.starts_with(b"{") && head.windows(7).any(|w| w == b"\"asset\"") {
+        return Ok(Format::Gltf);
+    }
+    let ext = extension(path);
+    match ext.as_str() {
+        "obj" => return Ok(Format::Obj),
+        "off" => return Ok(Format::Off),
+        "gltf" => return Ok(Format::Gltf),
+        "glb" => return Ok(Format::Glb),
+        "ply" => return Ok(Format::Ply),
+        "nrrd" | "nhdr" => return Ok(Format::Nrrd),
+        "nii" => return Ok(Format::Nifti),
+        "inr" => return Ok(Format::Inr),
+        _ => {}
+    }
+    if obj::looks_like_obj(head) {
+        return Ok(Format::Obj);
+    }
+    if ext == "raw" {
+        return Err(unknown(
+            "a raw volume needs --raw-dims and --raw-type (see `lodstudio info --help`)",
+        ));
+    }
+    Err(unknown(
+        "not OBJ, glTF/GLB, PLY, OFF, NRRD, NIfTI-1 or INRIMAGE-4 by content or extension",
+    ))
+}
+
+/// Lower-case extension, skipping a trailing `.gz`.
+pub fn extension(path: &Path) -> String {
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().to_lowercase())
+        .unwrap_or_default();
+    let name = name.strip_suffix(".gz").unwrap_or(&name);
+    Path::new(name)
+        .extension()
+        .map(|e| e.to_string_lossy().into_owned())
+        .unwrap_or_default()
+}
+
+/// Writes `bytes` to `path` atomically: a temporary file in the same folder, then rename.
+pub fn write_atomic(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
+    use std::io::Write;
+    let dir = path
+        .parent()
+        .filter(|d| !d.as_os_str().is_empty())
+        .unwrap_or(Path::new("."));
+    let name = path.file_name().unwrap_or_default().to_string_lossy();
+    let tmp: PathBuf = dir.join(format!(".{name}.tmp{}", std::process::id()));
+    let result = (|| {
+        let mut f = std::fs::File::create(&tmp)?;
+        f.write_all(bytes)?;
+        f.sync_all()?;
+        std::fs::rename(&tmp, path)
+    })();
+    if result.is_err() {
+        let _ = std::fs::remove_file(&tmp);
+    }
+    result
+}
