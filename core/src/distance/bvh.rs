@@ -1,0 +1,175 @@
+//! Bounding volume hierarchy over boxes, with a nearest-primitive query that
+//! visits the closer child first and prunes by box distance.
+
+use glam::Vec3;
+
+use super::triangle::closest_point_on_triangle;
+use crate::geom::{Aabb, TriMesh};
+
+const LEAF_SIZE: usize = 4;
+
+#[derive(Debug, Clone)]
+struct Node {
+    bounds: Aabb,
+    /// Leaf: first index into `order`; internal: index of the right child
+    /// (the left child follows the node).
+    start_or_right: u32,
+    /// Leaf: number of primitives; internal: 0.
+    count: u32,
+}
+
+#[derive(Debug, Clone)]
+pub struct Bvh {
+    nodes: Vec<Node>,
+    order: Vec<u32>,
+}
+
+impl Bvh {
+    /// Median split on the longest axis of the centroids.
+    pub fn build(bounds: &[Aabb]) -> Bvh {
+        let mut bvh = Bvh {
+            nodes: Vec::with_capacity(2 * bounds.len() / LEAF_SIZE + 1),
+            order: (0..bounds.len() as u32).collect(),
+        };
+        if !bounds.is_empty() {
+            let mut order = std::mem::take(&mut bvh.order);
+            bvh.split(bounds, &mut order, 0);
+            bvh.order = order;
+        }
+        bvh
+    }
+
+    fn split(&mut self, bounds: &[Aabb], order: &mut [u32], start: usize) {
+        let node_bounds = order
+            .iter()
+            .fold(Aabb::EMPTY, |b, i| b.union(bounds[*i as usize]));
+        let id = self.nodes.len();
+        self.nodes.push(Node {
+            bounds: node_bounds,
+            start_or_right: start as u32,
+            count: order.len() as u32,
+        });
+        if order.len() <= LEAF_SIZE {
+            return;
+        }
+        let cb = order
+            .iter()
+            .fold(Aabb::EMPTY, |b, i| b.grow(bounds[*i as usize].center()));
+        let axis = cb.extent().max_position();
+        let mid = order.len() / 2;
+        order.select_nth_unstable_by(mid, |a, b| {
+            bounds[*a as usize].center()[axis].total_cmp(&bounds[*b as usize].center()[axis])
+        });
+        let (left, right) = order.split_at_mut(mid);
+        self.split(bounds, left, start);
+        let right_id = self.nodes.len() as u32;
+        self.split(bounds, right, start + mid);
+        self.nodes[id].start_or_right = right_id;
+        self.nodes[id].count = 0;
+    }
+
+    /// The primitive nearest to `p` under `dist` (which must be at least the
+    /// distance to the primitive's box), and its distance; `None` when empty.
+    pub fn nearest(&self, p: Vec3, dist: impl Fn(u32) -> f32) -> Option<(f32, u32)> {
+        let mut best = (f32::INFINITY, u32::MAX);
+        let mut stack: [u32; 64] = [0; 64];
+        let mut top = usize::from(!self.nodes.is_empty());
+        while top > 0 {
+            top -= 1;
+            let node = &self.nodes[stack[top] as usize];
+            if node.bounds.distance(p) >= best.0 {
+                continue;
+            }
+            if node.count > 0 {
+                let s = node.start_or_right as usize;
+                for &prim in &self.order[s..s + node.count as usize] {
+                    let d = dist(prim);
+                    if d < best.0 {
+                        best = (d, prim);
+                    }
+                }
+                continue;
+            }
+            let (l, r) = (stack[top] + 1, node.start_or_right);
+            let (dl, dr) = (
+                self.nodes[l as usize].bounds.distance(p),
+                self.nodes[r as usize].bounds.distance(p),
+            );
+            // Push the farther child first so the nearer one is searched first.
+            let (near, far) = if dl <= dr { (l, r) } else { (r, l) };
+            if top + 2 <= stack.len() {
+                stack[top] = far;
+                stack[top + 1] = near;
+                top += 2;
+            }
+        }
+        (best.1 != u32::MAX).then_some(best)
+    }
+}
+
+/// Distance from points to a triangle mesh's surface.
+pub struct MeshDistance<'a> {
+    mesh: &'a TriMesh,
+    bvh: Bvh,
+}
+
+impl<'a> MeshDistance<'a> {
+    pub fn new(mesh: &'a TriMesh) -> Self {
+        let boxes: Vec<Aabb> = (0..mesh.triangles.len())
+            .map(|t| Aabb::from_points(&mesh.triangle(t)))
+            .collect();
+        Self {
+            mesh,
+            bvh: Bvh::build(&boxes),
+        }
+    }
+
+    /// Closest surface point and its triangle; `None` for an empty mesh.
+    pub fn closest(&self, p: Vec3) -> Option<(Vec3, u32)> {
+        let (_, t) = self.bvh.nearest(p, |t| {
+            let [a, b, c] = self.mesh.triangle(t as usize);
+            closest_point_on_triangle(p, a, b, c).distance(p)
+        })?;
+        let [a, b, c] = self.mesh.triangle(t as usize);
+        Some((closest_point_on_triangle(p, a, b, c), t))
+    }
+
+    pub fn distance(&self, p: Vec3) -> f32 {
+        self.closest(p)
+            .map_or(f32::INFINITY, |(q, _)| q.distance(p))
+    }
+}
+
+/// Distance from points to a union of solid balls (points with radii).
+pub struct SphereSetDistance<'a> {
+    centers: &'a [Vec3],
+    radii: &'a [f32],
+    bvh: Bvh,
+}
+
+impl<'a> SphereSetDistance<'a> {
+    pub fn new(centers: &'a [Vec3], radii: &'a [f32]) -> Self {
+        let boxes: Vec<Aabb> = centers
+            .iter()
+            .zip(radii)
+            .map(|(c, r)| Aabb {
+                min: *c - Vec3::splat(*r),
+                max: *c + Vec3::splat(*r),
+            })
+            .collect();
+        Self {
+            centers,
+            radii,
+            bvh: Bvh::build(&boxes),
+        }
+    }
+
+    /// 0 inside a ball, else the distance to the nearest ball's surface.
+    pub fn distance(&self, p: Vec3) -> f32 {
+        self.bvh
+            .nearest(p, |i| {
+                (p.distance(self.centers[i as usize]) - self.radii[i as usize]).max(0.0)
+            })
+            .map_or(f32::INFINITY, |(d, _)| d)
+    }
+}

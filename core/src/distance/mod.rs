@@ -1,0 +1,13 @@
+//! Distance measurement: a BVH over triangles or spheres, exact point-to-triangle
+//! distance, and the sampled two-sided Hausdorff distance that every method's
+//! guaranteed error bound is checked against.
+
+pub mod bvh;
+pub mod hausdorff;
+pub mod triangle;
+
+pub use bvh::{Bvh, MeshDistance, SphereSetDistance};
+pub use hausdorff::{
+    HausdorffReport, SamplingOptions, hausdorff_mesh_mesh, hausdorff_mesh_spheres, sample_surface,
+};
+pub use triangle::closest_point_on_triangle;
