@@ -1,0 +1,71 @@
+//! Helpers for the workspace-level end-to-end tests in `tests/tests/`: where the
+//! shared models and the malformed corpus live, and how to run the CLI.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+use std::sync::OnceLock;
+
+/// `../shared/models` beside the checkout (fixed by the project layout).
+pub fn shared_models() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shared/models")
+}
+
+pub fn shared_model(name: &str) -> PathBuf {
+    shared_models().join(name)
+}
+
+/// The committed corpus of malformed files.
+pub fn malformed_dir() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("malformed")
+}
+
+/// Path of the `lodstudio` binary of this build, building it once if needed
+/// (a test package cannot depend on another package's binary directly).
+pub fn lodstudio_bin() -> &'static Path {
+    static BIN: OnceLock<PathBuf> = OnceLock::new();
+    BIN.get_or_init(|| {
+        let exe = std::env::current_exe().expect("test executable path");
+        // target/<profile>/deps/<test> -> target/<profile>/lodstudio
+        let profile_dir = exe.parent().and_then(Path::parent).expect("target layout");
+        let bin = profile_dir.join(format!("lodstudio{}", std::env::consts::EXE_SUFFIX));
+        let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
+        let release = profile_dir.ends_with("release");
+        let mut cmd = Command::new(cargo);
+        cmd.args(["build", "-p", "lodstudio", "--bin", "lodstudio", "--quiet"]);
+        if release {
+            cmd.arg("--release");
+        }
+        let status = cmd.status().expect("run cargo build");
+        assert!(status.success(), "building the lodstudio binary failed");
+        bin
+    })
+}
+
+/// Runs `lodstudio ARGS` without a display.
+pub fn lodstudio(args: &[&str]) -> Output {
+    Command::new(lodstudio_bin())
+        .args(args)
+        .env_remove("DISPLAY")
+        .env_remove("WAYLAND_DISPLAY")
+        .output()
+        .expect("run lodstudio")
+}
+
+/// Runs `lodstudio ARGS --json`, asserts success and parses its single JSON object.
+pub fn lodstudio_json(args: &[&str]) -> serde_json::Value {
+    let mut all: Vec<&str> = args.to_vec();
+    all.push("--json");
+    let out = lodstudio(&all);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "lodstudio {all:?} failed: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert_eq!(
+        stdout.trim().lines().count(),
+        1,
+        "one JSON object on one line"
+    );
+    serde_json::from_str(stdout.trim()).expect("valid JSON")
+}
