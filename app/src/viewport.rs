@@ -1,0 +1,1112 @@
+//! The studio's 3D viewport: an orbit camera and a wgpu renderer drawn through
+//! egui's paint callback.
+//!
+//! egui's render pass has no depth buffer, so [`CallbackTrait::prepare`] renders
+//! the scene into an offscreen colour + depth target of our own (sized to the
+//! viewport in physical pixels, multisampled where the adapter allows), and
+//! [`CallbackTrait::paint`] copies that image into egui's pass with a
+//! full-screen triangle. GPU resources live in the renderer's
+//! `callback_resources` (created once by [`init`]); geometry is uploaded only
+//! when the scene's version changes, into buffers that grow but are reused.
+
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+
+use bytemuck::{Pod, Zeroable};
+use egui_wgpu::{CallbackResources, CallbackTrait, ScreenDescriptor, wgpu};
+use glam::{Mat4, Vec3};
+use lodstudio_core::geom::{Aabb, PointSet, TriMesh, Volume};
+use lodstudio_core::io::Model;
+
+/// Vertical field of view of the camera.
+const FOV_Y: f32 = std::f32::consts::FRAC_PI_4;
+/// Surface colour of meshes without vertex colours (linear RGB).
+const CLAY: Vec3 = Vec3::new(0.62, 0.56, 0.50);
+/// Colour of points without colours and of volume bounding boxes (linear RGB).
+const POINT_COLOR: Vec3 = Vec3::new(0.45, 0.62, 0.80);
+const BOX_COLOR: Vec3 = Vec3::new(0.80, 0.80, 0.80);
+/// Background of the viewport (linear RGB).
+const BACKGROUND: wgpu::Color = wgpu::Color {
+    r: 0.045,
+    g: 0.050,
+    b: 0.060,
+    a: 1.0,
+};
+/// On-screen radius of points that carry no radius of their own.
+const POINT_RADIUS_PX: f32 = 2.5;
+const COLOR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrgb;
+const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
+/// Cosine of the crease angle (30°): sharper edges get split normals.
+const CREASE_COS: f32 = 0.866;
+/// Pitch stays short of the poles so the view's up vector is never parallel to it.
+const MAX_PITCH: f32 = 1.55;
+
+/// One mesh or line vertex as the GPU reads it.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+struct MeshVertex {
+    position: [f32; 3],
+    normal: [f32; 3],
+    color: [f32; 3],
+}
+
+/// One point, drawn as a screen-facing disc (an instance of a 6-vertex quad).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+struct PointInstance {
+    position: [f32; 3],
+    /// Object-space radius; 0 draws the point at [`POINT_RADIUS_PX`].
+    radius: f32,
+    /// Zero when the point has no normal: it is then shaded as a small sphere.
+    normal: [f32; 3],
+    color: [f32; 3],
+}
+
+/// Per-frame uniforms; the layout matches `Frame` in the shader.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+struct FrameUniforms {
+    view_proj: [[f32; 4]; 4],
+    /// xyz: camera position.
+    eye: [f32; 4],
+    /// Viewport width and height in pixels, focal length in pixels, default point radius.
+    viewport: [f32; 4],
+}
+
+/// Geometry ready for upload, built once per model (on a worker thread if wanted).
+#[derive(Debug, Clone)]
+pub struct Scene {
+    geometry: Geometry,
+    bounds: Aabb,
+}
+
+#[derive(Debug, Clone)]
+enum Geometry {
+    Triangles {
+        vertices: Vec<MeshVertex>,
+        indices: Vec<u32>,
+    },
+    Points(Vec<PointInstance>),
+    Lines(Vec<MeshVertex>),
+}
+
+impl Scene {
+    /// Lit triangles with the mesh's own normals, or else normals that are
+    /// smooth across edges flatter than [`CREASE_COS`] and sharp at creases (so
+    /// CAD parts keep crisp edges). Triangles that index outside the vertex
+    /// array are left out.
+    pub fn from_mesh(mesh: &TriMesh) -> Scene {
+        let n = mesh.positions.len();
+        let triangles: Vec<[u32; 3]> = mesh
+            .triangles
+            .iter()
+            .filter(|t| t.iter().all(|&v| (v as usize) < n))
+            .copied()
+            .collect();
+        let colors = mesh.colors.as_ref().filter(|c| c.len() == n);
+        let vertex = |v: usize, normal: Vec3| MeshVertex {
+            position: mesh.positions[v].to_array(),
+            normal: normal.normalize_or_zero().to_array(),
+            color: colors.map_or(CLAY, |c| c[v]).to_array(),
+        };
+        let geometry = match &mesh.normals {
+            Some(normals) if normals.len() == n => Geometry::Triangles {
+                vertices: (0..n).map(|v| vertex(v, normals[v])).collect(),
+                indices: triangles.into_iter().flatten().collect(),
+            },
+            _ => {
+                let (vertices, indices) = crease_split(&mesh.positions, &triangles, vertex);
+                Geometry::Triangles { vertices, indices }
+            }
+        };
+        Scene {
+            geometry,
+            bounds: mesh.bounds(),
+        }
+    }
+
+    /// Screen-facing discs, sized by the points' radii where they have them.
+    pub fn from_points(points: &PointSet) -> Scene {
+        let n = points.positions.len();
+        let normals = points.normals.as_ref().filter(|v| v.len() == n);
+        let colors = points.colors.as_ref().filter(|v| v.len() == n);
+        let radii = points.radii.as_ref().filter(|v| v.len() == n);
+        let instances = (0..n)
+            .map(|i| PointInstance {
+                position: points.positions[i].to_array(),
+                radius: radii.map_or(0.0, |r| r[i].max(0.0)),
+                normal: normals
+                    .map_or(Vec3::ZERO, |v| v[i].normalize_or_zero())
+                    .to_array(),
+                color: colors.map_or(POINT_COLOR, |c| c[i]).to_array(),
+            })
+            .collect();
+        Scene {
+            geometry: Geometry::Points(instances),
+            bounds: points.bounds(),
+        }
+    }
+
+    /// A volume shows its bounding box as lines.
+    pub fn from_volume(volume: &Volume) -> Scene {
+        let b = volume.bounds();
+        let corner = |i: usize| {
+            Vec3::new(
+                if i & 1 == 0 { b.min.x } else { b.max.x },
+                if i & 2 == 0 { b.min.y } else { b.max.y },
+                if i & 4 == 0 { b.min.z } else { b.max.z },
+            )
+        };
+        // The 12 edges join corners that differ in exactly one axis bit.
+        let lines = (0..8usize)
+            .flat_map(|i| [1, 2, 4].map(|bit| (i, i | bit)))
+            .filter(|(i, j)| i != j)
+            .flat_map(|(i, j)| [corner(i), corner(j)])
+            .map(|p| MeshVertex {
+                position: p.to_array(),
+                normal: [0.0; 3],
+                color: BOX_COLOR.to_array(),
+            })
+            .collect();
+        Scene {
+            geometry: Geometry::Lines(lines),
+            bounds: b,
+        }
+    }
+
+    /// The scene for any loaded model (meshes, points, or a volume's box).
+    pub fn from_model(model: &Model) -> Scene {
+        match model {
+            Model::Mesh(m) => Scene::from_mesh(m),
+            Model::Points(p) => Scene::from_points(p),
+            Model::Volume(v) => Scene::from_volume(v),
+        }
+    }
+
+    /// Bounds of the model the scene was built from (what framing fits).
+    pub fn bounds(&self) -> Aabb {
+        self.bounds
+    }
+}
+
+/// Per-corner normals: each corner averages (area-weighted) the normals of the
+/// faces around its vertex that lie within the crease angle of its own face.
+/// Corners of one vertex with equal normals share an output vertex, so smooth
+/// meshes keep one vertex per input vertex; unused vertices are dropped.
+fn crease_split(
+    positions: &[Vec3],
+    triangles: &[[u32; 3]],
+    vertex: impl Fn(usize, Vec3) -> MeshVertex,
+) -> (Vec<MeshVertex>, Vec<u32>) {
+    let n = positions.len();
+    let face_normals: Vec<Vec3> = triangles
+        .iter()
+        .map(|t| {
+            let [a, b, c] = t.map(|v| positions[v as usize]);
+            (b - a).cross(c - a)
+        })
+        .collect();
+    let unit: Vec<Vec3> = face_normals.iter().map(|f| f.normalize_or_zero()).collect();
+    // Faces around each vertex, in compressed rows.
+    let mut start = vec![0usize; n + 1];
+    for t in triangles {
+        for &v in t {
+            start[v as usize + 1] += 1;
+        }
+    }
+    for v in 0..n {
+        start[v + 1] += start[v];
+    }
+    let mut fill = start.clone();
+    let mut faces = vec![0u32; start[n]];
+    for (f, t) in triangles.iter().enumerate() {
+        for &v in t {
+            faces[fill[v as usize]] = f as u32;
+            fill[v as usize] += 1;
+        }
+    }
+    let mut vertices = Vec::with_capacity(n);
+    let mut indices = vec![0u32; triangles.len() * 3];
+    for v in 0..n {
+        let around = &faces[start[v]..start[v + 1]];
+        let first = vertices.len();
+        for &f in around {
+            let f = f as usize;
+            let normal: Vec3 = around
+                .iter()
+                .map(|&g| g as usize)
+                .filter(|&g| unit[f].dot(unit[g]) >= CREASE_COS)
+                .map(|g| face_normals[g])
+                .sum();
+            let out = vertex(v, normal);
+            let index = match vertices[first..]
+                .iter()
+                .position(|o: &MeshVertex| o.normal == out.normal)
+            {
+                Some(i) => first + i,
+                None => {
+                    vertices.push(out);
+                    vertices.len() - 1
+                }
+            };
+            for (k, &corner) in triangles[f].iter().enumerate() {
+                if corner as usize == v {
+                    indices[3 * f + k] = index as u32;
+                }
+            }
+        }
+    }
+    (vertices, indices)
+}
+
+/// The 3D view of one scene with an orbit camera.
+pub struct Viewport {
+    /// Point the camera orbits around and looks at.
+    pub target: Vec3,
+    /// Distance from the camera to `target`.
+    pub distance: f32,
+    /// Rotation about the vertical axis, radians.
+    pub yaw: f32,
+    /// Elevation above the horizontal plane, radians.
+    pub pitch: f32,
+    scene: Option<Arc<Scene>>,
+    /// Bumped on every scene change; the GPU side re-uploads when it differs.
+    version: u64,
+    /// Width / height of the last shown rect, for framing.
+    aspect: f32,
+    has_wgpu: bool,
+    /// Set by the GPU side when the scene does not fit in its buffers.
+    too_large: Arc<AtomicBool>,
+}
+
+impl Viewport {
+    /// A viewport drawing with `render_state` (after [`init`] on it), or a
+    /// placeholder message when there is none.
+    pub fn new(render_state: Option<&egui_wgpu::RenderState>) -> Self {
+        if let Some(rs) = render_state {
+            init(rs);
+        }
+        Viewport {
+            target: Vec3::ZERO,
+            distance: 3.0,
+            yaw: 0.6,
+            pitch: 0.4,
+            scene: None,
+            version: 0,
+            aspect: 1.0,
+            has_wgpu: render_state.is_some(),
+            too_large: Arc::new(AtomicBool::new(false)),
+        }
+    }
+
+    /// Shows `scene` from the default direction, framed to fit.
+    pub fn set_scene(&mut self, scene: Scene) {
+        self.scene = Some(Arc::new(scene));
+        self.version += 1;
+        self.too_large.store(false, Ordering::Relaxed);
+        self.yaw = 0.6;
+        self.pitch = 0.4;
+        self.frame_all();
+    }
+
+    /// Shows a mesh (builds its GPU geometry here, on the calling thread).
+    pub fn set_mesh(&mut self, mesh: &TriMesh) {
+        self.set_scene(Scene::from_mesh(mesh));
+    }
+
+    /// Shows a point set (builds its GPU geometry here, on the calling thread).
+    pub fn set_points(&mut self, points: &PointSet) {
+        self.set_scene(Scene::from_points(points));
+    }
+
+    /// Shows a volume's bounding box.
+    pub fn set_volume(&mut self, volume: &Volume) {
+        self.set_scene(Scene::from_volume(volume));
+    }
+
+    /// Centres the scene and moves the camera back until its bounding sphere fits.
+    pub fn frame_all(&mut self) {
+        let (center, radius) = self.scene_sphere();
+        let half_fov_x = ((FOV_Y * 0.5).tan() * self.aspect).atan();
+        let half_fov = half_fov_x.clamp(0.05, FOV_Y * 0.5);
+        self.target = center;
+        self.distance = radius / half_fov.sin() * 1.05;
+    }
+
+    /// Centre and radius of the scene's bounding sphere (unit sphere when there is none).
+    fn scene_sphere(&self) -> (Vec3, f32) {
+        match &self.scene {
+            Some(s) if !s.bounds.is_empty() && s.bounds.diagonal().is_finite() => {
+                (s.bounds.center(), (s.bounds.diagonal() * 0.5).max(1e-6))
+            }
+            _ => (Vec3::ZERO, 1.0),
+        }
+    }
+
+    fn eye(&self) -> Vec3 {
+        let (sy, cy) = self.yaw.sin_cos();
+        let (sp, cp) = self.pitch.sin_cos();
+        self.target + self.distance * Vec3::new(cp * sy, sp, cp * cy)
+    }
+
+    /// Camera right and up vectors in world space.
+    fn basis(&self) -> (Vec3, Vec3) {
+        let forward = (self.target - self.eye()).normalize_or(Vec3::NEG_Z);
+        let right = forward.cross(Vec3::Y).normalize_or(Vec3::X);
+        (right, right.cross(forward))
+    }
+
+    /// View-projection matrix with near and far planes hugging the scene.
+    fn view_proj(&self, aspect: f32) -> Mat4 {
+        let eye = self.eye();
+        let (center, radius) = self.scene_sphere();
+        let d = eye.distance(center);
+        let far = (d + radius * 1.05).max(1e-4);
+        let near = (d - radius * 1.05).clamp(far * 1e-4, far * 0.5);
+        let proj = glam::camera::rh::proj::directx::perspective(FOV_Y, aspect, near, far);
+        let view = glam::camera::rh::view::look_at_mat4(eye, self.target, Vec3::Y);
+        proj * view
+    }
+
+    /// Rotates about the target by a drag of `delta` points.
+    fn orbit(&mut self, delta: egui::Vec2) {
+        self.yaw -= delta.x * 0.01;
+        self.pitch = (self.pitch + delta.y * 0.01).clamp(-MAX_PITCH, MAX_PITCH);
+    }
+
+    /// Moves the target so the scene follows the pointer.
+    fn pan(&mut self, delta: egui::Vec2, height_points: f32) {
+        let world_per_point = 2.0 * self.distance * (FOV_Y * 0.5).tan() / height_points.max(1.0);
+        let (right, up) = self.basis();
+        self.target += (up * delta.y - right * delta.x) * world_per_point;
+    }
+
+    /// Moves towards (factor < 1) or away from the target, within sane bounds.
+    fn zoom(&mut self, factor: f32) {
+        let (_, radius) = self.scene_sphere();
+        if factor.is_finite() && factor > 0.0 {
+            self.distance = (self.distance * factor).clamp(radius * 1e-3, radius * 1e3);
+        }
+    }
+
+    /// Draws the viewport into all remaining space and handles camera input:
+    /// left-drag orbits, right/middle/shift+left-drag pans, scroll or pinch zooms,
+    /// double-click frames the whole scene.
+    pub fn show(&mut self, ui: &mut egui::Ui) -> egui::Response {
+        let size = ui.available_size().max(egui::vec2(1.0, 1.0));
+        let (rect, response) = ui.allocate_exact_size(size, egui::Sense::click_and_drag());
+        response.widget_info(|| egui::WidgetInfo::labeled(egui::Role::Canvas, true, "3D viewport"));
+        self.aspect = rect.width() / rect.height().max(1.0);
+
+        if !self.has_wgpu {
+            ui.painter()
+                .rect_filled(rect, 0.0, ui.visuals().extreme_bg_color);
+            ui.put(rect, egui::Label::new("3D viewport needs wgpu"));
+            return response;
+        }
+
+        self.handle_input(ui, &response, rect);
+
+        let ppp = ui.ctx().pixels_per_point();
+        let size_px = [
+            (rect.width() * ppp).round().max(1.0) as u32,
+            (rect.height() * ppp).round().max(1.0) as u32,
+        ];
+        let focal_px = size_px[1] as f32 * 0.5 / (FOV_Y * 0.5).tan();
+        let uniforms = FrameUniforms {
+            view_proj: self.view_proj(self.aspect).to_cols_array_2d(),
+            eye: self.eye().extend(1.0).to_array(),
+            viewport: [
+                size_px[0] as f32,
+                size_px[1] as f32,
+                focal_px,
+                POINT_RADIUS_PX * ppp,
+            ],
+        };
+        ui.painter().add(egui_wgpu::Callback::new_paint_callback(
+            rect,
+            ViewportCallback {
+                uniforms,
+                scene: self.scene.clone(),
+                version: self.version,
+                size_px,
+                too_large: Arc::clone(&self.too_large),
+            },
+        ));
+        if self.too_large.load(Ordering::Relaxed) {
+            ui.put(
+                rect,
+                egui::Label::new(
+                    egui::RichText::new("model too large for this GPU's buffers")
+                        .color(ui.visuals().warn_fg_color),
+                ),
+            );
+        }
+        response
+    }
+
+    fn handle_input(&mut self, ui: &egui::Ui, response: &egui::Response, rect: egui::Rect) {
+        use egui::PointerButton::{Middle, Primary, Secondary};
+        let delta = response.drag_delta();
+        let shift = ui.input(|i| i.modifiers.shift);
+        if response.dragged_by(Secondary)
+            || response.dragged_by(Middle)
+            || (response.dragged_by(Primary) && shift)
+        {
+            self.pan(delta, rect.height());
+        } else if response.dragged_by(Primary) {
+            self.orbit(delta);
+        }
+        if response.hovered() {
+            let (scroll, pinch) = ui.input(|i| (i.smooth_scroll_delta.y, i.zoom_delta()));
+            if scroll != 0.0 {
+                self.zoom((-scroll * 0.002).exp());
+            }
+            if pinch != 1.0 {
+                self.zoom(1.0 / pinch);
+            }
+        }
+        if response.double_clicked() {
+            self.frame_all();
+        }
+    }
+}
+
+/// Creates the viewport's pipelines in `render_state`; call once at start-up.
+pub fn init(render_state: &egui_wgpu::RenderState) {
+    let resources = ViewportResources::new(render_state);
+    render_state
+        .renderer
+        .write()
+        .callback_resources
+        .insert(resources);
+}
+
+/// What one frame of the viewport needs on the GPU side.
+struct ViewportCallback {
+    uniforms: FrameUniforms,
+    scene: Option<Arc<Scene>>,
+    version: u64,
+    size_px: [u32; 2],
+    too_large: Arc<AtomicBool>,
+}
+
+impl CallbackTrait for ViewportCallback {
+    fn prepare(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        _screen_descriptor: &ScreenDescriptor,
+        egui_encoder: &mut wgpu::CommandEncoder,
+        callback_resources: &mut CallbackResources,
+    ) -> Vec<wgpu::CommandBuffer> {
+        if let Some(res) = callback_resources.get_mut::<ViewportResources>() {
+            res.ensure_target(device, self.size_px);
+            if res.uploaded_version != Some(self.version) {
+                let fits = res.upload(device, queue, self.scene.as_deref());
+                self.too_large.store(!fits, Ordering::Relaxed);
+                res.uploaded_version = Some(self.version);
+            }
+            queue.write_buffer(&res.uniform_buffer, 0, bytemuck::bytes_of(&self.uniforms));
+            res.render(egui_encoder);
+        }
+        Vec::new()
+    }
+
+    fn paint(
+        &self,
+        _info: egui::PaintCallbackInfo,
+        render_pass: &mut wgpu::RenderPass<'static>,
+        callback_resources: &CallbackResources,
+    ) {
+        let Some(res) = callback_resources.get::<ViewportResources>() else {
+            return;
+        };
+        let Some(target) = &res.target else {
+            return;
+        };
+        // egui has set the viewport to our rect: one triangle covers it.
+        render_pass.set_pipeline(&res.blit_pipeline);
+        render_pass.set_bind_group(0, &target.blit_bind_group, &[]);
+        render_pass.draw(0..3, 0..1);
+    }
+}
+
+/// A GPU buffer that is reused and only reallocated when data outgrows it.
+struct GrowBuffer {
+    buffer: Option<wgpu::Buffer>,
+    usage: wgpu::BufferUsages,
+    label: &'static str,
+}
+
+impl GrowBuffer {
+    fn new(label: &'static str, usage: wgpu::BufferUsages) -> Self {
+        GrowBuffer {
+            buffer: None,
+            usage: usage | wgpu::BufferUsages::COPY_DST,
+            label,
+        }
+    }
+
+    /// Writes `data` at the start; false when it exceeds the device's buffer limit.
+    fn write(&mut self, device: &wgpu::Device, queue: &wgpu::Queue, data: &[u8]) -> bool {
+        let len = data.len() as u64;
+        if len == 0 {
+            return true;
+        }
+        if self.buffer.as_ref().is_none_or(|b| b.size() < len) {
+            let max = device.limits().max_buffer_size;
+            if len > max {
+                return false;
+            }
+            let size = len
+                .checked_next_power_of_two()
+                .unwrap_or(len)
+                .min(max)
+                .next_multiple_of(wgpu::COPY_BUFFER_ALIGNMENT);
+            self.buffer = Some(device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(self.label),
+                size,
+                usage: self.usage,
+                mapped_at_creation: false,
+            }));
+        }
+        if let Some(buffer) = &self.buffer {
+            queue.write_buffer(buffer, 0, data);
+        }
+        true
+    }
+}
+
+/// What is uploaded and how to draw it.
+#[derive(Clone, Copy)]
+enum Drawn {
+    Nothing,
+    Triangles { indices: u32 },
+    Points { instances: u32 },
+    Lines { vertices: u32 },
+}
+
+/// The offscreen image the scene is rendered into, at the viewport's pixel size.
+struct Target {
+    size: [u32; 2],
+    /// Resolved (or single-sample) colour, read by the blit.
+    color: wgpu::TextureView,
+    /// Multisampled colour, when MSAA is on.
+    msaa: Option<wgpu::TextureView>,
+    depth: wgpu::TextureView,
+    blit_bind_group: wgpu::BindGroup,
+}
+
+struct ViewportResources {
+    mesh_pipeline: wgpu::RenderPipeline,
+    line_pipeline: wgpu::RenderPipeline,
+    point_pipeline: wgpu::RenderPipeline,
+    blit_pipeline: wgpu::RenderPipeline,
+    blit_layout: wgpu::BindGroupLayout,
+    uniform_buffer: wgpu::Buffer,
+    frame_bind_group: wgpu::BindGroup,
+    vertices: GrowBuffer,
+    indices: GrowBuffer,
+    drawn: Drawn,
+    uploaded_version: Option<u64>,
+    sample_count: u32,
+    target: Option<Target>,
+}
+
+impl ViewportResources {
+    fn new(rs: &egui_wgpu::RenderState) -> Self {
+        let device = &rs.device;
+        let sample_count = if supports_4x(rs, COLOR_FORMAT) && supports_4x(rs, DEPTH_FORMAT) {
+            4
+        } else {
+            1
+        };
+        let scene_module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("viewport scene"),
+            source: wgpu::ShaderSource::Wgsl(SCENE_SHADER.into()),
+        });
+        let blit_module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("viewport blit"),
+            source: wgpu::ShaderSource::Wgsl(BLIT_SHADER.into()),
+        });
+
+        let frame_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("viewport frame"),
+            entries: &[wgpu::BindGroupLayoutEntry {
+                binding: 0,
+                visibility: wgpu::ShaderStages::VERTEX | wgpu::ShaderStages::FRAGMENT,
+                ty: wgpu::BindingType::Buffer {
+                    ty: wgpu::BufferBindingType::Uniform,
+                    has_dynamic_offset: false,
+                    min_binding_size: wgpu::BufferSize::new(
+                        std::mem::size_of::<FrameUniforms>() as u64
+                    ),
+                },
+                count: None,
+            }],
+        });
+        let uniform_buffer = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("viewport frame"),
+            size: std::mem::size_of::<FrameUniforms>() as u64,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let frame_bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("viewport frame"),
+            layout: &frame_layout,
+            entries: &[wgpu::BindGroupEntry {
+                binding: 0,
+                resource: uniform_buffer.as_entire_binding(),
+            }],
+        });
+        let scene_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("viewport scene"),
+            bind_group_layouts: &[Some(&frame_layout)],
+            immediate_size: 0,
+        });
+
+        const MESH_ATTRS: [wgpu::VertexAttribute; 3] =
+            wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3, 2 => Float32x3];
+        const POINT_ATTRS: [wgpu::VertexAttribute; 4] = wgpu::vertex_attr_array![
+            0 => Float32x3, 1 => Float32, 2 => Float32x3, 3 => Float32x3
+        ];
+        let mesh_buffers = [Some(wgpu::VertexBufferLayout {
+            array_stride: std::mem::size_of::<MeshVertex>() as u64,
+            step_mode: wgpu::VertexStepMode::Vertex,
+            attributes: &MESH_ATTRS,
+        })];
+        let point_buffers = [Some(wgpu::VertexBufferLayout {
+            array_stride: std::mem::size_of::<PointInstance>() as u64,
+            step_mode: wgpu::VertexStepMode::Instance,
+            attributes: &POINT_ATTRS,
+        })];
+        let scene_pipeline = |label: &str,
+                              vs: &str,
+                              fs: &str,
+                              buffers: &[Option<wgpu::VertexBufferLayout<'_>>],
+                              topology: wgpu::PrimitiveTopology| {
+            device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                label: Some(label),
+                layout: Some(&scene_layout),
+                vertex: wgpu::VertexState {
+                    module: &scene_module,
+                    entry_point: Some(vs),
+                    compilation_options: wgpu::PipelineCompilationOptions::default(),
+                    buffers,
+                },
+                primitive: wgpu::PrimitiveState {
+                    topology,
+                    ..Default::default()
+                },
+                depth_stencil: Some(wgpu::DepthStencilState {
+                    format: DEPTH_FORMAT,
+                    depth_write_enabled: Some(true),
+                    depth_compare: Some(wgpu::CompareFunction::LessEqual),
+                    stencil: wgpu::StencilState::default(),
+                    bias: wgpu::DepthBiasState::default(),
+                }),
+                multisample: wgpu::MultisampleState {
+                    count: sample_count,
+                    mask: !0,
+                    alpha_to_coverage_enabled: false,
+                },
+                fragment: Some(wgpu::FragmentState {
+                    module: &scene_module,
+                    entry_point: Some(fs),
+                    compilation_options: wgpu::PipelineCompilationOptions::default(),
+                    targets: &[Some(COLOR_FORMAT.into())],
+                }),
+                multiview_mask: None,
+                cache: None,
+            })
+        };
+        let mesh_pipeline = scene_pipeline(
+            "viewport mesh",
+            "vs_mesh",
+            "fs_mesh",
+            &mesh_buffers,
+            wgpu::PrimitiveTopology::TriangleList,
+        );
+        let line_pipeline = scene_pipeline(
+            "viewport lines",
+            "vs_mesh",
+            "fs_unlit",
+            &mesh_buffers,
+            wgpu::PrimitiveTopology::LineList,
+        );
+        let point_pipeline = scene_pipeline(
+            "viewport points",
+            "vs_points",
+            "fs_points",
+            &point_buffers,
+            wgpu::PrimitiveTopology::TriangleList,
+        );
+
+        let blit_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("viewport blit"),
+            entries: &[wgpu::BindGroupLayoutEntry {
+                binding: 0,
+                visibility: wgpu::ShaderStages::FRAGMENT,
+                ty: wgpu::BindingType::Texture {
+                    sample_type: wgpu::TextureSampleType::Float { filterable: false },
+                    view_dimension: wgpu::TextureViewDimension::D2,
+                    multisampled: false,
+                },
+                count: None,
+            }],
+        });
+        let blit_pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("viewport blit"),
+            bind_group_layouts: &[Some(&blit_layout)],
+            immediate_size: 0,
+        });
+        // egui's pass (as run_studio and the tests configure it) has one sample
+        // and no depth; its target may or may not be sRGB-encoding.
+        let blit_pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some("viewport blit"),
+            layout: Some(&blit_pipeline_layout),
+            vertex: wgpu::VertexState {
+                module: &blit_module,
+                entry_point: Some("vs_blit"),
+                compilation_options: wgpu::PipelineCompilationOptions::default(),
+                buffers: &[],
+            },
+            primitive: wgpu::PrimitiveState::default(),
+            depth_stencil: None,
+            multisample: wgpu::MultisampleState::default(),
+            fragment: Some(wgpu::FragmentState {
+                module: &blit_module,
+                entry_point: Some(if rs.target_format.is_srgb() {
+                    "fs_blit_linear"
+                } else {
+                    "fs_blit_gamma"
+                }),
+                compilation_options: wgpu::PipelineCompilationOptions::default(),
+                targets: &[Some(rs.target_format.into())],
+            }),
+            multiview_mask: None,
+            cache: None,
+        });
+
+        ViewportResources {
+            mesh_pipeline,
+            line_pipeline,
+            point_pipeline,
+            blit_pipeline,
+            blit_layout,
+            uniform_buffer,
+            frame_bind_group,
+            vertices: GrowBuffer::new("viewport vertices", wgpu::BufferUsages::VERTEX),
+            indices: GrowBuffer::new("viewport indices", wgpu::BufferUsages::INDEX),
+            drawn: Drawn::Nothing,
+            uploaded_version: None,
+            sample_count,
+            target: None,
+        }
+    }
+
+    /// (Re)creates the offscreen target when the viewport's pixel size changed.
+    fn ensure_target(&mut self, device: &wgpu::Device, size: [u32; 2]) {
+        let max = device.limits().max_texture_dimension_2d.max(1);
+        let size = size.map(|s| s.clamp(1, max));
+        if self.target.as_ref().is_some_and(|t| t.size == size) {
+            return;
+        }
+        let texture = |label: &str, format, samples, usage| {
+            device
+                .create_texture(&wgpu::TextureDescriptor {
+                    label: Some(label),
+                    size: wgpu::Extent3d {
+                        width: size[0],
+                        height: size[1],
+                        depth_or_array_layers: 1,
+                    },
+                    mip_level_count: 1,
+                    sample_count: samples,
+                    dimension: wgpu::TextureDimension::D2,
+                    format,
+                    usage,
+                    view_formats: &[],
+                })
+                .create_view(&wgpu::TextureViewDescriptor::default())
+        };
+        let attach = wgpu::TextureUsages::RENDER_ATTACHMENT;
+        let color = texture(
+            "viewport colour",
+            COLOR_FORMAT,
+            1,
+            attach | wgpu::TextureUsages::TEXTURE_BINDING,
+        );
+        let msaa = (self.sample_count > 1).then(|| {
+            texture(
+                "viewport colour (msaa)",
+                COLOR_FORMAT,
+                self.sample_count,
+                attach,
+            )
+        });
+        let depth = texture("viewport depth", DEPTH_FORMAT, self.sample_count, attach);
+        let blit_bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("viewport blit"),
+            layout: &self.blit_layout,
+            entries: &[wgpu::BindGroupEntry {
+                binding: 0,
+                resource: wgpu::BindingResource::TextureView(&color),
+            }],
+        });
+        self.target = Some(Target {
+            size,
+            color,
+            msaa,
+            depth,
+            blit_bind_group,
+        });
+    }
+
+    /// Uploads the scene's geometry; false (and nothing drawn) when it does not fit.
+    fn upload(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        scene: Option<&Scene>,
+    ) -> bool {
+        let count = |n: usize| u32::try_from(n).ok();
+        let drawn = match scene.map(|s| &s.geometry) {
+            None => Some(Drawn::Nothing),
+            Some(Geometry::Triangles { vertices, indices }) => count(indices.len())
+                .filter(|_| {
+                    self.vertices
+                        .write(device, queue, bytemuck::cast_slice(vertices))
+                        && self
+                            .indices
+                            .write(device, queue, bytemuck::cast_slice(indices))
+                })
+                .map(|indices| Drawn::Triangles { indices }),
+            Some(Geometry::Points(points)) => count(points.len())
+                .filter(|_| {
+                    self.vertices
+                        .write(device, queue, bytemuck::cast_slice(points))
+                })
+                .map(|instances| Drawn::Points { instances }),
+            Some(Geometry::Lines(lines)) => count(lines.len())
+                .filter(|_| {
+                    self.vertices
+                        .write(device, queue, bytemuck::cast_slice(lines))
+                })
+                .map(|vertices| Drawn::Lines { vertices }),
+        };
+        self.drawn = drawn.unwrap_or(Drawn::Nothing);
+        drawn.is_some()
+    }
+
+    /// Clears the offscreen target and draws the uploaded geometry into it.
+    fn render(&self, encoder: &mut wgpu::CommandEncoder) {
+        let Some(target) = &self.target else {
+            return;
+        };
+        let (view, resolve_target, store) = match &target.msaa {
+            Some(msaa) => (msaa, Some(&target.color), wgpu::StoreOp::Discard),
+            None => (&target.color, None, wgpu::StoreOp::Store),
+        };
+        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("viewport scene"),
+            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                view,
+                resolve_target,
+                depth_slice: None,
+                ops: wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(BACKGROUND),
+                    store,
+                },
+            })],
+            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                view: &target.depth,
+                depth_ops: Some(wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(1.0),
+                    store: wgpu::StoreOp::Discard,
+                }),
+                stencil_ops: None,
+            }),
+            ..Default::default()
+        });
+        let Some(vertices) = &self.vertices.buffer else {
+            return;
+        };
+        pass.set_bind_group(0, &self.frame_bind_group, &[]);
+        match self.drawn {
+            Drawn::Nothing => {}
+            Drawn::Triangles { indices } => {
+                if let Some(index_buffer) = &self.indices.buffer {
+                    pass.set_pipeline(&self.mesh_pipeline);
+                    pass.set_vertex_buffer(0, vertices.slice(..));
+                    pass.set_index_buffer(index_buffer.slice(..), wgpu::IndexFormat::Uint32);
+                    pass.draw_indexed(0..indices, 0, 0..1);
+                }
+            }
+            Drawn::Points { instances } => {
+                pass.set_pipeline(&self.point_pipeline);
+                pass.set_vertex_buffer(0, vertices.slice(..));
+                pass.draw(0..6, 0..instances);
+            }
+            Drawn::Lines { vertices: n } => {
+                pass.set_pipeline(&self.line_pipeline);
+                pass.set_vertex_buffer(0, vertices.slice(..));
+                pass.draw(0..n, 0..1);
+            }
+        }
+    }
+}
+
+/// Whether `format` can be rendered with 4x MSAA on this device.
+fn supports_4x(rs: &egui_wgpu::RenderState, format: wgpu::TextureFormat) -> bool {
+    let features = rs.device.features();
+    let flags = if features.contains(wgpu::Features::TEXTURE_ADAPTER_SPECIFIC_FORMAT_FEATURES) {
+        rs.adapter.get_texture_format_features(format).flags
+    } else {
+        format.guaranteed_format_features(features).flags
+    };
+    flags.sample_count_supported(4)
+}
+
+/// Lit meshes (headlight, two-sided), unlit lines, and points as discs.
+const SCENE_SHADER: &str = r#"
+struct Frame {
+    view_proj: mat4x4<f32>,
+    eye: vec4<f32>,
+    viewport: vec4<f32>,
+};
+@group(0) @binding(0) var<uniform> frame: Frame;
+
+// Headlight diffuse on both faces, a little ambient and a soft highlight.
+fn shade(base: vec3<f32>, n_dot_v: f32) -> vec3<f32> {
+    let d = abs(n_dot_v);
+    return base * (0.16 + 0.84 * d) + vec3<f32>(0.18 * pow(d, 40.0));
+}
+
+struct MeshIn {
+    @location(0) position: vec3<f32>,
+    @location(1) normal: vec3<f32>,
+    @location(2) color: vec3<f32>,
+};
+struct MeshOut {
+    @builtin(position) clip: vec4<f32>,
+    @location(0) world: vec3<f32>,
+    @location(1) normal: vec3<f32>,
+    @location(2) color: vec3<f32>,
+};
+
+@vertex
+fn vs_mesh(v: MeshIn) -> MeshOut {
+    var out: MeshOut;
+    out.clip = frame.view_proj * vec4<f32>(v.position, 1.0);
+    out.world = v.position;
+    out.normal = v.normal;
+    out.color = v.color;
+    return out;
+}
+
+@fragment
+fn fs_mesh(in: MeshOut) -> @location(0) vec4<f32> {
+    let v = normalize(frame.eye.xyz - in.world);
+    var n_dot_v = 1.0;
+    if (dot(in.normal, in.normal) > 1e-12) {
+        n_dot_v = dot(normalize(in.normal), v);
+    }
+    return vec4<f32>(shade(in.color, n_dot_v), 1.0);
+}
+
+@fragment
+fn fs_unlit(in: MeshOut) -> @location(0) vec4<f32> {
+    return vec4<f32>(in.color, 1.0);
+}
+
+struct PointIn {
+    @location(0) position: vec3<f32>,
+    @location(1) radius: f32,
+    @location(2) normal: vec3<f32>,
+    @location(3) color: vec3<f32>,
+};
+struct PointOut {
+    @builtin(position) clip: vec4<f32>,
+    @location(0) corner: vec2<f32>,
+    @location(1) normal: vec3<f32>,
+    @location(2) color: vec3<f32>,
+    @location(3) to_eye: vec3<f32>,
+};
+
+@vertex
+fn vs_points(@builtin(vertex_index) i: u32, p: PointIn) -> PointOut {
+    var corners = array<vec2<f32>, 6>(
+        vec2<f32>(-1.0, -1.0), vec2<f32>(1.0, -1.0), vec2<f32>(1.0, 1.0),
+        vec2<f32>(-1.0, -1.0), vec2<f32>(1.0, 1.0), vec2<f32>(-1.0, 1.0),
+    );
+    let c = corners[i % 6u];
+    let clip = frame.view_proj * vec4<f32>(p.position, 1.0);
+    var radius_px = frame.viewport.w;
+    if (p.radius > 0.0) {
+        radius_px = max(p.radius * frame.viewport.z / max(clip.w, 1e-6), 1.0);
+    }
+    let offset = c * radius_px * 2.0 / frame.viewport.xy;
+    var out: PointOut;
+    out.clip = vec4<f32>(clip.xy + offset * clip.w, clip.z, clip.w);
+    out.corner = c;
+    out.normal = p.normal;
+    out.color = p.color;
+    out.to_eye = frame.eye.xyz - p.position;
+    return out;
+}
+
+@fragment
+fn fs_points(in: PointOut) -> @location(0) vec4<f32> {
+    let r2 = dot(in.corner, in.corner);
+    if (r2 > 1.0) {
+        discard;
+    }
+    // Without a normal the disc is shaded like a small sphere facing the camera.
+    var n_dot_v = sqrt(1.0 - r2);
+    if (dot(in.normal, in.normal) > 1e-12 && dot(in.to_eye, in.to_eye) > 0.0) {
+        n_dot_v = dot(normalize(in.normal), normalize(in.to_eye));
+    }
+    return vec4<f32>(shade(in.color, n_dot_v), 1.0);
+}
+"#;
+
+/// Copies the offscreen image 1:1 into egui's pass, encoding to sRGB when the
+/// target does not do it itself.
+const BLIT_SHADER: &str = r#"
+@group(0) @binding(0) var image: texture_2d<f32>;
+
+struct BlitOut {
+    @builtin(position) clip: vec4<f32>,
+    @location(0) uv: vec2<f32>,
+};
+
+@vertex
+fn vs_blit(@builtin(vertex_index) i: u32) -> BlitOut {
+    let uv = vec2<f32>(f32((i << 1u) & 2u), f32(i & 2u));
+    var out: BlitOut;
+    out.clip = vec4<f32>(uv.x * 2.0 - 1.0, 1.0 - uv.y * 2.0, 0.0, 1.0);
+    out.uv = uv;
+    return out;
+}
+
+fn fetch(uv: vec2<f32>) -> vec4<f32> {
+    let size = textureDimensions(image);
+    let texel = min(vec2<u32>(max(uv, vec2<f32>(0.0)) * vec2<f32>(size)), size - vec2<u32>(1u));
+    return textureLoad(image, texel, 0);
+}
+
+@fragment
+fn fs_blit_linear(in: BlitOut) -> @location(0) vec4<f32> {
+    return vec4<f32>(fetch(in.uv).rgb, 1.0);
+}
+
+@fragment
+fn fs_blit_gamma(in: BlitOut) -> @location(0) vec4<f32> {
+    let c = fetch(in.uv).rgb;
+    let lo = c * 12.92;
+    let hi = 1.055 * pow(c, vec3<f32>(1.0 / 2.4)) - 0.055;
+    return vec4<f32>(select(hi, lo, c <= vec3<f32>(0.0031308)), 1.0);
+}
+"#;

@@ -1,0 +1,386 @@
+//! The studio driven headlessly through egui_kittest with a real wgpu renderer
+//! (llvmpipe or lavapipe on machines without a GPU).
+
+use std::io::Write as _;
+use std::path::PathBuf;
+use std::time::{Duration, Instant};
+
+use egui_kittest::Harness;
+use egui_kittest::kittest::Queryable as _;
+use egui_kittest::wgpu::{WgpuTestRenderer, create_render_state, default_wgpu_setup};
+use lodstudio::studio::StudioApp;
+
+const MAX_LOAD_FRAMES: usize = 600;
+const MAX_LOAD_TIME: Duration = Duration::from_secs(60);
+
+/// A harness whose renderer shares its wgpu state with the studio's viewport,
+/// so the paint callback finds its pipelines.
+fn studio(initial: Option<PathBuf>) -> Harness<'static, StudioApp> {
+    let render_state = create_render_state(
+        default_wgpu_setup(),
+        egui_wgpu::RendererOptions::PREDICTABLE,
+    );
+    let app = StudioApp::with_render_state(Some(&render_state), initial);
+    Harness::builder()
+        .with_size([1280.0, 800.0])
+        // Real-time-like frames, so two clicks make a double-click.
+        .with_step_dt(1.0 / 60.0)
+        .with_max_steps(120)
+        .renderer(WgpuTestRenderer::from_render_state(render_state))
+        .build_ui_state(|ui, app: &mut StudioApp| app.show(ui), app)
+}
+
+/// Steps frames until the studio has no load running (bounded), then settles.
+fn wait_for_load(harness: &mut Harness<'_, StudioApp>) {
+    let start = Instant::now();
+    for _ in 0..MAX_LOAD_FRAMES {
+        harness.step();
+        if !harness.state().is_loading() {
+            harness.run();
+            return;
+        }
+        assert!(
+            start.elapsed() < MAX_LOAD_TIME,
+            "model still loading after {MAX_LOAD_TIME:?}"
+        );
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    panic!("model still loading after {MAX_LOAD_FRAMES} frames");
+}
+
+fn has_label(harness: &Harness<'_, StudioApp>, label: &str) -> bool {
+    harness.query_all_by_label(label).next().is_some()
+}
+
+/// Writes `image` as a binary PPM (no image codec needed) for a human to look at.
+fn save_ppm(width: u32, height: u32, rgba: &[u8], name: &str) -> PathBuf {
+    let path = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(format!("{name}.ppm"));
+    let mut bytes = format!("P6\n{width} {height}\n255\n").into_bytes();
+    for px in rgba.chunks_exact(4) {
+        bytes.extend_from_slice(&px[..3]);
+    }
+    let mut file = std::fs::File::create(&path).expect("create snapshot file");
+    file.write_all(&bytes).expect("write snapshot file");
+    path
+}
+
+/// Renders the studio, saves the image as `name`, and measures the viewport:
+/// the fraction of its pixels that differ from the background (its corner)
+/// and how many distinct colours those have.
+fn viewport_pixels(harness: &mut Harness<'_, StudioApp>, name: &str) -> (f32, usize) {
+    let rect = harness.get_by_label("3D viewport").rect();
+    let image = harness.render().expect("render the studio");
+    let path = save_ppm(image.width(), image.height(), image.as_raw(), name);
+    eprintln!("rendered the studio to {}", path.display());
+    let (x0, y0) = (rect.min.x.ceil() as u32 + 2, rect.min.y.ceil() as u32 + 2);
+    let (x1, y1) = (rect.max.x.floor() as u32 - 2, rect.max.y.floor() as u32 - 2);
+    let background = image.get_pixel(x0, y0).0;
+    let mut total = 0usize;
+    let mut model: Vec<[u8; 4]> = Vec::new();
+    for y in (y0..y1).step_by(2) {
+        for x in (x0..x1).step_by(2) {
+            total += 1;
+            let px = image.get_pixel(x, y).0;
+            if px != background {
+                model.push(px);
+            }
+        }
+    }
+    let covered = model.len() as f32 / total.max(1) as f32;
+    model.sort_unstable();
+    model.dedup();
+    (covered, model.len())
+}
+
+#[test]
+fn default_model_shows_counts_and_is_drawn() {
+    let mut harness = studio(None);
+    wait_for_load(&mut harness);
+
+    let summary = harness
+        .state()
+        .summary()
+        .expect("the default model loaded")
+        .clone();
+    assert!(summary.triangles > 0, "default model has triangles");
+    assert!(has_label(&harness, "triangles"), "inspector row label");
+    let count = summary.triangles.to_string();
+    assert!(
+        has_label(&harness, &count),
+        "inspector shows the triangle count {count}"
+    );
+
+    let rect = harness.get_by_label("3D viewport").rect();
+    assert!(rect.width() > 200.0 && rect.height() > 200.0, "{rect:?}");
+
+    let (covered, shades) = viewport_pixels(&mut harness, "studio_default");
+    assert!(
+        covered > 0.02,
+        "only {:.1}% of the viewport differs from the background",
+        covered * 100.0
+    );
+    // Lit, not flat: the model shows many shades.
+    assert!(shades > 20, "only {shades} shades");
+}
+
+#[test]
+fn missing_file_shows_error_and_keeps_model() {
+    let mut harness = studio(Some("builtin:sphere".into()));
+    wait_for_load(&mut harness);
+    let before = harness.state().summary().expect("sphere loaded").clone();
+
+    harness
+        .state_mut()
+        .open("/nonexistent/lodstudio-missing-model.obj");
+    wait_for_load(&mut harness);
+
+    assert!(has_label(&harness, "Could not open model"), "error window");
+    assert!(
+        harness
+            .query_all_by_label_contains("lodstudio-missing-model.obj")
+            .next()
+            .is_some(),
+        "the error names the file"
+    );
+    let after = harness.state().summary().expect("previous model kept");
+    assert_eq!(after, &before);
+    assert!(has_label(&harness, &before.triangles.to_string()));
+
+    // Dismissing the error closes its window; the model stays.
+    harness.get_by_label("OK").click();
+    harness.run();
+    assert!(!has_label(&harness, "Could not open model"));
+    assert_eq!(harness.state().summary(), Some(&before));
+}
+
+#[test]
+fn builtin_button_loads_that_model() {
+    let mut harness = studio(Some("builtin:sphere".into()));
+    wait_for_load(&mut harness);
+    let sphere = harness.state().summary().expect("sphere loaded").triangles;
+
+    harness
+        .get_by_role_and_label(egui::Role::Button, "torus")
+        .click();
+    harness.step();
+    assert!(harness.state().is_loading());
+    wait_for_load(&mut harness);
+
+    let torus = harness.state().summary().expect("torus loaded");
+    assert_ne!(torus.triangles, sphere);
+    assert!(has_label(&harness, &torus.triangles.to_string()));
+    assert!(
+        harness
+            .state()
+            .log_lines()
+            .any(|l| l.contains("builtin:torus")),
+        "log names the model"
+    );
+
+    // The same through File → Built-in models.
+    harness.get_by_label("File").click();
+    harness.run();
+    // A button in the menu; the left panel's header is a disclosure triangle.
+    harness
+        .get_by_role_and_label(egui::Role::Button, "Built-in models")
+        .hover();
+    harness.run();
+    let sphere_buttons: Vec<_> = harness
+        .get_all_by_role_and_label(egui::Role::Button, "sphere")
+        .collect();
+    assert_eq!(sphere_buttons.len(), 2, "left panel and submenu");
+    // The submenu's button is the one right of the left panel's.
+    let in_menu = sphere_buttons
+        .iter()
+        .max_by(|a, b| a.rect().min.x.total_cmp(&b.rect().min.x))
+        .expect("two buttons");
+    in_menu.click();
+    harness.step();
+    wait_for_load(&mut harness);
+    assert_eq!(harness.state().summary().map(|s| s.triangles), Some(sphere));
+}
+
+#[test]
+fn point_set_is_drawn() {
+    let mut harness = studio(Some("builtin:octahedron-points".into()));
+    wait_for_load(&mut harness);
+    let summary = harness.state().summary().expect("points loaded");
+    assert!(summary.points > 0);
+    assert!(has_label(&harness, &summary.points.to_string()));
+    let (covered, shades) = viewport_pixels(&mut harness, "studio_points");
+    assert!(covered > 0.02, "points cover {:.1}%", covered * 100.0);
+    assert!(shades > 4, "only {shades} shades");
+}
+
+/// (yaw, pitch, distance, target) of the studio's camera.
+fn camera(harness: &Harness<'_, StudioApp>) -> (f32, f32, f32, glam::Vec3) {
+    let v = harness.state().viewport();
+    (v.yaw, v.pitch, v.distance, v.target)
+}
+
+fn press(
+    harness: &Harness<'_, StudioApp>,
+    pos: egui::Pos2,
+    button: egui::PointerButton,
+    pressed: bool,
+) {
+    harness.event(egui::Event::PointerButton {
+        pos,
+        button,
+        pressed,
+        modifiers: egui::Modifiers::NONE,
+    });
+}
+
+#[test]
+fn viewport_camera_follows_pointer() {
+    use egui::PointerButton::{Primary, Secondary};
+    let mut harness = studio(Some("builtin:torus".into()));
+    wait_for_load(&mut harness);
+    let center = harness.get_by_label("3D viewport").rect().center();
+    let moved = center + egui::vec2(60.0, 30.0);
+    let (yaw0, pitch0, dist0, target0) = camera(&harness);
+
+    // Left-drag orbits.
+    harness.hover_at(center);
+    press(&harness, center, Primary, true);
+    harness.hover_at(center + egui::vec2(30.0, 15.0));
+    harness.hover_at(moved);
+    press(&harness, moved, Primary, false);
+    harness.run();
+    let (yaw1, pitch1, dist1, target1) = camera(&harness);
+    assert!(
+        yaw1 < yaw0 && pitch1 > pitch0,
+        "orbit: {yaw0},{pitch0} -> {yaw1},{pitch1}"
+    );
+    assert_eq!((dist1, target1), (dist0, target0));
+
+    // Right-drag pans.
+    harness.hover_at(center);
+    press(&harness, center, Secondary, true);
+    harness.hover_at(center + egui::vec2(30.0, 15.0));
+    harness.hover_at(moved);
+    press(&harness, moved, Secondary, false);
+    harness.run();
+    let (_, _, dist2, target2) = camera(&harness);
+    assert!(target2.distance(target0) > 1e-3, "pan moved the target");
+    assert_eq!(dist2, dist0);
+
+    // Scrolling up zooms in.
+    harness.hover_at(center);
+    harness.event(egui::Event::MouseWheel {
+        unit: egui::MouseWheelUnit::Point,
+        delta: egui::vec2(0.0, 120.0),
+        phase: egui::TouchPhase::Move,
+        source: egui::MouseWheelSource::Wheel,
+        modifiers: egui::Modifiers::NONE,
+    });
+    harness.run();
+    let (_, _, dist3, _) = camera(&harness);
+    assert!(dist3 < dist0, "zoom: {dist0} -> {dist3}");
+
+    // Double-click frames the model again.
+    for _ in 0..2 {
+        press(&harness, center, Primary, true);
+        press(&harness, center, Primary, false);
+    }
+    harness.run();
+    let (_, _, dist4, target4) = camera(&harness);
+    assert!((dist4 - dist0).abs() < 1e-4 * dist0, "{dist4} vs {dist0}");
+    assert!(target4.distance(target0) < 1e-5);
+}
+
+#[test]
+fn runs_without_wgpu() {
+    let app = StudioApp::with_render_state(None, Some("builtin:sphere".into()));
+    let mut harness = Harness::builder()
+        .with_size([1024.0, 700.0])
+        .build_ui_state(|ui, app: &mut StudioApp| app.show(ui), app);
+    wait_for_load(&mut harness);
+    assert!(has_label(&harness, "3D viewport needs wgpu"));
+    assert!(has_label(&harness, "3D viewport"));
+    assert!(harness.state().summary().is_some());
+}
+
+/// A file dropped onto the window, as the winit integration reports it.
+#[derive(Debug)]
+struct Dropped(PathBuf);
+
+impl egui::DroppedFile for Dropped {
+    fn path(&self) -> &std::path::Path {
+        &self.0
+    }
+
+    fn bytes(&self) -> Result<Vec<u8>, String> {
+        std::fs::read(&self.0).map_err(|e| e.to_string())
+    }
+}
+
+#[test]
+fn dropped_file_opens_and_becomes_recent() {
+    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR"));
+    let file = dir.join("gui-dropped-tetrahedron.off");
+    std::fs::write(
+        &file,
+        "OFF\n4 4 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n",
+    )
+    .expect("write the test model");
+
+    let mut harness = studio(Some("builtin:sphere".into()));
+    wait_for_load(&mut harness);
+    harness
+        .input_mut()
+        .dropped_files
+        .push(std::sync::Arc::new(Dropped(file.clone())));
+    harness.step();
+    assert!(harness.state().is_loading());
+    wait_for_load(&mut harness);
+
+    assert_eq!(harness.state().summary().map(|s| s.triangles), Some(4));
+    // Listed under "Recent files" (the model name above it is a plain label).
+    assert!(
+        harness
+            .query_all_by_role_and_label(egui::Role::Button, "gui-dropped-tetrahedron.off")
+            .next()
+            .is_some()
+    );
+}
+
+/// A load blocked on a FIFO nobody writes to stays in progress until cancelled.
+#[cfg(unix)]
+#[test]
+fn cancel_keeps_previous_model() {
+    let fifo = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("gui-cancel.fifo");
+    let _ = std::fs::remove_file(&fifo);
+    let made = std::process::Command::new("mkfifo")
+        .arg(&fifo)
+        .status()
+        .expect("run mkfifo");
+    assert!(made.success());
+
+    let mut harness = studio(Some("builtin:sphere".into()));
+    wait_for_load(&mut harness);
+    let before = harness.state().summary().expect("sphere loaded").clone();
+
+    harness.state_mut().open(&fifo);
+    harness.step();
+    harness.step();
+    assert!(harness.state().is_loading());
+    harness.get_by_label("Cancel").click();
+    harness.step();
+    assert!(!harness.state().is_loading());
+    harness.run();
+
+    assert_eq!(harness.state().summary(), Some(&before));
+    assert!(has_label(&harness, &before.triangles.to_string()));
+    assert!(!has_label(&harness, "Could not open model"));
+    assert!(
+        harness
+            .state()
+            .log_lines()
+            .any(|l| l.starts_with("Cancelled loading gui-cancel.fifo")),
+    );
+    // Let the abandoned worker finish: a writer that closes at once gives it EOF.
+    drop(std::fs::OpenOptions::new().write(true).open(&fifo));
+    let _ = std::fs::remove_file(&fifo);
+}
