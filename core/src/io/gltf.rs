@@ -223,3 +223,119 @@ fn read_primitive(
     }
     Ok(Some(mesh))
 }
+
+/// Writes one mesh as a binary glTF (GLB): positions, normals, vertex colours,
+/// UVs and 32-bit indices in one buffer, one node, one scene.
+pub fn write_glb(mesh: &TriMesh) -> Vec<u8> {
+    use serde_json::json;
+    let mut bin: Vec<u8> = Vec::new();
+    let mut views = Vec::new();
+    let mut accessors = Vec::new();
+    let mut attributes = serde_json::Map::new();
+    let n = mesh.positions.len();
+    let bounds = mesh.bounds();
+    let mut add = |bin: &mut Vec<u8>,
+                   data: &[f32],
+                   kind: &str,
+                   target: u32,
+                   extra: serde_json::Value| {
+        let offset = bin.len();
+        bin.extend(data.iter().flat_map(|x| x.to_le_bytes()));
+        views.push(json!({"buffer": 0, "byteOffset": offset, "byteLength": data.len() * 4, "target": target}));
+        let mut acc =
+            json!({"bufferView": views.len() - 1, "componentType": 5126, "count": n, "type": kind});
+        if let (Some(a), Some(e)) = (acc.as_object_mut(), extra.as_object()) {
+            a.extend(e.clone());
+        }
+        accessors.push(acc);
+        accessors.len() - 1
+    };
+    let flat3 = |v: &[Vec3]| v.iter().flat_map(|p| p.to_array()).collect::<Vec<f32>>();
+    let pos = add(
+        &mut bin,
+        &flat3(&mesh.positions),
+        "VEC3",
+        34962,
+        json!({"min": bounds.min.to_array(), "max": bounds.max.to_array()}),
+    );
+    attributes.insert("POSITION".into(), pos.into());
+    if let Some(nr) = &mesh.normals {
+        let unit: Vec<Vec3> = nr
+            .iter()
+            .map(|v| v.try_normalize().unwrap_or(Vec3::Z))
+            .collect();
+        let a = add(&mut bin, &flat3(&unit), "VEC3", 34962, json!({}));
+        attributes.insert("NORMAL".into(), a.into());
+    }
+    if let Some(c) = &mesh.colors {
+        let clamped: Vec<Vec3> = c.iter().map(|v| v.clamp(Vec3::ZERO, Vec3::ONE)).collect();
+        let a = add(&mut bin, &flat3(&clamped), "VEC3", 34962, json!({}));
+        attributes.insert("COLOR_0".into(), a.into());
+    }
+    if let Some(uv) = &mesh.uvs {
+        let flat: Vec<f32> = uv.iter().flat_map(|v| v.to_array()).collect();
+        let a = add(&mut bin, &flat, "VEC2", 34962, json!({}));
+        attributes.insert("TEXCOORD_0".into(), a.into());
+    }
+    let offset = bin.len();
+    bin.extend(
+        mesh.triangles
+            .iter()
+            .flatten()
+            .flat_map(|i| i.to_le_bytes()),
+    );
+    views.push(json!({"buffer": 0, "byteOffset": offset, "byteLength": mesh.triangles.len() * 12, "target": 34963}));
+    accessors.push(json!({"bufferView": views.len() - 1, "componentType": 5125, "count": mesh.triangles.len() * 3, "type": "SCALAR"}));
+    let indices = accessors.len() - 1;
+    while bin.len() % 4 != 0 {
+        bin.push(0);
+    }
+    let doc = json!({
+        "asset": {"version": "2.0", "generator": "lodstudio"},
+        "scene": 0,
+        "scenes": [{"nodes": [0]}],
+        "nodes": [{"mesh": 0, "name": "lod0"}],
+        "meshes": [{"primitives": [{"attributes": attributes, "indices": indices, "mode": 4, "material": 0}]}],
+        "materials": [{"pbrMetallicRoughness": {"baseColorFactor": [1.0, 1.0, 1.0, 1.0], "metallicFactor": 0.0, "roughnessFactor": 0.8}, "doubleSided": false}],
+        "buffers": [{"byteLength": bin.len()}],
+        "bufferViews": views,
+        "accessors": accessors,
+    });
+    glb_container(doc.to_string().into_bytes(), bin)
+}
+
+/// Packs a JSON chunk (space-padded) and a binary chunk (zero-padded) into GLB.
+fn glb_container(mut json: Vec<u8>, bin: Vec<u8>) -> Vec<u8> {
+    while json.len() % 4 != 0 {
+        json.push(b' ');
+    }
+    let total = 12 + 8 + json.len() + 8 + bin.len();
+    let mut out = Vec::with_capacity(total);
+    out.extend_from_slice(b"glTF");
+    out.extend_from_slice(&2u32.to_le_bytes());
+    out.extend_from_slice(&(total as u32).to_le_bytes());
+    out.extend_from_slice(&(json.len() as u32).to_le_bytes());
+    out.extend_from_slice(b"JSON");
+    out.extend_from_slice(&json);
+    out.extend_from_slice(&(bin.len() as u32).to_le_bytes());
+    out.extend_from_slice(b"BIN\0");
+    out.extend_from_slice(&bin);
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn glb_round_trips_through_the_reader() {
+        let mut m = crate::builtins::torus(1.0, 0.3, 16, 8);
+        m.colors = Some(vec![Vec3::new(0.2, 0.5, 0.9); m.positions.len()]);
+        let glb = write_glb(&m);
+        let back = read(&glb, None).unwrap();
+        assert_eq!(back.triangles, m.triangles);
+        assert_eq!(back.positions, m.positions);
+        assert!(back.normals.is_some() && back.uvs.is_some());
+        assert_eq!(back.colors.as_ref().unwrap()[3], Vec3::new(0.2, 0.5, 0.9));
+    }
+}

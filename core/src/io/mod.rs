@@ -288,6 +288,22 @@ pub fn extension(path: &Path) -> String {
         .unwrap_or_default()
 }
 
+/// Mesh formats lodstudio writes, chosen by extension.
+pub const MESH_WRITE_FORMATS: &str = "obj, ply, glb";
+
+/// Encodes a mesh for `path`'s extension (`obj`, `ply` binary, `glb`).
+pub fn encode_mesh(path: &Path, mesh: &TriMesh) -> Result<Vec<u8>, String> {
+    match extension(path).as_str() {
+        "obj" => Ok(obj::write(mesh)),
+        "ply" => Ok(ply::write_mesh(mesh, ply::Encoding::BinaryLittleEndian)),
+        "glb" => Ok(gltf::write_glb(mesh)),
+        other => Err(format!(
+            "cannot write {:?}: unknown mesh extension {other:?} (use {MESH_WRITE_FORMATS})",
+            path.display().to_string()
+        )),
+    }
+}
+
 /// Writes `bytes` to `path` atomically: a temporary file in the same folder, then rename.
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
     use std::io::Write;

@@ -194,6 +194,55 @@ fn validate(data: &[u8], progress: &Progress) -> ParseResult<Vec<Vec3>> {
         .collect())
 }
 
+/// Writes a mesh as OBJ: `v` (with `r g b` when coloured), `vt`, `vn`, and one
+/// `o part_N` group per part.
+pub fn write(mesh: &TriMesh) -> Vec<u8> {
+    use std::fmt::Write;
+    let mut s = String::with_capacity(mesh.positions.len() * 40 + mesh.triangles.len() * 30);
+    s.push_str("# written by lodstudio\n");
+    for (i, p) in mesh.positions.iter().enumerate() {
+        match &mesh.colors {
+            Some(c) => {
+                let c = c[i];
+                let _ = writeln!(s, "v {} {} {} {} {} {}", p.x, p.y, p.z, c.x, c.y, c.z);
+            }
+            None => {
+                let _ = writeln!(s, "v {} {} {}", p.x, p.y, p.z);
+            }
+        }
+    }
+    for uv in mesh.uvs.iter().flatten() {
+        let _ = writeln!(s, "vt {} {}", uv.x, uv.y);
+    }
+    for n in mesh.normals.iter().flatten() {
+        let _ = writeln!(s, "vn {} {} {}", n.x, n.y, n.z);
+    }
+    let corner = |v: u32| {
+        let v = v + 1;
+        match (mesh.uvs.is_some(), mesh.normals.is_some()) {
+            (true, true) => format!("{v}/{v}/{v}"),
+            (true, false) => format!("{v}/{v}"),
+            (false, true) => format!("{v}//{v}"),
+            (false, false) => v.to_string(),
+        }
+    };
+    let mut part = u32::MAX;
+    for (t, tri) in mesh.triangles.iter().enumerate() {
+        if mesh.parts.is_some() && mesh.part(t) != part {
+            part = mesh.part(t);
+            let _ = writeln!(s, "o part_{part}");
+        }
+        let _ = writeln!(
+            s,
+            "f {} {} {}",
+            corner(tri[0]),
+            corner(tri[1]),
+            corner(tri[2])
+        );
+    }
+    s.into_bytes()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -212,6 +261,17 @@ mod tests {
         assert_eq!(m.triangles.len(), 3);
         assert_eq!(m.part_count(), 2);
         assert_eq!(m.parts.as_ref().unwrap(), &vec![0, 0, 1]);
+    }
+
+    #[test]
+    fn write_then_read_round_trips() {
+        let mut m = crate::builtins::torus(1.0, 0.3, 12, 8);
+        m.colors = Some(m.positions.iter().map(|p| p.abs() / 1.3).collect());
+        let back = read(&write(&m), &Progress::new()).unwrap();
+        let (back, _) = crate::geom::repair::repair_mesh(back, &Default::default());
+        assert_eq!(back.triangles.len(), m.triangles.len());
+        assert_eq!(back.positions.len(), m.positions.len());
+        assert!(back.colors.is_some() && back.normals.is_some() && back.uvs.is_some());
     }
 
     #[test]

@@ -1,0 +1,617 @@
+//! Greedy edge collapse driven by a priority queue (hybrid paper §5.2).
+//!
+//! Collapses keep topology (link condition, no duplicate triangles), reject
+//! triangles that flip or fold, optionally reject slivers (merge-tree paper
+//! eq. 3 quality), and never join separate parts: part seams, borders and
+//! non-manifold edges are constrained edges whose vertices move only along them
+//! (or not at all with `lock_borders`). Each collapse kills both endpoints and
+//! every triangle around them and creates a new vertex and new triangles, so a
+//! caller building a hierarchy (the hybrid MRG) gets distinct ids for every
+//! primitive. The order comes from a caller-supplied cost; by default the
+//! quadric error of the best legal placement.
+
+use std::cmp::Reverse;
+use std::collections::BinaryHeap;
+
+use glam::{Vec2, Vec3};
+
+use super::quadric::Quadric;
+use crate::geom::{Adjacency, TriMesh};
+
+/// Legality rules for collapses.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CollapseOptions {
+    /// Border (and part-seam, non-manifold) vertices never move.
+    pub lock_borders: bool,
+    /// Sliver guard: reject a collapse that makes a triangle of quality
+    /// 4√3·area/(l0²+l1²+l2²) below this (and worse than before). 0 disables.
+    pub min_quality: f32,
+    /// Fold guard: reject a collapse that turns any triangle's normal by more than
+    /// the angle whose cosine this is (0 rejects only flips beyond 90°).
+    pub min_normal_cos: f32,
+}
+
+impl Default for CollapseOptions {
+    fn default() -> Self {
+        Self {
+            lock_borders: false,
+            min_quality: 0.0,
+            min_normal_cos: 0.2,
+        }
+    }
+}
+
+/// What a caller's cost function sees of a candidate collapse.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Candidate {
+    pub edge: [u32; 2],
+    pub position: Vec3,
+    /// Quadric error of `position` (sum of squared plane distances, area weighted).
+    pub quadric_error: f64,
+    /// Triangles the collapse removes (2 inside, 1 on a border).
+    pub triangles_removed: usize,
+}
+
+/// Orders candidate collapses: smaller goes first.
+pub type CostFn = dyn Fn(&Candidate) -> f64 + Send + Sync;
+
+/// One performed collapse.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Collapse {
+    /// The two vertices merged (both are dead afterwards).
+    pub edge: [u32; 2],
+    /// The new vertex and its position.
+    pub vertex: u32,
+    pub position: Vec3,
+    /// Triangle ids that died and that were created.
+    pub removed: Vec<u32>,
+    pub added: Vec<u32>,
+    pub cost: f64,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Entry {
+    cost: f64,
+    a: u32,
+    b: u32,
+}
+impl Eq for Entry {}
+impl PartialOrd for Entry {
+    fn partial_cmp(&self, o: &Self) -> Option<std::cmp::Ordering> {
+        Some(self.cmp(o))
+    }
+}
+impl Ord for Entry {
+    fn cmp(&self, o: &Self) -> std::cmp::Ordering {
+        self.cost
+            .total_cmp(&o.cost)
+            .then(self.a.cmp(&o.a))
+            .then(self.b.cmp(&o.b))
+    }
+}
+
+/// Relative weight of the constraint planes along borders and seams.
+const BORDER_WEIGHT: f64 = 10.0;
+
+/// The working mesh of an edge-collapse simplification.
+pub struct EdgeCollapser {
+    pos: Vec<Vec3>,
+    normals: Option<Vec<Vec3>>,
+    colors: Option<Vec<Vec3>>,
+    uvs: Option<Vec<Vec2>>,
+    tris: Vec<[u32; 3]>,
+    tri_part: Vec<u32>,
+    tri_alive: Vec<bool>,
+    vtris: Vec<Vec<u32>>,
+    v_alive: Vec<bool>,
+    constrained: Vec<bool>,
+    quadric: Vec<Quadric>,
+    heap: BinaryHeap<Reverse<Entry>>,
+    deferred: Vec<(u32, u32)>,
+    collapsed_since_retry: bool,
+    alive_triangles: usize,
+    opts: CollapseOptions,
+    cost: Box<CostFn>,
+}
+
+fn quality(p: [Vec3; 3]) -> f32 {
+    let l2 =
+        p[0].distance_squared(p[1]) + p[1].distance_squared(p[2]) + p[2].distance_squared(p[0]);
+    if l2 <= 0.0 {
+        return 0.0;
+    }
+    4.0 * 3f32.sqrt() * 0.5 * (p[1] - p[0]).cross(p[2] - p[0]).length() / l2
+}
+
+impl EdgeCollapser {
+    /// Starts from `mesh` (expected repaired: no degenerate triangles).
+    pub fn new(mesh: &TriMesh, opts: CollapseOptions) -> Self {
+        Self::with_cost(mesh, opts, Box::new(|c: &Candidate| c.quadric_error))
+    }
+
+    /// Starts with a caller-supplied ordering (the hybrid method scales it by τ).
+    pub fn with_cost(mesh: &TriMesh, opts: CollapseOptions, cost: Box<CostFn>) -> Self {
+        let nv = mesh.positions.len();
+        let nt = mesh.triangles.len();
+        let mut vtris = vec![Vec::new(); nv];
+        for (t, tri) in mesh.triangles.iter().enumerate() {
+            for v in tri {
+                vtris[*v as usize].push(t as u32);
+            }
+        }
+        let tri_part: Vec<u32> = (0..nt).map(|t| mesh.part(t)).collect();
+        let mut quadric = vec![Quadric::default(); nv];
+        for (t, tri) in mesh.triangles.iter().enumerate() {
+            let [a, b, c] = mesh.triangle(t);
+            let n = (b - a).cross(c - a);
+            let area = 0.5 * n.length();
+            if area > 0.0 {
+                let q = Quadric::plane(a, n.normalize(), area as f64);
+                for v in tri {
+                    quadric[*v as usize].add(&q);
+                }
+            }
+        }
+        // Constrained edges: borders, part seams, non-manifold and mis-oriented edges.
+        let adj = Adjacency::new(&mesh.triangles);
+        let mut constrained = vec![false; nv];
+        for (c, &o) in adj.opposite.iter().enumerate() {
+            let t = c / 3;
+            let seam = o != crate::geom::adjacency::NONE && tri_part[o as usize / 3] != tri_part[t];
+            if o != crate::geom::adjacency::NONE && !seam {
+                continue;
+            }
+            let tri = mesh.triangles[t];
+            let (u, w) = (tri[(c + 1) % 3], tri[(c + 2) % 3]);
+            constrained[u as usize] = true;
+            constrained[w as usize] = true;
+            // A plane through the edge, perpendicular to the face, keeps it in place.
+            let [a, b, cc] = mesh.triangle(t);
+            let face_n = (b - a).cross(cc - a).normalize_or_zero();
+            let (pu, pw) = (mesh.positions[u as usize], mesh.positions[w as usize]);
+            let e = pw - pu;
+            let n = e.cross(face_n).normalize_or_zero();
+            if n != Vec3::ZERO {
+                let q = Quadric::plane(pu, n, BORDER_WEIGHT * e.length_squared() as f64);
+                quadric[u as usize].add(&q);
+                quadric[w as usize].add(&q);
+            }
+        }
+        for (i, e) in adj.edges.iter().enumerate() {
+            if adj.edge_valence[i] != 2 {
+                constrained[e[0] as usize] = true;
+                constrained[e[1] as usize] = true;
+            }
+        }
+        let mut s = EdgeCollapser {
+            pos: mesh.positions.clone(),
+            normals: mesh.normals.clone(),
+            colors: mesh.colors.clone(),
+            uvs: mesh.uvs.clone(),
+            tris: mesh.triangles.clone(),
+            tri_part,
+            tri_alive: vec![true; nt],
+            vtris,
+            v_alive: vec![true; nv],
+            constrained,
+            quadric,
+            heap: BinaryHeap::with_capacity(adj.edges.len()),
+            deferred: Vec::new(),
+            collapsed_since_retry: false,
+            alive_triangles: nt,
+            opts,
+            cost,
+        };
+        for e in &adj.edges {
+            s.push(e[0], e[1]);
+        }
+        s
+    }
+
+    pub fn triangle_count(&self) -> usize {
+        self.alive_triangles
+    }
+
+    pub fn position(&self, v: u32) -> Vec3 {
+        self.pos[v as usize]
+    }
+
+    pub fn triangle(&self, t: u32) -> [u32; 3] {
+        self.tris[t as usize]
+    }
+
+    pub fn triangle_positions(&self, t: u32) -> [Vec3; 3] {
+        self.tris[t as usize].map(|v| self.pos[v as usize])
+    }
+
+    /// Ids of the triangles alive now.
+    pub fn alive_triangles(&self) -> impl Iterator<Item = u32> + '_ {
+        (0..self.tris.len() as u32).filter(|t| self.tri_alive[*t as usize])
+    }
+
+    fn push(&mut self, a: u32, b: u32) {
+        if let Some((cand, _)) = self.best_candidate(a, b, false) {
+            let cost = (self.cost)(&cand);
+            if cost.is_finite() {
+                self.heap.push(Reverse(Entry { cost, a, b }));
+            }
+        }
+    }
+
+    /// Triangles containing both a and b.
+    fn shared(&self, a: u32, b: u32) -> impl Iterator<Item = u32> + '_ {
+        self.vtris[a as usize]
+            .iter()
+            .copied()
+            .filter(move |t| self.tris[*t as usize].contains(&b))
+    }
+
+    fn neighbours(&self, v: u32, out: &mut Vec<u32>) {
+        out.clear();
+        for t in &self.vtris[v as usize] {
+            out.extend(self.tris[*t as usize].iter().copied().filter(|w| *w != v));
+        }
+        out.sort_unstable();
+        out.dedup();
+    }
+
+    /// Edge on a border or seam: not exactly two triangles of one part share it.
+    fn is_constrained_edge(&self, a: u32, b: u32) -> bool {
+        let mut shared = self.shared(a, b);
+        match (shared.next(), shared.next(), shared.next()) {
+            (Some(t0), Some(t1), None) => self.tri_part[t0 as usize] != self.tri_part[t1 as usize],
+            _ => true,
+        }
+    }
+
+    /// Placements allowed by the border rules, best quadric error first; with
+    /// `check`, only legal ones. Returns the best and how many triangles it removes.
+    fn best_candidate(&self, a: u32, b: u32, check: bool) -> Option<(Candidate, usize)> {
+        let (ca, cb) = (self.constrained[a as usize], self.constrained[b as usize]);
+        let (pa, pb) = (self.pos[a as usize], self.pos[b as usize]);
+        let mut places: [Option<Vec3>; 4] = [None; 4];
+        match (ca, cb) {
+            (true, true) if self.opts.lock_borders || !self.is_constrained_edge(a, b) => {
+                return None;
+            }
+            (true, false) => places[0] = Some(pa),
+            (false, true) => places[0] = Some(pb),
+            _ if self.opts.lock_borders && (ca || cb) => return None,
+            _ => {
+                let q = Quadric::sum(&self.quadric[a as usize], &self.quadric[b as usize]);
+                // The optimum only when it stays near the edge (ill-conditioned otherwise).
+                let len = pa.distance(pb);
+                places[0] = q
+                    .optimum()
+                    .filter(|p| p.distance(pa) <= 2.0 * len && p.distance(pb) <= 2.0 * len);
+                places[1] = Some(pa);
+                places[2] = Some(pb);
+                places[3] = Some((pa + pb) * 0.5);
+            }
+        }
+        let q = Quadric::sum(&self.quadric[a as usize], &self.quadric[b as usize]);
+        let mut scored: Vec<(f64, Vec3)> =
+            places.iter().flatten().map(|p| (q.error(*p), *p)).collect();
+        scored.sort_by(|x, y| x.0.total_cmp(&y.0));
+        let removed = self.shared(a, b).count();
+        for (err, p) in scored {
+            if !check || self.is_legal(a, b, p) {
+                return Some((
+                    Candidate {
+                        edge: [a, b],
+                        position: p,
+                        quadric_error: err,
+                        triangles_removed: removed,
+                    },
+                    removed,
+                ));
+            }
+        }
+        None
+    }
+
+    /// Link condition, no duplicate triangles, no flips/folds, sliver guard.
+    fn is_legal(&self, a: u32, b: u32, p: Vec3) -> bool {
+        let mut na = Vec::new();
+        let mut nb = Vec::new();
+        self.neighbours(a, &mut na);
+        self.neighbours(b, &mut nb);
+        let common = na.iter().filter(|v| nb.binary_search(v).is_ok()).count();
+        let opposite = self.shared(a, b).count();
+        if common != opposite || opposite == 0 {
+            return false;
+        }
+        let mut new_tris: Vec<[u32; 3]> = Vec::with_capacity(16);
+        for &v in &[a, b] {
+            for &t in &self.vtris[v as usize] {
+                let tri = self.tris[t as usize];
+                if tri.contains(&a) && tri.contains(&b) {
+                    continue;
+                }
+                let old = tri.map(|w| self.pos[w as usize]);
+                let new = tri.map(|w| {
+                    if w == a || w == b {
+                        p
+                    } else {
+                        self.pos[w as usize]
+                    }
+                });
+                let n0 = (old[1] - old[0]).cross(old[2] - old[0]);
+                let n1 = (new[1] - new[0]).cross(new[2] - new[0]);
+                let (l0, l1) = (n0.length(), n1.length());
+                if l1 <= f32::MIN_POSITIVE || n0.dot(n1) < self.opts.min_normal_cos * l0 * l1 {
+                    return false;
+                }
+                if self.opts.min_quality > 0.0 {
+                    let q1 = quality(new);
+                    if q1 < self.opts.min_quality && q1 < quality(old) {
+                        return false;
+                    }
+                }
+                let mut key = tri.map(|w| if w == b { a } else { w });
+                key.sort_unstable();
+                new_tris.push(key);
+            }
+        }
+        new_tris.sort_unstable();
+        new_tris.windows(2).all(|w| w[0] != w[1])
+    }
+
+    /// Performs the next legal collapse in cost order; `None` when none is left.
+    pub fn step(&mut self) -> Option<Collapse> {
+        loop {
+            let Some(Reverse(e)) = self.heap.pop() else {
+                // Retry edges that were illegal when they came up, if collapses
+                // since then may have changed their neighbourhood.
+                if !self.collapsed_since_retry {
+                    return None;
+                }
+                self.collapsed_since_retry = false;
+                for (a, b) in std::mem::take(&mut self.deferred) {
+                    if self.v_alive[a as usize] && self.v_alive[b as usize] {
+                        self.push(a, b);
+                    }
+                }
+                continue;
+            };
+            if !self.v_alive[e.a as usize] || !self.v_alive[e.b as usize] {
+                continue;
+            }
+            match self.best_candidate(e.a, e.b, true) {
+                Some((cand, _)) => {
+                    // The queued cost was for the best placement, legal or not: if
+                    // only a worse one is legal, the edge waits its real turn.
+                    let cost = (self.cost)(&cand);
+                    if cost > e.cost * (1.0 + 1e-9) + f64::MIN_POSITIVE {
+                        if cost.is_finite() {
+                            self.heap.push(Reverse(Entry { cost, ..e }));
+                        }
+                        continue;
+                    }
+                    return Some(self.collapse(&cand, cost));
+                }
+                None => self.deferred.push((e.a, e.b)),
+            }
+        }
+    }
+
+    /// Collapses until at most `target` triangles remain or nothing can collapse;
+    /// `on_step` sees every collapse and may stop the run by returning false.
+    pub fn run(&mut self, target: usize, mut on_step: impl FnMut(&Self, &Collapse) -> bool) {
+        while self.alive_triangles > target {
+            let Some(c) = self.step() else { break };
+            if !on_step(self, &c) {
+                break;
+            }
+        }
+    }
+
+    fn collapse(&mut self, cand: &Candidate, cost: f64) -> Collapse {
+        let [a, b] = cand.edge;
+        let p = cand.position;
+        let c = self.pos.len() as u32;
+        self.collapsed_since_retry = true;
+        // Attributes: interpolate by where p projects onto the edge.
+        let (pa, pb) = (self.pos[a as usize], self.pos[b as usize]);
+        let ab = pb - pa;
+        let s = if ab.length_squared() > 0.0 {
+            ((p - pa).dot(ab) / ab.length_squared()).clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
+        self.pos.push(p);
+        if let Some(n) = &mut self.normals {
+            n.push(n[a as usize].lerp(n[b as usize], s).normalize_or_zero());
+        }
+        if let Some(col) = &mut self.colors {
+            col.push(col[a as usize].lerp(col[b as usize], s));
+        }
+        if let Some(uv) = &mut self.uvs {
+            uv.push(uv[a as usize].lerp(uv[b as usize], s));
+        }
+        let q = Quadric::sum(&self.quadric[a as usize], &self.quadric[b as usize]);
+        self.quadric.push(q);
+        self.constrained
+            .push(self.constrained[a as usize] || self.constrained[b as usize]);
+        self.v_alive.push(true);
+        self.v_alive[a as usize] = false;
+        self.v_alive[b as usize] = false;
+
+        let mut removed: Vec<u32> = self.vtris[a as usize].clone();
+        removed.extend(self.vtris[b as usize].iter().copied());
+        removed.sort_unstable();
+        removed.dedup();
+        let mut added = Vec::with_capacity(removed.len());
+        let mut star = Vec::with_capacity(removed.len());
+        for &t in &removed {
+            let tri = self.tris[t as usize];
+            self.tri_alive[t as usize] = false;
+            for w in tri {
+                if w != a && w != b {
+                    self.vtris[w as usize].retain(|x| *x != t);
+                }
+            }
+            if tri.contains(&a) && tri.contains(&b) {
+                continue;
+            }
+            let id = self.tris.len() as u32;
+            let new = tri.map(|w| if w == a || w == b { c } else { w });
+            self.tris.push(new);
+            self.tri_part.push(self.tri_part[t as usize]);
+            self.tri_alive.push(true);
+            for w in new {
+                if w != c {
+                    self.vtris[w as usize].push(id);
+                }
+            }
+            star.push(id);
+            added.push(id);
+        }
+        self.alive_triangles -= removed.len() - added.len();
+        self.vtris[a as usize] = Vec::new();
+        self.vtris[b as usize] = Vec::new();
+        self.vtris.push(star);
+        let mut nbrs = Vec::new();
+        self.neighbours(c, &mut nbrs);
+        for n in nbrs {
+            self.push(c, n);
+        }
+        Collapse {
+            edge: [a, b],
+            vertex: c,
+            position: p,
+            removed,
+            added,
+            cost,
+        }
+    }
+
+    /// The current mesh, compacted; also the internal id of each output triangle.
+    pub fn mesh(&self) -> (TriMesh, Vec<u32>) {
+        let mut remap = vec![u32::MAX; self.pos.len()];
+        let mut out = TriMesh::default();
+        let mut ids = Vec::with_capacity(self.alive_triangles);
+        let mut parts = Vec::with_capacity(self.alive_triangles);
+        let mut order = Vec::new();
+        for t in self.alive_triangles() {
+            let tri = self.tris[t as usize].map(|v| {
+                if remap[v as usize] == u32::MAX {
+                    remap[v as usize] = order.len() as u32;
+                    order.push(v);
+                }
+                remap[v as usize]
+            });
+            out.triangles.push(tri);
+            parts.push(self.tri_part[t as usize]);
+            ids.push(t);
+        }
+        out.positions = order.iter().map(|v| self.pos[*v as usize]).collect();
+        out.normals = self
+            .normals
+            .as_ref()
+            .map(|n| order.iter().map(|v| n[*v as usize]).collect());
+        out.colors = self
+            .colors
+            .as_ref()
+            .map(|n| order.iter().map(|v| n[*v as usize]).collect());
+        out.uvs = self
+            .uvs
+            .as_ref()
+            .map(|n| order.iter().map(|v| n[*v as usize]).collect());
+        if parts.iter().any(|p| *p != 0) {
+            out.parts = Some(parts);
+        }
+        (out, ids)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::builtins::{icosphere, torus};
+    use crate::geom::Topology;
+
+    #[test]
+    fn collapses_keep_topology_and_report_their_triangles() {
+        let mesh = torus(1.0, 0.35, 48, 24);
+        let mut s = EdgeCollapser::new(&mesh, CollapseOptions::default());
+        let mut steps = 0;
+        s.run(200, |s, c| {
+            assert!(c.removed.len() > c.added.len());
+            assert!(c.added.iter().all(|t| s.triangle(*t).contains(&c.vertex)));
+            steps += 1;
+            true
+        });
+        let (out, ids) = s.mesh();
+        assert!(out.triangles.len() <= 200 && steps > 0);
+        assert_eq!(ids.len(), out.triangles.len());
+        let t = Topology::of(&out);
+        assert_eq!((t.genus, t.components.len(), t.boundary_loops), (1, 1, 0));
+        assert_eq!(t.non_manifold_edges, 0);
+        assert_eq!(t.inconsistent_edges, 0);
+        assert!(out.normals.is_some() && out.uvs.is_some());
+    }
+
+    #[test]
+    fn locked_borders_stay_and_parts_stay_apart() {
+        // Two parts: a sphere and a torus, glued into one mesh with part ids.
+        let mut mesh = icosphere(Vec3::new(3.0, 0.0, 0.0), 1.0, 3);
+        mesh.append(&torus(1.0, 0.3, 32, 16));
+        let mut s = EdgeCollapser::new(&mesh, CollapseOptions::default());
+        s.run(100, |_, _| true);
+        let (out, _) = s.mesh();
+        let t = Topology::of(&out);
+        assert_eq!(t.components.len(), 2);
+        assert_eq!(t.genus, 1);
+        assert_eq!(out.part_count(), 2);
+
+        // An open grid: with locked borders the border vertices keep their positions.
+        let n = 12u32;
+        let mut grid = TriMesh::default();
+        for j in 0..=n {
+            for i in 0..=n {
+                let (x, y) = (i as f32 / n as f32, j as f32 / n as f32);
+                grid.positions
+                    .push(Vec3::new(x, y, 0.05 * (6.0 * x).sin() * (5.0 * y).cos()));
+            }
+        }
+        for j in 0..n {
+            for i in 0..n {
+                let v = j * (n + 1) + i;
+                grid.triangles.push([v, v + 1, v + n + 2]);
+                grid.triangles.push([v, v + n + 2, v + n + 1]);
+            }
+        }
+        let opts = CollapseOptions {
+            lock_borders: true,
+            ..Default::default()
+        };
+        let mut s = EdgeCollapser::new(&grid, opts);
+        s.run(0, |_, _| true);
+        let (out, _) = s.mesh();
+        let border_before = Topology::of(&grid);
+        let border_after = Topology::of(&out);
+        assert_eq!(border_before.boundary_loops, border_after.boundary_loops);
+        let on_border = |p: &Vec3| p.x == 0.0 || p.y == 0.0 || p.x == 1.0 || p.y == 1.0;
+        let before = grid.positions.iter().filter(|p| on_border(p)).count();
+        let after = out.positions.iter().filter(|p| on_border(p)).count();
+        assert_eq!(before, after, "every border vertex kept");
+        assert!(out.triangles.len() < grid.triangles.len() / 2);
+    }
+
+    #[test]
+    fn sliver_guard_keeps_triangle_quality() {
+        let mesh = icosphere(Vec3::ZERO, 1.0, 4);
+        let opts = CollapseOptions {
+            min_quality: 0.3,
+            ..Default::default()
+        };
+        let mut s = EdgeCollapser::new(&mesh, opts);
+        s.run(300, |_, _| true);
+        let (out, _) = s.mesh();
+        let worst = (0..out.triangles.len())
+            .map(|t| quality(out.triangle(t)))
+            .fold(1.0, f32::min);
+        assert!(worst >= 0.3, "worst quality {worst}");
+    }
+}
