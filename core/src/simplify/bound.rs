@@ -144,14 +144,15 @@ fn piece(p: [Vec3; 3], d: [f32; 3], near: [u32; 3], target: &MeshDistance) -> Pi
 
 /// Upper bound of max_{y ∈ tri} d(y, X) for the surface X behind `target`;
 /// `at` holds (d(tri_i, X), nearest triangle of X) for the three vertices.
-/// Refinement also stops once the bound is at most `enough`.
+/// Refinement also stops once the bound is at most `enough`. Returns the upper
+/// bound and the largest exact distance found (a lower bound).
 pub fn max_distance_bound(
     tri: [Vec3; 3],
     at: [(f32, u32); 3],
     target: &MeshDistance,
     opts: &BoundOptions,
     enough: f32,
-) -> f32 {
+) -> (f32, f32) {
     let d = at.map(|x| x.0);
     let mut lower = d[0].max(d[1]).max(d[2]);
     let mut heap = BinaryHeap::with_capacity(3 * opts.max_splits + 1);
@@ -190,7 +191,8 @@ pub fn max_distance_bound(
         ));
         heap.push(piece(m, dm, nm, target));
     }
-    heap.peek().map_or(lower, |top| top.upper.max(lower)) * (1.0 + ROUNDING)
+    let upper = heap.peek().map_or(lower, |top| top.upper.max(lower));
+    (upper * (1.0 + ROUNDING), lower)
 }
 
 /// Exact distance and nearest triangle of `to` for every vertex of `from`.
@@ -198,24 +200,51 @@ fn vertex_distances(from: &TriMesh, to: &MeshDistance) -> Vec<(f32, u32)> {
     from.positions.par_iter().map(|p| to.nearest(*p)).collect()
 }
 
-/// For every triangle of `from`: the bound on its distance to `to`, and the
-/// triangle of `to` that covers it best as a whole.
+/// Bound, lower bound and best covering triangle of `to`, per triangle of `from`.
+type SideBounds = Vec<(f32, f32, u32)>;
+
+/// For every triangle of `from`: the bound on its distance to `to`, the largest
+/// exact distance found, and the triangle of `to` that covers it best as a whole.
 fn one_side(
     from: &TriMesh,
     at_vertex: &[(f32, u32)],
     to: &MeshDistance,
     opts: &BoundOptions,
     enough: f32,
-) -> Vec<(f32, u32)> {
+) -> SideBounds {
     (0..from.triangles.len())
         .into_par_iter()
         .map(|t| {
             let at = from.triangles[t].map(|v| at_vertex[v as usize]);
             let tri = from.triangle(t);
             let (_, owner) = piece_bound(&tri, &at.map(|x| x.0), &at.map(|x| x.1), to);
-            (max_distance_bound(tri, at, to, opts, enough), owner)
+            let (upper, lower) = max_distance_bound(tri, at, to, opts, enough);
+            (upper, lower, owner)
         })
         .collect()
+}
+
+/// Second pass: triangles still above `enough` get a larger split budget (only
+/// they can decide the maximum).
+fn refine_side(
+    bounds: &mut SideBounds,
+    from: &TriMesh,
+    at_vertex: &[(f32, u32)],
+    to: &MeshDistance,
+    opts: &BoundOptions,
+    enough: f32,
+) {
+    let deep = BoundOptions {
+        max_splits: opts.max_splits * 4,
+        ..*opts
+    };
+    bounds.par_iter_mut().enumerate().for_each(|(t, b)| {
+        if b.0 > enough {
+            let at = from.triangles[t].map(|v| at_vertex[v as usize]);
+            let (upper, lower) = max_distance_bound(from.triangle(t), at, to, &deep, enough);
+            *b = (upper.min(b.0), lower.max(b.1), b.2);
+        }
+    });
 }
 
 /// Certifies `simplified` against `original` (see the module doc).
@@ -251,16 +280,29 @@ pub fn certify(original: &TriMesh, simplified: &TriMesh, opts: &BoundOptions) ->
     } else {
         lower * (1.0 + opts.rel_tol)
     };
-    let reverse = one_side(simplified, &at_s, &to_o, &opts, enough);
-    let forward = one_side(original, &at_o, &to_s, &opts, enough);
+    let mut reverse = one_side(simplified, &at_s, &to_o, &opts, enough);
+    let mut forward = one_side(original, &at_o, &to_s, &opts, enough);
+    // Pass one raised the lower bound; refine what is still above it.
+    let found = reverse
+        .iter()
+        .chain(&forward)
+        .map(|x| x.1)
+        .fold(lower, f32::max);
+    let enough = if opts.per_triangle {
+        0.0
+    } else {
+        found * (1.0 + opts.rel_tol)
+    };
+    refine_side(&mut reverse, simplified, &at_s, &to_o, &opts, enough);
+    refine_side(&mut forward, original, &at_o, &to_s, &opts, enough);
     let mut triangle_bounds: Vec<f32> = reverse.iter().map(|x| x.0).collect();
-    for (b, owner) in &forward {
+    for (b, _, owner) in &forward {
         let tb = &mut triangle_bounds[*owner as usize];
         *tb = tb.max(*b);
     }
     Certificate {
         triangle_bounds,
-        attributed: forward.iter().map(|x| x.1).collect(),
+        attributed: forward.iter().map(|x| x.2).collect(),
         forward: forward.iter().map(|x| x.0).fold(0.0, f32::max),
         reverse: reverse.iter().map(|x| x.0).fold(0.0, f32::max),
     }
