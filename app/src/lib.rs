@@ -1,5 +1,10 @@
 //! lodstudio: the eframe/wgpu studio for level-of-detail hierarchies.
 
+pub mod build;
+pub mod export;
+pub mod heatmap;
+pub mod job;
+pub mod panels;
 pub mod studio;
 pub mod viewport;
 

@@ -1,23 +1,34 @@
-//! The studio window: menu, model list, 3D viewport, inspector and log.
+//! The studio window: menu, model list, LOD method and its parameters, 3D
+//! viewport, inspector and log.
 //!
-//! Everything slow (loading, summarising, preparing GPU geometry, the file
-//! dialog) runs on worker threads; the UI polls them each frame so it never
-//! blocks, and a failed or cancelled load keeps the previous model.
+//! Everything slow (loading, summarising, building a LOD, preparing GPU
+//! geometry, file dialogs, exporting) runs on worker threads; the UI polls
+//! them each frame so it never blocks, and a failed or cancelled load or build
+//! keeps the previous model and result.
 
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::sync::mpsc::{self, Receiver, TryRecvError};
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
-use lodstudio_core::Progress;
 use lodstudio_core::builtins;
 use lodstudio_core::io::{LoadError, LoadOptions, Loaded, load};
 use lodstudio_core::stats::ModelSummary;
 
+use crate::build::{self, Built};
+use crate::export::{self, Saved};
+use crate::heatmap;
+use crate::job::{Job, Poll};
+use crate::panels::{Method, MethodSettings};
 use crate::viewport::{Scene, Viewport};
 
 /// Storage key of the recent-files list (JSON array of paths).
 const RECENT_KEY: &str = "lodstudio.recent";
+/// Storage key of the chosen method and all method parameters (JSON).
+const METHODS_KEY: &str = "lodstudio.methods";
+/// With auto rebuild, a build starts once parameters have been still this long
+/// (seconds), so dragging a slider does not start a build every frame.
+const REBUILD_DELAY: f64 = 0.4;
 const MAX_RECENT: usize = 10;
 /// Older log lines are dropped beyond this many.
 const MAX_LOG: usize = 500;
@@ -64,6 +75,28 @@ struct Current {
     summary: ModelSummary,
     /// Inspector rows, computed once so drawing allocates nothing new.
     rows: Vec<(String, String)>,
+    /// The model as the viewport draws it.
+    scene: Arc<Scene>,
+}
+
+/// When a requested build starts.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum BuildRequest {
+    /// At the next frame (the Build button).
+    Now,
+    /// [`REBUILD_DELAY`] after the next frame; a further change asks again, which
+    /// postpones it (parameter changes with auto rebuild).
+    Settled,
+    /// Once egui's clock reaches this time.
+    At(f64),
+}
+
+/// Which version of the model the viewport shows.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum View {
+    Original,
+    /// The last build's result (the original while there is none).
+    Simplified,
 }
 
 /// What a load worker hands back.
@@ -75,10 +108,7 @@ struct Finished {
 
 struct LoadJob {
     path: PathBuf,
-    name: String,
-    progress: Arc<Progress>,
-    started: Instant,
-    result: Receiver<Result<Box<Finished>, LoadError>>,
+    job: Job<Result<Box<Finished>, LoadError>>,
 }
 
 struct LogLine {
@@ -99,20 +129,46 @@ pub struct StudioApp {
     log: Vec<LogLine>,
     /// Message of the last failed load, shown in a window until dismissed.
     error: Option<String>,
+    /// The chosen method and its parameters (persisted).
+    methods: MethodSettings,
+    build: Option<Job<Result<Built, String>>>,
+    /// The last finished build of the model on screen.
+    result: Option<Arc<Built>>,
+    /// A build asked for but not started yet.
+    build_at: Option<BuildRequest>,
+    /// Why the last build request failed, shown under the Build button.
+    build_note: Option<String>,
+    view: View,
+    /// Colour the simplified mesh by each triangle's certified bound.
+    heat: bool,
+    export: Option<Job<Saved>>,
 }
 
 impl StudioApp {
     /// Called by eframe: restores recent files and opens `initial` (or the default model).
     pub fn new(cc: &eframe::CreationContext<'_>, initial: Option<PathBuf>) -> Self {
         let mut app = Self::with_render_state(cc.wgpu_render_state.as_ref(), initial);
-        if let Some(recent) = cc
-            .storage
-            .and_then(|s| s.get_string(RECENT_KEY))
-            .and_then(|json| serde_json::from_str::<Vec<PathBuf>>(&json).ok())
-        {
-            app.recent = recent.into_iter().take(MAX_RECENT).collect();
+        if let Some(storage) = cc.storage {
+            app.restore(storage);
         }
         app
+    }
+
+    /// Takes the recent files and method settings that [`eframe::App::save`]
+    /// stored; anything missing or unreadable keeps its default.
+    pub fn restore(&mut self, storage: &dyn eframe::Storage) {
+        if let Some(recent) = storage
+            .get_string(RECENT_KEY)
+            .and_then(|json| serde_json::from_str::<Vec<PathBuf>>(&json).ok())
+        {
+            self.recent = recent.into_iter().take(MAX_RECENT).collect();
+        }
+        if let Some(methods) = storage
+            .get_string(METHODS_KEY)
+            .and_then(|json| MethodSettings::from_json(&json))
+        {
+            self.methods = methods;
+        }
     }
 
     /// A studio without eframe (for tests): draws with `render_state` if given.
@@ -129,6 +185,14 @@ impl StudioApp {
             recent: Vec::new(),
             log: Vec::new(),
             error: None,
+            methods: MethodSettings::default(),
+            build: None,
+            result: None,
+            build_at: None,
+            build_note: None,
+            view: View::Simplified,
+            heat: false,
+            export: None,
         }
     }
 
@@ -162,6 +226,53 @@ impl StudioApp {
         self.log.iter().map(|l| l.text.as_str())
     }
 
+    /// The chosen method and its parameters.
+    pub fn methods(&self) -> &MethodSettings {
+        &self.methods
+    }
+
+    /// Changes parameters as the controls do (so with auto rebuild on, a
+    /// build follows after the usual delay).
+    pub fn set_methods(&mut self, methods: MethodSettings) {
+        if methods != self.methods {
+            self.methods = methods;
+            self.parameters_changed();
+        }
+    }
+
+    /// Builds the chosen method on the model on screen (starting at the next
+    /// frame), replacing any build in progress.
+    pub fn build(&mut self) {
+        self.build_at = Some(BuildRequest::Now);
+    }
+
+    /// Whether a build is waiting to start or running.
+    pub fn is_building(&self) -> bool {
+        self.build_at.is_some() || self.build.is_some()
+    }
+
+    /// The last finished build of the model on screen.
+    pub fn result(&self) -> Option<&Built> {
+        self.result.as_deref()
+    }
+
+    /// Which version of the model the viewport shows.
+    pub fn view(&self) -> View {
+        self.view
+    }
+
+    /// Writes the last result to `path` (format by extension) on a worker
+    /// thread, without a dialog; the outcome goes to the log.
+    pub fn export_to(&mut self, path: impl Into<PathBuf>, ctx: &egui::Context) {
+        let path = path.into();
+        self.start_export(ctx, move |mesh| export::write(mesh, &path));
+    }
+
+    /// Whether an export (its dialog or its writing) is under way.
+    pub fn is_exporting(&self) -> bool {
+        self.export.is_some()
+    }
+
     /// Draws the whole studio into `ui` (the root of the window).
     pub fn show(&mut self, ui: &mut egui::Ui) {
         let ctx = ui.ctx().clone();
@@ -171,6 +282,9 @@ impl StudioApp {
             self.start_load(path, &ctx);
         }
         self.poll_job(&ctx);
+        self.poll_build();
+        self.poll_export();
+        self.start_build_when_due(&ctx);
 
         egui::Panel::top("menu").show(ui, |ui| self.menu_bar(ui));
         egui::Panel::bottom("status")
@@ -178,18 +292,24 @@ impl StudioApp {
             .default_size(110.0)
             .show(ui, |ui| self.status_panel(ui));
         egui::Panel::left("model")
-            .default_size(210.0)
-            .show(ui, |ui| self.model_panel(ui));
-        egui::Panel::right("inspector")
             .default_size(250.0)
+            .show(ui, |ui| self.left_panel(ui));
+        egui::Panel::right("inspector")
+            .default_size(260.0)
             .show(ui, |ui| self.inspector(ui));
         egui::CentralPanel::no_frame().show(ui, |ui| {
+            self.view_bar(ui);
+            self.sync_view();
             self.viewport.show(ui);
         });
 
         self.error_window(&ctx);
         drop_hint(&ctx);
-        if self.job.is_some() || self.picker.is_some() {
+        if self.job.is_some()
+            || self.picker.is_some()
+            || self.build.is_some()
+            || self.export.is_some()
+        {
             ctx.request_repaint_after(POLL_INTERVAL);
         }
     }
@@ -255,77 +375,59 @@ impl StudioApp {
 
     fn start_load(&mut self, path: PathBuf, ctx: &egui::Context) {
         if let Some(old) = self.job.take() {
-            old.progress.cancel();
-            self.info(format!("Stopped loading {}", old.name));
+            self.info(format!("Stopped loading {}", old.job.label()));
         }
         let name = display_name(&path);
-        let progress = Arc::new(Progress::new());
-        let (tx, rx) = mpsc::channel();
-        let worker_progress = Arc::clone(&progress);
         let worker_path = path.clone();
-        let ctx = ctx.clone();
-        let spawned = std::thread::Builder::new()
-            .name("model loader".into())
-            .spawn(move || {
-                let progress = worker_progress;
-                // After a cancel nobody waits for the result: skip the remaining work.
-                let result = match load(&worker_path, &LoadOptions::default(), &progress) {
-                    Ok(_) | Err(_) if progress.is_cancelled() => return,
-                    Ok(loaded) => {
-                        progress.stage("summarising");
-                        let summary = ModelSummary::of(&loaded);
-                        if progress.is_cancelled() {
-                            return;
-                        }
-                        progress.stage("preparing the view");
-                        let scene = Scene::from_model(&loaded.model);
-                        Ok(Box::new(Finished {
-                            loaded,
-                            summary,
-                            scene,
-                        }))
-                    }
-                    Err(e) => Err(e),
-                };
-                // The receiver is gone if a newer load replaced this one.
-                let _ = tx.send(result);
-                ctx.request_repaint();
-            });
+        let spawned = Job::spawn("model loader", name.clone(), ctx, move |progress| {
+            let loaded = load(&worker_path, &LoadOptions::default(), progress);
+            // A cancelled load may fail for that reason alone: say nothing.
+            progress.check()?;
+            let loaded = match loaded {
+                Ok(loaded) => loaded,
+                Err(e) => return Ok(Err(e)),
+            };
+            progress.stage("summarising");
+            let summary = ModelSummary::of(&loaded);
+            progress.check()?;
+            progress.stage("preparing the view");
+            let scene = Scene::from_model(&loaded.model);
+            Ok(Ok(Box::new(Finished {
+                loaded,
+                summary,
+                scene,
+            })))
+        });
         match spawned {
-            Ok(_) => {
+            Ok(job) => {
                 self.info(format!("Loading {}", path.display()));
-                self.job = Some(LoadJob {
-                    path,
-                    name,
-                    progress,
-                    started: Instant::now(),
-                    result: rx,
-                });
+                self.job = Some(LoadJob { path, job });
             }
             Err(e) => self.load_failed(format!("cannot start loading {name}: {e}")),
         }
     }
 
     fn poll_job(&mut self, ctx: &egui::Context) {
-        let Some(job) = &self.job else {
+        let Some(load) = &self.job else {
             return;
         };
-        let outcome = match job.result.try_recv() {
-            Err(TryRecvError::Empty) => return,
-            Ok(outcome) => outcome,
-            Err(TryRecvError::Disconnected) => {
+        let outcome = match load.job.poll() {
+            Poll::Running => return,
+            Poll::Done(outcome) => outcome,
+            Poll::Lost => {
                 let msg = format!(
                     "{}: loading stopped unexpectedly (internal error)",
-                    job.name
+                    load.job.label()
                 );
                 self.job = None;
                 self.load_failed(msg);
                 return;
             }
         };
-        let Some(job) = self.job.take() else {
+        let Some(LoadJob { path, job }) = self.job.take() else {
             return;
         };
+        let name = job.label().to_string();
         match outcome {
             Ok(done) => {
                 let Finished {
@@ -333,31 +435,30 @@ impl StudioApp {
                     summary,
                     scene,
                 } = *done;
-                let seconds = job.started.elapsed().as_secs_f32();
+                let seconds = job.elapsed().as_secs_f32();
                 let counts = match (summary.triangles, summary.points) {
                     (0, 0) => summary.kind.to_string(),
                     (0, p) => format!("{p} points"),
                     (t, _) => format!("{t} triangles"),
                 };
                 self.info(format!(
-                    "Loaded {} ({}, {counts}) in {seconds:.2} s",
-                    job.name,
+                    "Loaded {name} ({}, {counts}) in {seconds:.2} s",
                     summary.format.name()
                 ));
-                self.viewport.set_scene(scene);
-                if !is_builtin(&job.path) {
-                    self.remember(&job.path);
+                self.forget_result();
+                let scene = Arc::new(scene);
+                self.viewport.frame_scene(Arc::clone(&scene));
+                if !is_builtin(&path) {
+                    self.remember(&path);
                 }
-                ctx.send_viewport_cmd(egui::ViewportCommand::Title(format!(
-                    "lodstudio — {}",
-                    job.name
-                )));
+                ctx.send_viewport_cmd(egui::ViewportCommand::Title(format!("lodstudio — {name}")));
                 self.current = Some(Current {
                     rows: summary.lines(),
-                    name: job.name,
-                    path: job.path,
+                    name,
+                    path,
                     loaded: Arc::new(loaded),
                     summary,
+                    scene,
                 });
             }
             Err(e) => self.load_failed(e.to_string()),
@@ -365,9 +466,196 @@ impl StudioApp {
     }
 
     fn cancel_load(&mut self) {
-        if let Some(job) = self.job.take() {
-            job.progress.cancel();
-            self.info(format!("Cancelled loading {}", job.name));
+        if let Some(load) = self.job.take() {
+            self.info(format!("Cancelled loading {}", load.job.label()));
+        }
+    }
+
+    /// A new model makes the last result (and any build of the old one) moot.
+    fn forget_result(&mut self) {
+        if let Some(old) = self.build.take() {
+            self.info(format!("Stopped building {}", old.label()));
+        }
+        self.result = None;
+        self.build_at = None;
+        self.build_note = None;
+    }
+
+    /// After a parameter changed: schedule a rebuild if wanted and possible.
+    fn parameters_changed(&mut self) {
+        self.build_note = None;
+        let has_mesh = self
+            .current
+            .as_ref()
+            .is_some_and(|c| build::mesh_of(&c.loaded.model).is_ok());
+        if self.methods.auto_rebuild && has_mesh {
+            self.build_at = Some(BuildRequest::Settled);
+        }
+    }
+
+    /// Starts a requested build once its time has come; an auto rebuild waits
+    /// until parameters have been still for [`REBUILD_DELAY`].
+    fn start_build_when_due(&mut self, ctx: &egui::Context) {
+        let Some(at) = self.build_at else {
+            return;
+        };
+        let now = ctx.input(|i| i.time);
+        match at {
+            BuildRequest::Settled => {
+                self.build_at = Some(BuildRequest::At(now + REBUILD_DELAY));
+                ctx.request_repaint_after_secs(REBUILD_DELAY as f32);
+            }
+            BuildRequest::At(t) if now < t => ctx.request_repaint_after_secs((t - now) as f32),
+            BuildRequest::Now | BuildRequest::At(_) => {
+                self.build_at = None;
+                self.start_build(ctx);
+            }
+        }
+    }
+
+    fn start_build(&mut self, ctx: &egui::Context) {
+        let ready = match &self.current {
+            None => Err("Open a model first.".to_string()),
+            Some(c) => build::mesh_of(&c.loaded.model).map(|_| (Arc::clone(&c.loaded), &c.name)),
+        };
+        let (loaded, name) = match ready {
+            Ok(ready) => ready,
+            Err(message) => {
+                self.build_failed(message);
+                return;
+            }
+        };
+        // Every method starts here; a new one makes this match incomplete.
+        let (label, work) = match self.methods.method {
+            Method::EdgeCollapse => {
+                let options = self.methods.edge_collapse.options();
+                (
+                    format!("{} of {name}", Method::EdgeCollapse.name()),
+                    move |progress: &lodstudio_core::Progress| {
+                        build::run(&loaded.model, options, progress)
+                    },
+                )
+            }
+        };
+        // Replacing the job cancels the running build (see `Job`'s Drop).
+        if let Some(old) = self.build.take() {
+            self.info(format!("Stopped {}", old.label()));
+        }
+        self.build_note = None;
+        match Job::spawn("lod builder", label, ctx, work) {
+            Ok(job) => self.build = Some(job),
+            Err(e) => self.build_failed(format!("cannot start the build: {e}")),
+        }
+    }
+
+    fn poll_build(&mut self) {
+        let Some(job) = &self.build else {
+            return;
+        };
+        let outcome = match job.poll() {
+            Poll::Running => return,
+            Poll::Done(outcome) => outcome,
+            Poll::Lost => Err("the build stopped unexpectedly (internal error)".to_string()),
+        };
+        let Some(job) = self.build.take() else {
+            return;
+        };
+        match outcome {
+            Ok(built) => {
+                let bound = built.simplified.error_bound();
+                self.info(format!(
+                    "{}: {} to {} triangles, certified bound {} ({:.3} % of the diagonal), {:.2} s",
+                    job.label(),
+                    built.input_triangles,
+                    built.simplified.mesh.triangles.len(),
+                    build::length(bound),
+                    100.0 * bound / built.diagonal.max(f32::MIN_POSITIVE),
+                    built.seconds
+                ));
+                self.result = Some(Arc::new(built));
+                self.view = View::Simplified;
+            }
+            Err(message) => self.build_failed(format!("{}: {message}", job.label())),
+        }
+    }
+
+    fn cancel_build(&mut self) {
+        self.build_at = None;
+        if let Some(job) = self.build.take() {
+            let kept = if self.result.is_some() {
+                "the previous result is kept"
+            } else {
+                "no result yet"
+            };
+            self.info(format!("Cancelled {}; {kept}", job.label()));
+        }
+    }
+
+    fn build_failed(&mut self, message: String) {
+        self.error(message.clone());
+        self.build_note = Some(message);
+    }
+
+    /// Shows the scene the view toggles ask for (uploads only on a change).
+    fn sync_view(&mut self) {
+        let Some(current) = &self.current else {
+            return;
+        };
+        let scene = match (&self.result, self.view) {
+            (Some(built), View::Simplified) if self.heat => &built.heat_scene,
+            (Some(built), View::Simplified) => &built.scene,
+            _ => &current.scene,
+        };
+        self.viewport.swap_scene(scene);
+    }
+
+    /// Runs `write` (which may show a dialog) on the last result, on a worker.
+    fn start_export(
+        &mut self,
+        ctx: &egui::Context,
+        write: impl FnOnce(&lodstudio_core::TriMesh) -> Saved + Send + 'static,
+    ) {
+        if self.export.is_some() {
+            return;
+        }
+        let Some(built) = self.result.clone() else {
+            self.error("Nothing to export yet: build a LOD first".into());
+            return;
+        };
+        match Job::spawn("export", "Exporting".into(), ctx, move |_| {
+            Ok(write(&built.simplified.mesh))
+        }) {
+            Ok(job) => self.export = Some(job),
+            Err(e) => self.error(format!("cannot start the export: {e}")),
+        }
+    }
+
+    fn export_dialog(&mut self, ctx: &egui::Context) {
+        let (Some(current), Some(built)) = (&self.current, &self.result) else {
+            return;
+        };
+        let name = export::suggested_name(&current.path, built.simplified.mesh.triangles.len());
+        self.start_export(ctx, move |mesh| export::choose_and_write(mesh, &name));
+    }
+
+    fn poll_export(&mut self) {
+        let Some(job) = &self.export else {
+            return;
+        };
+        let saved = match job.poll() {
+            Poll::Running => return,
+            Poll::Done(saved) => saved,
+            Poll::Lost => Saved::Failed("the export stopped unexpectedly (internal error)".into()),
+        };
+        self.export = None;
+        match saved {
+            Saved::Written { path, bytes } => {
+                self.info(format!("Exported {} ({bytes} bytes)", path.display()));
+            }
+            Saved::NoFile => self.info(
+                "Nothing exported: no file chosen (the dialog needs xdg-desktop-portal)".into(),
+            ),
+            Saved::Failed(message) => self.error(format!("Export failed: {message}")),
         }
     }
 
@@ -448,7 +736,16 @@ impl StudioApp {
         clicked
     }
 
-    fn model_panel(&mut self, ui: &mut egui::Ui) {
+    /// The model section, then the method section, scrolling together.
+    fn left_panel(&mut self, ui: &mut egui::Ui) {
+        egui::ScrollArea::vertical().show(ui, |ui| {
+            self.model_section(ui);
+            ui.separator();
+            self.method_section(ui);
+        });
+    }
+
+    fn model_section(&mut self, ui: &mut egui::Ui) {
         ui.heading("Model");
         match &self.current {
             Some(c) => {
@@ -462,27 +759,118 @@ impl StudioApp {
         if ui.button("Open…").clicked() {
             self.open_dialog(ui.ctx());
         }
-        ui.separator();
-        egui::ScrollArea::vertical().show(ui, |ui| {
-            egui::CollapsingHeader::new("Built-in models")
-                .default_open(true)
-                .show(ui, |ui| {
-                    for (name, description) in builtins::NAMES {
-                        if ui.button(*name).on_hover_text(*description).clicked() {
-                            self.open(format!("builtin:{name}"));
-                        }
+        egui::CollapsingHeader::new("Built-in models")
+            .default_open(true)
+            .show(ui, |ui| {
+                for (name, description) in builtins::NAMES {
+                    if ui.button(*name).on_hover_text(*description).clicked() {
+                        self.open(format!("builtin:{name}"));
                     }
-                });
-            egui::CollapsingHeader::new("Recent files")
-                .default_open(true)
-                .show(ui, |ui| {
-                    if self.recent.is_empty() {
-                        ui.weak("none yet");
-                    } else if let Some(path) = self.recent_list(ui) {
-                        self.open(path);
-                    }
-                });
+                }
+            });
+        egui::CollapsingHeader::new("Recent files")
+            .default_open(true)
+            .show(ui, |ui| {
+                if self.recent.is_empty() {
+                    ui.weak("none yet");
+                } else if let Some(path) = self.recent_list(ui) {
+                    self.open(path);
+                }
+            });
+    }
+
+    /// The method list, its parameters, and Build / Export.
+    fn method_section(&mut self, ui: &mut egui::Ui) {
+        ui.heading("Method");
+        let mut changed = self.methods.method_list(ui);
+        ui.add_space(4.0);
+        let mesh = self
+            .current
+            .as_ref()
+            .map(|c| build::mesh_of(&c.loaded.model).map(|m| m.triangles.len()));
+        let input_triangles = mesh.as_ref().and_then(|m| m.as_ref().ok()).copied();
+        match self.methods.method {
+            Method::EdgeCollapse => {
+                changed |= self.methods.edge_collapse.ui(ui, input_triangles);
+            }
+        }
+        ui.add_space(4.0);
+        let auto = ui
+            .checkbox(&mut self.methods.auto_rebuild, "Auto rebuild")
+            .on_hover_text("Rebuild by itself 0.4 s after the last parameter change.");
+        if changed || (auto.changed() && self.methods.auto_rebuild && self.result_is_stale()) {
+            self.parameters_changed();
+        }
+        let can_build = matches!(mesh, Some(Ok(_)));
+        ui.horizontal(|ui| {
+            let build = ui
+                .add_enabled(can_build, egui::Button::new("Build"))
+                .on_hover_text("Build the LOD now with these parameters.");
+            if build.clicked() {
+                self.build();
+            }
+            let can_export = self.result.is_some() && self.export.is_none();
+            let export = ui
+                .add_enabled(can_export, egui::Button::new("Export…"))
+                .on_hover_text("Save the simplified mesh as glb, obj or ply.")
+                .on_disabled_hover_text("Build a LOD first.");
+            if export.clicked() {
+                self.export_dialog(ui.ctx());
+            }
         });
+        let error_color = ui.visuals().error_fg_color;
+        if let Some(Err(why)) = &mesh {
+            ui.colored_label(error_color, why);
+        } else if let Some(note) = &self.build_note {
+            ui.colored_label(error_color, note);
+        } else if self.result.is_some() && !self.is_building() && self.result_is_stale() {
+            ui.weak("Parameters changed since the last build.");
+        }
+    }
+
+    /// Whether the result (if any) was built with other parameters than shown.
+    fn result_is_stale(&self) -> bool {
+        self.result
+            .as_ref()
+            .is_none_or(|r| r.options != self.methods.edge_collapse.options())
+    }
+
+    /// Original / simplified toggle and the heat-map switch above the viewport.
+    fn view_bar(&mut self, ui: &mut egui::Ui) {
+        let has_result = self.result.is_some();
+        // Without a result the original is what is shown, whatever was chosen.
+        let mut shown = if has_result {
+            self.view
+        } else {
+            View::Original
+        };
+        let mut heat = self.heat;
+        egui::Frame::new()
+            .inner_margin(egui::Margin::symmetric(6, 3))
+            .show(ui, |ui| {
+                ui.horizontal(|ui| {
+                    ui.add_enabled_ui(has_result, |ui| {
+                        ui.selectable_value(&mut shown, View::Original, "Original")
+                            .on_hover_text("Show the model as opened.");
+                        ui.selectable_value(&mut shown, View::Simplified, "Simplified")
+                            .on_hover_text("Show the last build's result.")
+                            .on_disabled_hover_text("Build a LOD first.");
+                        ui.separator();
+                        ui.add_enabled(
+                            shown == View::Simplified,
+                            egui::Checkbox::new(&mut heat, "Colour by certified bound"),
+                        )
+                        .on_hover_text(
+                            "Colour each simplified triangle by its certified Hausdorff \
+                             bound, from dark (near 0) to yellow (the largest).",
+                        );
+                    });
+                });
+            });
+        if has_result {
+            self.view = shown;
+            self.heat = heat;
+        }
     }
 
     fn inspector(&self, ui: &mut egui::Ui) {
@@ -502,24 +890,34 @@ impl StudioApp {
                         ui.end_row();
                     }
                 });
+            if let Some(built) = &self.result {
+                ui.separator();
+                ui.label(egui::RichText::new(Method::EdgeCollapse.name()).strong());
+                egui::Grid::new("build grid")
+                    .num_columns(2)
+                    .striped(true)
+                    .show(ui, |ui| {
+                        for row in &built.rows {
+                            ui.label(row.label).on_hover_text(row.hint);
+                            ui.label(&row.value);
+                            ui.end_row();
+                        }
+                    });
+                if self.heat && self.view == View::Simplified {
+                    ui.add_space(4.0);
+                    ui.label("certified bound per triangle");
+                    heatmap::legend(ui, &build::length(built.heat_max));
+                }
+            }
         });
     }
 
     fn status_panel(&mut self, ui: &mut egui::Ui) {
-        if let Some(job) = &self.job {
-            let mut cancel = false;
-            ui.horizontal(|ui| {
-                let text = format!("{}: {}", job.name, job.progress.stage_name());
-                ui.add(
-                    egui::ProgressBar::new(job.progress.fraction())
-                        .desired_width(ui.available_width() - 80.0)
-                        .text(text),
-                );
-                cancel = ui.button("Cancel").clicked();
-            });
-            if cancel {
-                self.cancel_load();
-            }
+        if self.job.as_ref().is_some_and(|l| l.job.progress_row(ui)) {
+            self.cancel_load();
+        }
+        if self.build.as_ref().is_some_and(|b| b.progress_row(ui)) {
+            self.cancel_build();
         }
         let row_height = ui.text_style_height(&egui::TextStyle::Body);
         let error_color = ui.visuals().error_fg_color;
@@ -566,6 +964,9 @@ impl eframe::App for StudioApp {
     fn save(&mut self, storage: &mut dyn eframe::Storage) {
         if let Ok(json) = serde_json::to_string(&self.recent) {
             storage.set_string(RECENT_KEY, json);
+        }
+        if let Some(json) = self.methods.to_json() {
+            storage.set_string(METHODS_KEY, json);
         }
     }
 }

@@ -96,26 +96,50 @@ impl Scene {
     /// CAD parts keep crisp edges). Triangles that index outside the vertex
     /// array are left out.
     pub fn from_mesh(mesh: &TriMesh) -> Scene {
+        Scene::mesh(mesh, None)
+    }
+
+    /// Like [`Scene::from_mesh`], but each triangle in one colour (linear RGB,
+    /// indexed like `mesh.triangles`) to show a per-triangle value such as a
+    /// certified error bound; triangles without an entry keep the mesh's colour.
+    pub fn from_mesh_with_triangle_colors(mesh: &TriMesh, colors: &[Vec3]) -> Scene {
+        Scene::mesh(mesh, Some(colors))
+    }
+
+    fn mesh(mesh: &TriMesh, triangle_colors: Option<&[Vec3]>) -> Scene {
         let n = mesh.positions.len();
-        let triangles: Vec<[u32; 3]> = mesh
+        // Valid triangles and, for the colours, their index in the input.
+        let (triangles, faces): (Vec<[u32; 3]>, Vec<usize>) = mesh
             .triangles
             .iter()
-            .filter(|t| t.iter().all(|&v| (v as usize) < n))
-            .copied()
-            .collect();
+            .enumerate()
+            .filter(|(_, t)| t.iter().all(|&v| (v as usize) < n))
+            .map(|(f, t)| (*t, f))
+            .unzip();
         let colors = mesh.colors.as_ref().filter(|c| c.len() == n);
-        let vertex = |v: usize, normal: Vec3| MeshVertex {
+        let normals = mesh.normals.as_ref().filter(|v| v.len() == n);
+        let vertex = |v: usize, face: Option<usize>, normal: Vec3| MeshVertex {
             position: mesh.positions[v].to_array(),
-            normal: normal.normalize_or_zero().to_array(),
-            color: colors.map_or(CLAY, |c| c[v]).to_array(),
+            normal: normals
+                .map_or(normal, |given| given[v])
+                .normalize_or_zero()
+                .to_array(),
+            color: face
+                .and_then(|f| triangle_colors?.get(faces[f]).copied())
+                .unwrap_or_else(|| colors.map_or(CLAY, |c| c[v]))
+                .to_array(),
         };
-        let geometry = match &mesh.normals {
-            Some(normals) if normals.len() == n => Geometry::Triangles {
-                vertices: (0..n).map(|v| vertex(v, normals[v])).collect(),
+        let geometry = match (normals, triangle_colors) {
+            // Given normals and per-vertex colours: the mesh's own vertices serve.
+            (Some(_), None) => Geometry::Triangles {
+                vertices: (0..n).map(|v| vertex(v, None, Vec3::ZERO)).collect(),
                 indices: triangles.into_iter().flatten().collect(),
             },
             _ => {
-                let (vertices, indices) = crease_split(&mesh.positions, &triangles, vertex);
+                let (vertices, indices) =
+                    crease_split(&mesh.positions, &triangles, |v, f, normal| {
+                        vertex(v, Some(f), normal)
+                    });
                 Geometry::Triangles { vertices, indices }
             }
         };
@@ -187,16 +211,25 @@ impl Scene {
     pub fn bounds(&self) -> Aabb {
         self.bounds
     }
+
+    /// How many triangles the scene draws.
+    pub fn triangle_count(&self) -> usize {
+        match &self.geometry {
+            Geometry::Triangles { indices, .. } => indices.len() / 3,
+            Geometry::Points(_) | Geometry::Lines(_) => 0,
+        }
+    }
 }
 
 /// Per-corner normals: each corner averages (area-weighted) the normals of the
 /// faces around its vertex that lie within the crease angle of its own face.
-/// Corners of one vertex with equal normals share an output vertex, so smooth
-/// meshes keep one vertex per input vertex; unused vertices are dropped.
+/// `vertex(v, face, normal)` makes the output vertex; corners of one vertex
+/// that come out equal (normal and colour) share it, so smooth meshes keep one
+/// vertex per input vertex; unused vertices are dropped.
 fn crease_split(
     positions: &[Vec3],
     triangles: &[[u32; 3]],
-    vertex: impl Fn(usize, Vec3) -> MeshVertex,
+    vertex: impl Fn(usize, usize, Vec3) -> MeshVertex,
 ) -> (Vec<MeshVertex>, Vec<u32>) {
     let n = positions.len();
     let face_normals: Vec<Vec3> = triangles
@@ -238,10 +271,10 @@ fn crease_split(
                 .filter(|&g| unit[f].dot(unit[g]) >= CREASE_COS)
                 .map(|g| face_normals[g])
                 .sum();
-            let out = vertex(v, normal);
+            let out = vertex(v, f, normal);
             let index = match vertices[first..]
                 .iter()
-                .position(|o: &MeshVertex| o.normal == out.normal)
+                .position(|o: &MeshVertex| o.normal == out.normal && o.color == out.color)
             {
                 Some(i) => first + i,
                 None => {
@@ -301,12 +334,36 @@ impl Viewport {
 
     /// Shows `scene` from the default direction, framed to fit.
     pub fn set_scene(&mut self, scene: Scene) {
-        self.scene = Some(Arc::new(scene));
-        self.version += 1;
-        self.too_large.store(false, Ordering::Relaxed);
+        self.frame_scene(Arc::new(scene));
+    }
+
+    /// Shows a shared `scene` (a newly opened model) from the default
+    /// direction, framed to fit.
+    pub fn frame_scene(&mut self, scene: Arc<Scene>) {
+        self.replace_scene(scene);
         self.yaw = 0.6;
         self.pitch = 0.4;
         self.frame_all();
+    }
+
+    /// Shows `scene` through the current camera, so switching between versions
+    /// of one model (original, simplified, colour-coded) keeps the view.
+    /// Showing the scene already on screen uploads nothing.
+    pub fn swap_scene(&mut self, scene: &Arc<Scene>) {
+        if !self.scene.as_ref().is_some_and(|s| Arc::ptr_eq(s, scene)) {
+            self.replace_scene(Arc::clone(scene));
+        }
+    }
+
+    fn replace_scene(&mut self, scene: Arc<Scene>) {
+        self.scene = Some(scene);
+        self.version += 1;
+        self.too_large.store(false, Ordering::Relaxed);
+    }
+
+    /// The scene on screen.
+    pub fn scene(&self) -> Option<&Scene> {
+        self.scene.as_deref()
     }
 
     /// Shows a mesh (builds its GPU geometry here, on the calling thread).

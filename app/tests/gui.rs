@@ -8,6 +8,7 @@ use std::time::{Duration, Instant};
 use egui_kittest::Harness;
 use egui_kittest::kittest::Queryable as _;
 use egui_kittest::wgpu::{WgpuTestRenderer, create_render_state, default_wgpu_setup};
+use lodstudio::panels::simplify::TargetMode;
 use lodstudio::studio::StudioApp;
 
 const MAX_LOAD_FRAMES: usize = 600;
@@ -32,20 +33,30 @@ fn studio(initial: Option<PathBuf>) -> Harness<'static, StudioApp> {
 
 /// Steps frames until the studio has no load running (bounded), then settles.
 fn wait_for_load(harness: &mut Harness<'_, StudioApp>) {
+    wait_while(harness, "loading", StudioApp::is_loading);
+}
+
+/// Steps frames until no build is pending or running (bounded), then settles.
+fn wait_for_build(harness: &mut Harness<'_, StudioApp>) {
+    wait_while(harness, "building", StudioApp::is_building);
+}
+
+/// Steps frames while `busy` holds (bounded in frames and time), then settles.
+fn wait_while(harness: &mut Harness<'_, StudioApp>, what: &str, busy: fn(&StudioApp) -> bool) {
     let start = Instant::now();
     for _ in 0..MAX_LOAD_FRAMES {
         harness.step();
-        if !harness.state().is_loading() {
+        if !busy(harness.state()) {
             harness.run();
             return;
         }
         assert!(
             start.elapsed() < MAX_LOAD_TIME,
-            "model still loading after {MAX_LOAD_TIME:?}"
+            "still {what} after {MAX_LOAD_TIME:?}"
         );
         std::thread::sleep(Duration::from_millis(20));
     }
-    panic!("model still loading after {MAX_LOAD_FRAMES} frames");
+    panic!("still {what} after {MAX_LOAD_FRAMES} frames");
 }
 
 fn has_label(harness: &Harness<'_, StudioApp>, label: &str) -> bool {
@@ -383,4 +394,242 @@ fn cancel_keeps_previous_model() {
     // Let the abandoned worker finish: a writer that closes at once gives it EOF.
     drop(std::fs::OpenOptions::new().write(true).open(&fifo));
     let _ = std::fs::remove_file(&fifo);
+}
+
+/// Triangles the viewport draws now.
+fn drawn_triangles(harness: &Harness<'_, StudioApp>) -> Option<usize> {
+    harness
+        .state()
+        .viewport()
+        .scene()
+        .map(|s| s.triangle_count())
+}
+
+#[test]
+fn edge_collapse_builds_shows_certificate_and_exports() {
+    let mut harness = studio(None);
+    wait_for_load(&mut harness);
+    assert_eq!(harness.state().summary().map(|s| s.triangles), Some(3714));
+    assert!(
+        harness.state().methods().auto_rebuild,
+        "auto rebuild is on by default"
+    );
+
+    // Drag the ratio to 0.25 (as assistive technology sets a slider); auto
+    // rebuild starts the build once the parameters have been still a while.
+    harness
+        .get_by_role_and_label(egui::Role::Slider, "ratio")
+        .set_value_accesskit(0.25);
+    harness.step();
+    assert_eq!(harness.state().methods().edge_collapse.ratio, 0.25);
+    assert!(harness.state().is_building(), "a rebuild is scheduled");
+    wait_for_build(&mut harness);
+
+    let built = harness.state().result().expect("the build finished");
+    let triangles = built.simplified.mesh.triangles.len();
+    let bound = built.simplified.error_bound();
+    assert!(triangles > 0 && triangles <= 929, "{triangles} triangles");
+    assert!(bound.is_finite() && bound > 0.0, "bound {bound}");
+    for label in [
+        "original triangles",
+        "simplified triangles",
+        "certified bound",
+        "bound / diagonal",
+        "forward (O to S)",
+        "reverse (S to O)",
+        "build time",
+    ] {
+        assert!(has_label(&harness, label), "inspector row {label:?}");
+    }
+    assert!(has_label(&harness, &triangles.to_string()));
+    assert!(has_label(&harness, &lodstudio::build::length(bound)));
+    assert!(
+        harness
+            .state()
+            .log_lines()
+            .any(|l| l.contains("certified bound")),
+        "the log reports the build"
+    );
+
+    // The viewport shows the result; the toggle switches back and forth.
+    assert_eq!(drawn_triangles(&harness), Some(triangles));
+    harness.get_by_label("Original").click();
+    harness.run();
+    assert_eq!(drawn_triangles(&harness), Some(3714));
+    harness.get_by_label("Simplified").click();
+    harness.run();
+    assert_eq!(drawn_triangles(&harness), Some(triangles));
+
+    // Colour by the certified bound: a legend explains the colours.
+    harness.get_by_label("Colour by certified bound").click();
+    harness.run();
+    assert!(has_label(&harness, "certified bound per triangle"));
+    let (covered, shades) = viewport_pixels(&mut harness, "studio_heat");
+    assert!(covered > 0.02, "covers {:.1}%", covered * 100.0);
+    assert!(shades > 20, "only {shades} shades");
+
+    // Export writes a file the loader reads back with the same triangles.
+    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR"));
+    let out = dir.join("gui-export.obj");
+    let _ = std::fs::remove_file(&out);
+    let ctx = harness.ctx.clone();
+    harness.state_mut().export_to(&out, &ctx);
+    wait_while(&mut harness, "exporting", StudioApp::is_exporting);
+    let reread = lodstudio_core::io::load(
+        &out,
+        &lodstudio_core::io::LoadOptions::default(),
+        &lodstudio_core::Progress::new(),
+    )
+    .expect("the export loads");
+    let lodstudio_core::Model::Mesh(mesh) = reread.model else {
+        panic!("the export is a mesh");
+    };
+    assert_eq!(mesh.triangles.len(), triangles);
+
+    // A format the writer does not know is reported, not written.
+    harness
+        .state_mut()
+        .export_to(dir.join("gui-export.xyz"), &ctx);
+    wait_while(&mut harness, "exporting", StudioApp::is_exporting);
+    assert!(
+        harness
+            .state()
+            .log_lines()
+            .any(|l| l.starts_with("Export failed") && l.contains("xyz")),
+    );
+}
+
+#[test]
+fn cancelling_a_build_keeps_the_previous_result() {
+    let mut harness = studio(Some("builtin:torus".into()));
+    wait_for_load(&mut harness);
+    let input = harness.state().summary().expect("torus loaded").triangles;
+
+    let mut methods = *harness.state().methods();
+    methods.auto_rebuild = false;
+    methods.edge_collapse.ratio = 0.5;
+    harness.state_mut().set_methods(methods);
+    harness.step();
+    assert!(
+        !harness.state().is_building(),
+        "no auto rebuild when it is off"
+    );
+    harness.get_by_label("Build").click();
+    wait_for_build(&mut harness);
+    let before = harness
+        .state()
+        .result()
+        .expect("first build")
+        .simplified
+        .mesh
+        .clone();
+    assert!(before.triangles.len() <= input / 2);
+
+    // An error target this tight builds several times over (seconds): cancel it.
+    methods.edge_collapse.mode = TargetMode::Error;
+    methods.edge_collapse.error_percent = 0.01;
+    harness.state_mut().set_methods(methods);
+    harness.get_by_label("Build").click();
+    harness.step();
+    harness.step();
+    assert!(harness.state().is_building(), "the build is still running");
+    assert!(
+        harness
+            .query_all_by_label_contains("Edge collapse of builtin:torus: ")
+            .next()
+            .is_some(),
+        "the progress row names the build and its stage"
+    );
+    harness.get_by_label("Cancel").click();
+    harness.step();
+    assert!(!harness.state().is_building());
+    harness.run();
+
+    let after = &harness
+        .state()
+        .result()
+        .expect("previous result kept")
+        .simplified
+        .mesh;
+    assert_eq!(after, &before);
+    assert_eq!(drawn_triangles(&harness), Some(before.triangles.len()));
+    assert!(has_label(&harness, &before.triangles.len().to_string()));
+    assert!(
+        harness
+            .state()
+            .log_lines()
+            .any(|l| l == "Cancelled Edge collapse of builtin:torus; the previous result is kept"),
+    );
+    assert!(has_label(
+        &harness,
+        "Parameters changed since the last build."
+    ));
+}
+
+#[test]
+fn build_on_a_point_set_explains_instead_of_failing() {
+    let mut harness = studio(Some("builtin:octahedron-points".into()));
+    wait_for_load(&mut harness);
+    let message =
+        "Edge collapse needs a triangle mesh, and this model is a point set (16000 points).";
+    assert!(has_label(&harness, message), "the method section says why");
+
+    // Asked anyway (the Build button is disabled): the same message, no result.
+    harness.state_mut().build();
+    wait_for_build(&mut harness);
+    assert!(harness.state().result().is_none());
+    assert!(harness.state().log_lines().any(|l| l == message));
+    assert!(harness.state().summary().is_some_and(|s| s.points == 16000));
+
+    // Changing parameters schedules nothing for a point set.
+    let mut methods = *harness.state().methods();
+    methods.edge_collapse.ratio = 0.5;
+    harness.state_mut().set_methods(methods);
+    assert!(!harness.state().is_building());
+}
+
+/// eframe's key-value storage, in memory.
+#[derive(Default)]
+struct MemoryStorage(std::collections::HashMap<String, String>);
+
+impl eframe::Storage for MemoryStorage {
+    fn get_string(&self, key: &str) -> Option<String> {
+        self.0.get(key).cloned()
+    }
+
+    fn set_string(&mut self, key: &str, value: String) {
+        self.0.insert(key.to_string(), value);
+    }
+
+    fn remove_string(&mut self, key: &str) {
+        self.0.remove(key);
+    }
+
+    fn flush(&mut self) {}
+}
+
+#[test]
+fn method_settings_persist() {
+    let mut first = StudioApp::with_render_state(None, Some("builtin:sphere".into()));
+    let mut methods = *first.methods();
+    methods.auto_rebuild = false;
+    methods.edge_collapse.mode = TargetMode::Triangles;
+    methods.edge_collapse.triangles = 1234;
+    methods.edge_collapse.lock_borders = true;
+    methods.edge_collapse.min_quality = 0.3;
+    first.set_methods(methods);
+    let mut storage = MemoryStorage::default();
+    eframe::App::save(&mut first, &mut storage);
+
+    let mut second = StudioApp::with_render_state(None, Some("builtin:sphere".into()));
+    assert_ne!(second.methods(), &methods);
+    second.restore(&storage);
+    assert_eq!(second.methods(), &methods);
+
+    // A damaged entry is ignored, not fatal.
+    eframe::Storage::set_string(&mut storage, "lodstudio.methods", "{ not json".into());
+    let mut third = StudioApp::with_render_state(None, Some("builtin:sphere".into()));
+    let defaults = *third.methods();
+    third.restore(&storage);
+    assert_eq!(third.methods(), &defaults);
 }

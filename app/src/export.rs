@@ -1,0 +1,85 @@
+//! Saving a built LOD: the save dialog and the writing both run on a worker
+//! thread (see `job.rs`), so neither a slow disk nor a dialog blocks the UI.
+
+use std::path::{Path, PathBuf};
+
+use lodstudio_core::TriMesh;
+use lodstudio_core::io::{encode_mesh, write_atomic};
+
+/// Extensions `encode_mesh` writes, the dialog's default first.
+const MESH_EXTENSIONS: &[&str] = &["glb", "obj", "ply"];
+
+/// How an export ended.
+#[derive(Debug)]
+pub enum Saved {
+    Written {
+        path: PathBuf,
+        bytes: usize,
+    },
+    /// The dialog was closed without a choice (or there is no dialog service).
+    NoFile,
+    Failed(String),
+}
+
+/// Asks where to save (suggesting `file_name`); the dialog itself asks before
+/// replacing a file. Then writes as [`write`] does.
+pub fn choose_and_write(mesh: &TriMesh, file_name: &str) -> Saved {
+    let chosen = rfd::FileDialog::new()
+        .set_title("Export simplified mesh")
+        .set_file_name(file_name)
+        .add_filter("Meshes (glb, obj, ply)", MESH_EXTENSIONS)
+        .save_file();
+    match chosen {
+        Some(path) => write(mesh, &path),
+        None => Saved::NoFile,
+    }
+}
+
+/// Writes `mesh` to `path` in the format its extension names, atomically (a
+/// failed write leaves any existing file as it was).
+pub fn write(mesh: &TriMesh, path: &Path) -> Saved {
+    let bytes = match encode_mesh(path, mesh) {
+        Ok(bytes) => bytes,
+        Err(e) => return Saved::Failed(e),
+    };
+    match write_atomic(path, &bytes) {
+        Ok(()) => Saved::Written {
+            path: path.to_path_buf(),
+            bytes: bytes.len(),
+        },
+        Err(e) => Saved::Failed(format!("{}: cannot write: {e}", path.display())),
+    }
+}
+
+/// A file name for the export of `source` (a path or `builtin:NAME`) with
+/// `triangles` triangles, in the dialog's default format.
+pub fn suggested_name(source: &Path, triangles: usize) -> String {
+    let text = source.to_string_lossy();
+    let stem = match text.strip_prefix("builtin:") {
+        Some(name) => name.to_string(),
+        None => source
+            .file_stem()
+            .map_or_else(|| "model".to_string(), |s| s.to_string_lossy().into_owned()),
+    };
+    format!("{stem}-{triangles}.{}", MESH_EXTENSIONS[0])
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn names_and_bad_extensions() {
+        assert_eq!(
+            suggested_name(Path::new("/x/couplingdown.off"), 929),
+            "couplingdown-929.glb"
+        );
+        assert_eq!(suggested_name(Path::new("builtin:torus"), 5), "torus-5.glb");
+        let mesh = lodstudio_core::builtins::torus(1.0, 0.3, 8, 4);
+        let dir = std::env::temp_dir();
+        match write(&mesh, &dir.join("lodstudio-export-test.xyz")) {
+            Saved::Failed(message) => assert!(message.contains("xyz"), "{message}"),
+            other => panic!("expected a failure, got {other:?}"),
+        }
+    }
+}

@@ -1,0 +1,108 @@
+//! Background jobs (loading a model, building a LOD) with a shared
+//! progress/cancel handle, and the one progress row the status panel shows for
+//! any of them.
+//!
+//! The UI polls a job each frame instead of waiting on it, so it never blocks.
+//! Dropping a job cancels it: whoever replaces or abandons a job stops its
+//! worker without extra bookkeeping, and a cancelled worker's answer is never
+//! read.
+
+use std::sync::Arc;
+use std::sync::mpsc::{self, Receiver, TryRecvError};
+use std::time::{Duration, Instant};
+
+use lodstudio_core::Progress;
+use lodstudio_core::progress::Cancelled;
+
+/// Work running on its own thread.
+pub struct Job<T> {
+    /// What the progress row names (a model, a method).
+    label: String,
+    progress: Arc<Progress>,
+    started: Instant,
+    result: Receiver<T>,
+}
+
+/// A job's state at one poll.
+pub enum Poll<T> {
+    Running,
+    Done(T),
+    /// The worker ended without an answer (it panicked).
+    Lost,
+}
+
+impl<T: Send + 'static> Job<T> {
+    /// Runs `work` on a thread named `thread`; the UI is woken when it ends.
+    /// Work that returns `Err(Cancelled)` sends nothing (nobody waits for it).
+    ///
+    /// # Errors
+    /// The OS refused to start a thread.
+    pub fn spawn(
+        thread: &str,
+        label: String,
+        ctx: &egui::Context,
+        work: impl FnOnce(&Progress) -> Result<T, Cancelled> + Send + 'static,
+    ) -> std::io::Result<Job<T>> {
+        let progress = Arc::new(Progress::new());
+        let worker_progress = Arc::clone(&progress);
+        let (tx, rx) = mpsc::channel();
+        let ctx = ctx.clone();
+        std::thread::Builder::new()
+            .name(thread.into())
+            .spawn(move || {
+                if let Ok(answer) = work(&worker_progress)
+                    && !worker_progress.is_cancelled()
+                {
+                    // The receiver is gone if the job was dropped meanwhile.
+                    let _ = tx.send(answer);
+                    ctx.request_repaint();
+                }
+            })?;
+        Ok(Job {
+            label,
+            progress,
+            started: Instant::now(),
+            result: rx,
+        })
+    }
+}
+
+impl<T> Job<T> {
+    pub fn poll(&self) -> Poll<T> {
+        match self.result.try_recv() {
+            Ok(answer) => Poll::Done(answer),
+            Err(TryRecvError::Empty) => Poll::Running,
+            // Cancelled workers send nothing, but a cancelled job is never polled.
+            Err(TryRecvError::Disconnected) => Poll::Lost,
+        }
+    }
+
+    pub fn label(&self) -> &str {
+        &self.label
+    }
+
+    pub fn elapsed(&self) -> Duration {
+        self.started.elapsed()
+    }
+
+    /// A progress bar with the stage name and a Cancel button; true when Cancel
+    /// was clicked (the caller drops the job, which stops it).
+    pub fn progress_row(&self, ui: &mut egui::Ui) -> bool {
+        ui.horizontal(|ui| {
+            let text = format!("{}: {}", self.label, self.progress.stage_name());
+            ui.add(
+                egui::ProgressBar::new(self.progress.fraction())
+                    .desired_width((ui.available_width() - 80.0).max(40.0))
+                    .text(text),
+            );
+            ui.button("Cancel").clicked()
+        })
+        .inner
+    }
+}
+
+impl<T> Drop for Job<T> {
+    fn drop(&mut self) {
+        self.progress.cancel();
+    }
+}
