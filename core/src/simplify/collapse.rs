@@ -353,8 +353,10 @@ impl EdgeCollapser {
                 new_tris.push(key);
             }
         }
+        // A collapse that leaves nothing around the new vertex deletes a whole
+        // (tiny) component; duplicates would make it non-manifold.
         new_tris.sort_unstable();
-        new_tris.windows(2).all(|w| w[0] != w[1])
+        !new_tris.is_empty() && new_tris.windows(2).all(|w| w[0] != w[1])
     }
 
     /// Performs the next legal collapse in cost order; `None` when none is left.
