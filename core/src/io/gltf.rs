@@ -287,7 +287,7 @@ pub fn write_glb(mesh: &TriMesh) -> Vec<u8> {
     views.push(json!({"buffer": 0, "byteOffset": offset, "byteLength": mesh.triangles.len() * 12, "target": 34963}));
     accessors.push(json!({"bufferView": views.len() - 1, "componentType": 5125, "count": mesh.triangles.len() * 3, "type": "SCALAR"}));
     let indices = accessors.len() - 1;
-    while bin.len() % 4 != 0 {
+    while !bin.len().is_multiple_of(4) {
         bin.push(0);
     }
     let doc = json!({
@@ -306,7 +306,7 @@ pub fn write_glb(mesh: &TriMesh) -> Vec<u8> {
 
 /// Packs a JSON chunk (space-padded) and a binary chunk (zero-padded) into GLB.
 fn glb_container(mut json: Vec<u8>, bin: Vec<u8>) -> Vec<u8> {
-    while json.len() % 4 != 0 {
+    while !json.len().is_multiple_of(4) {
         json.push(b' ');
     }
     let total = 12 + 8 + json.len() + 8 + bin.len();

@@ -77,10 +77,8 @@ pub fn read(data: &[u8], progress: &Progress) -> ParseResult<TriMesh> {
     // tobj drops vertex records no face uses; keep them so repair reports them.
     let n = mesh.positions.len();
     mesh.positions.extend_from_slice(&unreferenced);
-    for attr in [&mut mesh.normals, &mut mesh.colors] {
-        if let Some(a) = attr {
-            a.resize(n + unreferenced.len(), Vec3::ZERO);
-        }
+    for a in [&mut mesh.normals, &mut mesh.colors].into_iter().flatten() {
+        a.resize(n + unreferenced.len(), Vec3::ZERO);
     }
     if let Some(uv) = &mut mesh.uvs {
         uv.resize(n + unreferenced.len(), Vec2::ZERO);

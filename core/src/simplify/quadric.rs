@@ -69,7 +69,8 @@ impl Quadric {
         let m = self.matrix();
         let det = m.determinant();
         let scale = self.a[0].abs() + self.a[3].abs() + self.a[5].abs();
-        if !(det.abs() > 1e-12 * scale.powi(3)) {
+        // NaN determinants fail this too.
+        if det.abs().partial_cmp(&(1e-12 * scale.powi(3))) != Some(std::cmp::Ordering::Greater) {
             return None;
         }
         let p = m.inverse() * -DVec3::from_array(self.b);
