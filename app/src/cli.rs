@@ -69,6 +69,10 @@ struct SimplifyArgs {
     /// Border, seam and non-manifold vertices never move.
     #[arg(long)]
     lock_borders: bool,
+    /// Keep UV/normal seams: vertices are not welded across attribute seams, and
+    /// seam (and border) vertices never move, so both sides stay crack-free.
+    #[arg(long, conflicts_with_all = ["weld_tolerance", "no_weld"])]
+    keep_seams: bool,
     /// Sliver guard: minimum triangle quality 4√3·area/Σl² (merge-tree paper eq. 3); 0 disables.
     #[arg(long, value_name = "Q", default_value_t = 0.0)]
     min_quality: f32,
@@ -345,12 +349,14 @@ fn simplify(args: SimplifyArgs) -> Result<(), CliError> {
             args.min_quality
         )));
     }
-    let mesh = load_mesh(&args.file, &args.input)?;
+    let mut input = args.input;
+    input.no_weld |= args.keep_seams;
+    let mesh = load_mesh(&args.file, &input)?;
     let start = std::time::Instant::now();
     let opts = SimplifyOptions {
         target,
         collapse: CollapseOptions {
-            lock_borders: args.lock_borders,
+            lock_borders: args.lock_borders || args.keep_seams,
             min_quality: args.min_quality,
             ..Default::default()
         },

@@ -86,6 +86,60 @@ fn certified_bound_holds_against_dense_sampling_and_is_tight() {
     assert!(median <= 2.0, "median bound/measured {median}");
 }
 
+/// With seams kept, the truck's texture seams (split vertices) and borders keep
+/// every vertex position, so the two sides of a seam cannot open a crack.
+#[test]
+fn keep_seams_freezes_seam_and_border_vertices() {
+    use lodstudio_core::geom::{Adjacency, RepairOptions, Weld};
+    let opts = io::LoadOptions {
+        repair: RepairOptions { weld: Weld::Off },
+        raw: None,
+    };
+    let truck = match io::load(
+        &shared_model("CesiumMilkTruck.glb"),
+        &opts,
+        &Progress::new(),
+    )
+    .unwrap()
+    .model
+    {
+        Model::Mesh(m) => m,
+        _ => unreachable!(),
+    };
+    let seam_positions: std::collections::HashSet<[u32; 3]> = Adjacency::new(&truck.triangles)
+        .border_edges()
+        .flatten()
+        .map(|v| truck.positions[v as usize].to_array().map(f32::to_bits))
+        .collect();
+    let r = simplify::simplify(
+        &truck,
+        &SimplifyOptions {
+            target: Target::Ratio(0.3),
+            collapse: CollapseOptions {
+                lock_borders: true,
+                ..Default::default()
+            },
+        },
+        &Progress::new(),
+    )
+    .unwrap();
+    let kept: std::collections::HashSet<[u32; 3]> = r
+        .mesh
+        .positions
+        .iter()
+        .map(|p| p.to_array().map(f32::to_bits))
+        .collect();
+    assert!(
+        seam_positions.iter().all(|p| kept.contains(p)),
+        "every seam vertex kept"
+    );
+    assert!(
+        r.mesh.triangles.len() < truck.triangles.len(),
+        "something was simplified"
+    );
+    assert!(r.mesh.uvs.is_some(), "texture coordinates carried");
+}
+
 #[test]
 fn simplify_cli_writes_every_format_and_reports_the_contract_keys() {
     let dir = std::env::temp_dir().join(format!("lodstudio-simplify-{}", std::process::id()));

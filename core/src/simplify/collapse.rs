@@ -109,6 +109,8 @@ pub struct EdgeCollapser {
     heap: BinaryHeap<Reverse<Entry>>,
     deferred: Vec<(u32, u32)>,
     collapsed_since_retry: bool,
+    /// Per-vertex stamps for neighbourhood tests without allocation.
+    mark: std::cell::RefCell<(Vec<u32>, u32)>,
     alive_triangles: usize,
     opts: CollapseOptions,
     cost: Box<CostFn>,
@@ -198,6 +200,7 @@ impl EdgeCollapser {
             heap: BinaryHeap::with_capacity(adj.edges.len()),
             deferred: Vec::new(),
             collapsed_since_retry: false,
+            mark: std::cell::RefCell::new((vec![0; nv], 0)),
             alive_triangles: nt,
             opts,
             cost,
@@ -269,59 +272,116 @@ impl EdgeCollapser {
     fn best_candidate(&self, a: u32, b: u32, check: bool) -> Option<(Candidate, usize)> {
         let (ca, cb) = (self.constrained[a as usize], self.constrained[b as usize]);
         let (pa, pb) = (self.pos[a as usize], self.pos[b as usize]);
-        let mut places: [Option<Vec3>; 4] = [None; 4];
+        let q = Quadric::sum(&self.quadric[a as usize], &self.quadric[b as usize]);
+        let mut places = [(f64::INFINITY, Vec3::ZERO); 4];
+        let mut n = 0;
+        let mut add = |p: Vec3| {
+            places[n] = (q.error(p), p);
+            n += 1;
+        };
         match (ca, cb) {
             (true, true) if self.opts.lock_borders || !self.is_constrained_edge(a, b) => {
                 return None;
             }
-            (true, false) => places[0] = Some(pa),
-            (false, true) => places[0] = Some(pb),
+            (true, false) => add(pa),
+            (false, true) => add(pb),
             _ if self.opts.lock_borders && (ca || cb) => return None,
             _ => {
-                let q = Quadric::sum(&self.quadric[a as usize], &self.quadric[b as usize]);
                 // The optimum only when it stays near the edge (ill-conditioned otherwise).
                 let len = pa.distance(pb);
-                places[0] = q
+                if let Some(p) = q
                     .optimum()
-                    .filter(|p| p.distance(pa) <= 2.0 * len && p.distance(pb) <= 2.0 * len);
-                places[1] = Some(pa);
-                places[2] = Some(pb);
-                places[3] = Some((pa + pb) * 0.5);
+                    .filter(|p| p.distance(pa) <= 2.0 * len && p.distance(pb) <= 2.0 * len)
+                {
+                    add(p);
+                }
+                add(pa);
+                add(pb);
+                add((pa + pb) * 0.5);
             }
         }
-        let q = Quadric::sum(&self.quadric[a as usize], &self.quadric[b as usize]);
-        let mut scored: Vec<(f64, Vec3)> =
-            places.iter().flatten().map(|p| (q.error(*p), *p)).collect();
-        scored.sort_by(|x, y| x.0.total_cmp(&y.0));
+        let places = &mut places[..n];
+        places.sort_by(|x, y| x.0.total_cmp(&y.0));
         let removed = self.shared(a, b).count();
-        for (err, p) in scored {
-            if !check || self.is_legal(a, b, p) {
-                return Some((
-                    Candidate {
-                        edge: [a, b],
-                        position: p,
-                        quadric_error: err,
-                        triangles_removed: removed,
-                    },
-                    removed,
-                ));
-            }
+        if check && !self.topology_allows(a, b, removed) {
+            return None;
         }
-        None
+        let &(err, p) = places
+            .iter()
+            .find(|(_, p)| !check || self.geometry_allows(a, b, *p))?;
+        Some((
+            Candidate {
+                edge: [a, b],
+                position: p,
+                quadric_error: err,
+                triangles_removed: removed,
+            },
+            removed,
+        ))
     }
 
-    /// Link condition, no duplicate triangles, no flips/folds, sliver guard.
-    fn is_legal(&self, a: u32, b: u32, p: Vec3) -> bool {
-        let mut na = Vec::new();
-        let mut nb = Vec::new();
-        self.neighbours(a, &mut na);
-        self.neighbours(b, &mut nb);
-        let common = na.iter().filter(|v| nb.binary_search(v).is_ok()).count();
-        let opposite = self.shared(a, b).count();
-        if common != opposite || opposite == 0 {
+    /// The placement-independent rules: the link condition (the common
+    /// neighbours of a and b are exactly the vertices opposite the edge), no
+    /// tetrahedron folding into duplicate triangles, and at least one triangle
+    /// left around the new vertex (else a whole tiny component would vanish).
+    fn topology_allows(&self, a: u32, b: u32, shared: usize) -> bool {
+        if shared == 0 || self.vtris[a as usize].len() + self.vtris[b as usize].len() <= 2 * shared
+        {
             return false;
         }
-        let mut new_tris: Vec<[u32; 3]> = Vec::with_capacity(16);
+        let mut guard = self.mark.borrow_mut();
+        let (mark, stamp) = &mut *guard;
+        if mark.len() < self.pos.len() {
+            mark.resize(self.pos.len(), 0);
+        }
+        // Stamps s (neighbour of a) and s + 1 (already counted as common).
+        *stamp = stamp.wrapping_add(2);
+        if *stamp < 2 {
+            mark.fill(0);
+            *stamp = 2;
+        }
+        let s = *stamp;
+        for t in &self.vtris[a as usize] {
+            for w in self.tris[*t as usize] {
+                if w != a {
+                    mark[w as usize] = s;
+                }
+            }
+        }
+        let mut common = 0;
+        let mut opposite = [u32::MAX; 2];
+        for t in &self.vtris[b as usize] {
+            let tri = self.tris[*t as usize];
+            for w in tri {
+                if w != b && mark[w as usize] == s {
+                    mark[w as usize] = s + 1;
+                    common += 1;
+                }
+            }
+            if tri.contains(&a) && shared <= 2 {
+                let o = tri
+                    .iter()
+                    .copied()
+                    .find(|w| *w != a && *w != b)
+                    .unwrap_or(u32::MAX);
+                opposite[usize::from(opposite[0] != u32::MAX)] = o;
+            }
+        }
+        if common != shared {
+            return false;
+        }
+        // Tetrahedron: (a, o0, o1) and (b, o0, o1) would become one triangle twice.
+        let [o0, o1] = opposite;
+        let has_face = |v: u32| {
+            self.vtris[v as usize].iter().any(|t| {
+                self.tris[*t as usize].contains(&o0) && self.tris[*t as usize].contains(&o1)
+            })
+        };
+        !(shared == 2 && o1 != u32::MAX && has_face(a) && has_face(b))
+    }
+
+    /// No triangle flips or folds past the fold guard, and the sliver guard holds.
+    fn geometry_allows(&self, a: u32, b: u32, p: Vec3) -> bool {
         for &v in &[a, b] {
             for &t in &self.vtris[v as usize] {
                 let tri = self.tris[t as usize];
@@ -348,15 +408,9 @@ impl EdgeCollapser {
                         return false;
                     }
                 }
-                let mut key = tri.map(|w| if w == b { a } else { w });
-                key.sort_unstable();
-                new_tris.push(key);
             }
         }
-        // A collapse that leaves nothing around the new vertex deletes a whole
-        // (tiny) component; duplicates would make it non-manifold.
-        new_tris.sort_unstable();
-        !new_tris.is_empty() && new_tris.windows(2).all(|w| w[0] != w[1])
+        true
     }
 
     /// Performs the next legal collapse in cost order; `None` when none is left.
