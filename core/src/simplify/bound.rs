@@ -21,12 +21,14 @@
 
 use std::cmp::Ordering;
 use std::collections::BinaryHeap;
+use std::sync::atomic::{AtomicUsize, Ordering as AtomicOrdering};
 
 use glam::Vec3;
 use rayon::prelude::*;
 
 use crate::distance::MeshDistance;
 use crate::geom::TriMesh;
+use crate::progress::{Cancelled, Progress};
 
 /// How hard branch and bound works.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -195,63 +197,104 @@ pub fn max_distance_bound(
     (upper * (1.0 + ROUNDING), lower)
 }
 
-/// Exact distance and nearest triangle of `to` for every vertex of `from`.
-fn vertex_distances(from: &TriMesh, to: &MeshDistance) -> Vec<(f32, u32)> {
-    from.positions.par_iter().map(|p| to.nearest(*p)).collect()
-}
-
 /// Bound, lower bound and best covering triangle of `to`, per triangle of `from`.
 type SideBounds = Vec<(f32, f32, u32)>;
 
-/// For every triangle of `from`: the bound on its distance to `to`, the largest
-/// exact distance found, and the triangle of `to` that covers it best as a whole.
-fn one_side(
-    from: &TriMesh,
-    at_vertex: &[(f32, u32)],
-    to: &MeshDistance,
-    opts: &BoundOptions,
-    enough: f32,
-) -> SideBounds {
-    (0..from.triangles.len())
-        .into_par_iter()
-        .map(|t| {
-            let at = from.triangles[t].map(|v| at_vertex[v as usize]);
-            let tri = from.triangle(t);
-            let (_, owner) = piece_bound(&tri, &at.map(|x| x.0), &at.map(|x| x.1), to);
-            let (upper, lower) = max_distance_bound(tri, at, to, opts, enough);
-            (upper, lower, owner)
-        })
-        .collect()
+/// One direction of the certificate: the triangles of `from` against the surface `to`.
+struct Side<'a> {
+    from: &'a TriMesh,
+    to: &'a MeshDistance<'a>,
+    /// Exact distance and nearest triangle of `to` per vertex of `from`.
+    at_vertex: Vec<(f32, u32)>,
 }
 
-/// Second pass: triangles still above `enough` get a larger split budget (only
-/// they can decide the maximum).
-fn refine_side(
-    bounds: &mut SideBounds,
-    from: &TriMesh,
-    at_vertex: &[(f32, u32)],
-    to: &MeshDistance,
-    opts: &BoundOptions,
-    enough: f32,
-) {
-    let deep = BoundOptions {
-        max_splits: opts.max_splits * 4,
-        ..*opts
-    };
-    bounds.par_iter_mut().enumerate().for_each(|(t, b)| {
-        if b.0 > enough {
-            let at = from.triangles[t].map(|v| at_vertex[v as usize]);
-            let (upper, lower) = max_distance_bound(from.triangle(t), at, to, &deep, enough);
-            *b = (upper.min(b.0), lower.max(b.1), b.2);
+/// Progress over all passes, and the cancel flag checked per triangle.
+struct Tracker<'a> {
+    progress: &'a Progress,
+    done: AtomicUsize,
+    total: usize,
+}
+
+impl Tracker<'_> {
+    /// Counts one triangle; false once cancelled.
+    fn tick(&self) -> bool {
+        let d = self.done.fetch_add(1, AtomicOrdering::Relaxed) + 1;
+        if d.is_multiple_of(4096) {
+            self.progress
+                .set_fraction(d as f32 / self.total.max(1) as f32);
         }
-    });
+        !self.progress.is_cancelled()
+    }
+}
+
+impl<'a> Side<'a> {
+    fn new(from: &'a TriMesh, to: &'a MeshDistance<'a>) -> Self {
+        let at_vertex = from.positions.par_iter().map(|p| to.nearest(*p)).collect();
+        Side {
+            from,
+            to,
+            at_vertex,
+        }
+    }
+
+    fn at(&self, t: usize) -> [(f32, u32); 3] {
+        self.from.triangles[t].map(|v| self.at_vertex[v as usize])
+    }
+
+    /// For every triangle: its bound, the largest exact distance found, and the
+    /// triangle of `to` that covers it best as a whole.
+    fn bounds(&self, opts: &BoundOptions, enough: f32, track: &Tracker) -> SideBounds {
+        (0..self.from.triangles.len())
+            .into_par_iter()
+            .map(|t| {
+                if !track.tick() {
+                    return (f32::INFINITY, 0.0, 0);
+                }
+                let at = self.at(t);
+                let tri = self.from.triangle(t);
+                let (_, owner) = piece_bound(&tri, &at.map(|x| x.0), &at.map(|x| x.1), self.to);
+                let (upper, lower) = max_distance_bound(tri, at, self.to, opts, enough);
+                (upper, lower, owner)
+            })
+            .collect()
+    }
+
+    /// Second pass: triangles still above `enough` get a larger split budget
+    /// (only they can decide the maximum).
+    fn refine(&self, bounds: &mut SideBounds, opts: &BoundOptions, enough: f32, track: &Tracker) {
+        let deep = BoundOptions {
+            max_splits: opts.max_splits * 4,
+            ..*opts
+        };
+        bounds.par_iter_mut().enumerate().for_each(|(t, b)| {
+            if track.tick() && b.0 > enough {
+                let (upper, lower) =
+                    max_distance_bound(self.from.triangle(t), self.at(t), self.to, &deep, enough);
+                *b = (upper.min(b.0), lower.max(b.1), b.2);
+            }
+        });
+    }
 }
 
 /// Certifies `simplified` against `original` (see the module doc).
 pub fn certify(original: &TriMesh, simplified: &TriMesh, opts: &BoundOptions) -> Certificate {
+    match certify_with_progress(original, simplified, opts, &Progress::new()) {
+        Ok(c) => c,
+        Err(Cancelled) => unreachable!("a fresh progress handle is never cancelled"),
+    }
+}
+
+/// [`certify`], publishing its fraction done on `progress` and stopping as soon
+/// as it is cancelled.
+pub fn certify_with_progress(
+    original: &TriMesh,
+    simplified: &TriMesh,
+    opts: &BoundOptions,
+    progress: &Progress,
+) -> Result<Certificate, Cancelled> {
     let n = simplified.triangles.len();
     if n == 0 || original.triangles.is_empty() {
-        return Certificate {
+        return Ok(Certificate {
             triangle_bounds: vec![0.0; n],
             attributed: Vec::new(),
             forward: if original.triangles.is_empty() {
@@ -260,52 +303,59 @@ pub fn certify(original: &TriMesh, simplified: &TriMesh, opts: &BoundOptions) ->
                 f32::INFINITY
             },
             reverse: 0.0,
-        };
+        });
     }
     let (to_o, to_s) = (MeshDistance::new(original), MeshDistance::new(simplified));
-    let (at_s, at_o) = (
-        vertex_distances(simplified, &to_o),
-        vertex_distances(original, &to_s),
-    );
+    let (rev, fwd) = (Side::new(simplified, &to_o), Side::new(original, &to_s));
+    progress.check()?;
     // The largest exact vertex distance is a lower bound of the result: refining a
     // triangle far below it cannot change the maximum, so the absolute tolerance
     // follows it and the work goes where the maximum is.
-    let lower = at_s.iter().chain(&at_o).map(|x| x.0).fold(0.0, f32::max);
+    let lower = rev
+        .at_vertex
+        .iter()
+        .chain(&fwd.at_vertex)
+        .map(|x| x.0)
+        .fold(0.0, f32::max);
     let opts = BoundOptions {
         abs_tol: opts.abs_tol.max(opts.rel_tol * lower),
         ..*opts
     };
-    let enough = if opts.per_triangle {
-        0.0
-    } else {
-        lower * (1.0 + opts.rel_tol)
+    let enough_above = |l: f32| {
+        if opts.per_triangle {
+            0.0
+        } else {
+            l * (1.0 + opts.rel_tol)
+        }
     };
-    let mut reverse = one_side(simplified, &at_s, &to_o, &opts, enough);
-    let mut forward = one_side(original, &at_o, &to_s, &opts, enough);
+    let track = Tracker {
+        progress,
+        done: AtomicUsize::new(0),
+        total: 2 * (n + original.triangles.len()),
+    };
+    let mut reverse = rev.bounds(&opts, enough_above(lower), &track);
+    let mut forward = fwd.bounds(&opts, enough_above(lower), &track);
+    progress.check()?;
     // Pass one raised the lower bound; refine what is still above it.
     let found = reverse
         .iter()
         .chain(&forward)
         .map(|x| x.1)
         .fold(lower, f32::max);
-    let enough = if opts.per_triangle {
-        0.0
-    } else {
-        found * (1.0 + opts.rel_tol)
-    };
-    refine_side(&mut reverse, simplified, &at_s, &to_o, &opts, enough);
-    refine_side(&mut forward, original, &at_o, &to_s, &opts, enough);
+    rev.refine(&mut reverse, &opts, enough_above(found), &track);
+    fwd.refine(&mut forward, &opts, enough_above(found), &track);
+    progress.check()?;
     let mut triangle_bounds: Vec<f32> = reverse.iter().map(|x| x.0).collect();
     for (b, _, owner) in &forward {
         let tb = &mut triangle_bounds[*owner as usize];
         *tb = tb.max(*b);
     }
-    Certificate {
+    Ok(Certificate {
         triangle_bounds,
         attributed: forward.iter().map(|x| x.2).collect(),
         forward: forward.iter().map(|x| x.0).fold(0.0, f32::max),
         reverse: reverse.iter().map(|x| x.0).fold(0.0, f32::max),
-    }
+    })
 }
 
 #[cfg(test)]

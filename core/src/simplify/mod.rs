@@ -11,7 +11,7 @@ pub mod bound;
 pub mod collapse;
 pub mod quadric;
 
-pub use bound::{BoundOptions, Certificate, certify};
+pub use bound::{BoundOptions, Certificate, certify, certify_with_progress};
 pub use collapse::{Candidate, Collapse, CollapseOptions, CostFn, EdgeCollapser};
 
 use crate::geom::TriMesh;
@@ -93,7 +93,7 @@ pub fn simplify(
         progress.check()?;
         let (out, _) = s.mesh();
         progress.stage("certifying the error bound");
-        let certificate = certify(mesh, &out, &bound_opts);
+        let certificate = certify_with_progress(mesh, &out, &bound_opts, progress)?;
         Ok(Simplified {
             mesh: out,
             certificate,
@@ -156,6 +156,29 @@ mod tests {
     use super::*;
     use crate::builtins::torus;
     use crate::distance::{SamplingOptions, hausdorff_mesh_mesh};
+
+    /// Cancelling while the bound is being certified stops the build.
+    #[test]
+    fn cancel_during_certification_stops() {
+        let mesh = crate::builtins::icosphere(glam::Vec3::ZERO, 1.0, 6);
+        let progress = std::sync::Arc::new(Progress::new());
+        let watcher = {
+            let p = progress.clone();
+            std::thread::spawn(move || {
+                while p.stage_name() != "certifying the error bound" {
+                    std::thread::sleep(std::time::Duration::from_micros(200));
+                }
+                p.cancel();
+            })
+        };
+        let opts = SimplifyOptions {
+            target: Target::Ratio(0.5),
+            collapse: CollapseOptions::default(),
+        };
+        let r = simplify(&mesh, &opts, &progress);
+        watcher.join().unwrap();
+        assert!(matches!(r, Err(SimplifyError::Cancelled)));
+    }
 
     #[test]
     fn error_target_is_met_with_a_certified_bound() {
