@@ -195,6 +195,7 @@ mod tests {
     #[test]
     fn builds_a_torus_and_explains_points() {
         let options = SimplifyOptions {
+            per_triangle_bounds: false,
             target: Target::Ratio(0.25),
             collapse: CollapseOptions::default(),
         };

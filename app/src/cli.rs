@@ -354,6 +354,7 @@ fn simplify(args: SimplifyArgs) -> Result<(), CliError> {
     let mesh = load_mesh(&args.file, &input)?;
     let start = std::time::Instant::now();
     let opts = SimplifyOptions {
+        per_triangle_bounds: false,
         target,
         collapse: CollapseOptions {
             lock_borders: args.lock_borders || args.keep_seams,

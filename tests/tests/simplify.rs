@@ -32,6 +32,7 @@ fn certified_bound_holds_against_dense_sampling_and_is_tight() {
         let before = Topology::of(&mesh);
         for ratio in [0.5, 0.1, 0.01] {
             let opts = SimplifyOptions {
+                per_triangle_bounds: false,
                 target: Target::Ratio(ratio),
                 collapse: CollapseOptions::default(),
             };
@@ -114,6 +115,7 @@ fn keep_seams_freezes_seam_and_border_vertices() {
     let r = simplify::simplify(
         &truck,
         &SimplifyOptions {
+            per_triangle_bounds: false,
             target: Target::Ratio(0.3),
             collapse: CollapseOptions {
                 lock_borders: true,

@@ -40,6 +40,11 @@ const FOLD_HINT: &str = "Fold guard: reject a collapse that turns any triangle's
     by more than the angle whose cosine this is, so the surface does not fold over \
     itself. 0 rejects only turns beyond 90°; higher is stricter.";
 
+const TIGHT_HINT: &str = "Certify every triangle's bound to within 5% of its measured \
+    distance, so the heat map shows where the error really is. Off: triangles are only \
+    refined while they could decide the mesh's bound (much faster; their values are \
+    conservative).";
+
 /// Everything edge collapse needs besides the mesh.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(default)]
@@ -55,6 +60,8 @@ pub struct EdgeCollapseSettings {
     pub min_quality: f32,
     /// Smallest cosine between a triangle's normals before and after a collapse.
     pub min_normal_cos: f32,
+    /// Certify every triangle tightly (for the heat map), not only the maximum.
+    pub tight_bounds: bool,
 }
 
 impl Default for EdgeCollapseSettings {
@@ -68,6 +75,7 @@ impl Default for EdgeCollapseSettings {
             lock_borders: collapse.lock_borders,
             min_quality: collapse.min_quality,
             min_normal_cos: collapse.min_normal_cos,
+            tight_bounds: false,
         }
     }
 }
@@ -93,6 +101,7 @@ impl EdgeCollapseSettings {
             lock_borders: self.lock_borders,
             min_quality: clamp_or(self.min_quality, 0.0..=1.0, d.min_quality),
             min_normal_cos: clamp_or(self.min_normal_cos, 0.0..=1.0, d.min_normal_cos),
+            tight_bounds: self.tight_bounds,
         }
     }
 
@@ -100,6 +109,7 @@ impl EdgeCollapseSettings {
     pub fn options(&self) -> SimplifyOptions {
         let s = self.sanitized();
         SimplifyOptions {
+            per_triangle_bounds: s.tight_bounds,
             target: match s.mode {
                 TargetMode::Ratio => Target::Ratio(s.ratio),
                 TargetMode::Triangles => Target::Triangles(s.triangles),
@@ -174,6 +184,8 @@ impl EdgeCollapseSettings {
             .on_hover_text(FOLD_HINT);
         let degrees = self.min_normal_cos.clamp(-1.0, 1.0).acos().to_degrees();
         ui.weak(format!("normals may turn up to {degrees:.0}°"));
+        ui.checkbox(&mut self.tight_bounds, "Tight per-triangle bounds")
+            .on_hover_text(TIGHT_HINT);
         *self != before
     }
 }

@@ -35,6 +35,9 @@ pub enum Target {
 pub struct SimplifyOptions {
     pub target: Target,
     pub collapse: CollapseOptions,
+    /// Certify every triangle to its own tolerance (for per-triangle inspection),
+    /// not only as far as the mesh's bound needs; slower.
+    pub per_triangle_bounds: bool,
 }
 
 /// A simplified mesh with its certificate.
@@ -75,7 +78,10 @@ pub fn simplify(
 ) -> Result<Simplified, SimplifyError> {
     let n = mesh.triangles.len();
     let diag = mesh.bounds().diagonal();
-    let bound_opts = BoundOptions::for_diagonal(diag);
+    let bound_opts = BoundOptions {
+        per_triangle: opts.per_triangle_bounds,
+        ..BoundOptions::for_diagonal(diag)
+    };
     let count = |target: usize| -> Result<Simplified, SimplifyError> {
         progress.stage("collapsing edges");
         let mut s = EdgeCollapser::new(mesh, opts.collapse);
@@ -172,6 +178,7 @@ mod tests {
             })
         };
         let opts = SimplifyOptions {
+            per_triangle_bounds: false,
             target: Target::Ratio(0.5),
             collapse: CollapseOptions::default(),
         };
@@ -184,6 +191,7 @@ mod tests {
     fn error_target_is_met_with_a_certified_bound() {
         let mesh = torus(1.0, 0.35, 64, 32);
         let opts = SimplifyOptions {
+            per_triangle_bounds: false,
             target: Target::RelativeError(0.005),
             collapse: CollapseOptions::default(),
         };
@@ -195,6 +203,7 @@ mod tests {
         assert!(measured <= r.error_bound());
         // One step coarser would break the limit, or the search stopped within 2%.
         let bad = SimplifyOptions {
+            per_triangle_bounds: false,
             target: Target::Ratio(2.0),
             ..opts
         };
