@@ -15,6 +15,7 @@ pub mod progress;
 pub mod rng;
 pub mod simplify;
 pub mod stats;
+pub mod voxel;
 
 pub use geom::{Aabb, PointSet, TriMesh, Volume};
 pub use io::{LoadError, Loaded, Model};
