@@ -32,11 +32,11 @@ pub fn build(name: &str, progress: &Progress) -> Result<Model, LoadError> {
         "torus" => Model::Mesh(torus(1.0, 0.35, 64, 32)),
         "octahedron-points" => Model::Points(octahedron_points(16_000, 1)),
         "sphereflake" => Model::Mesh(sphereflake_mesh(&Sphereflake::new(3))),
-        "csg-part" => Model::Mesh(crate::isosurface::extract(
-            &implicit::csg_part(),
-            0.04,
-            progress,
-        )?),
+        "csg-part" => {
+            let field =
+                crate::voxel::sampling::sample_field(&implicit::csg_part(), 0.04, progress)?;
+            Model::Mesh(crate::voxel::marching_cubes(&field, 0.0, progress)?)
+        }
         _ => {
             return Err(LoadError::UnknownBuiltin {
                 name: name.to_string(),

@@ -10,7 +10,6 @@ pub mod distance;
 pub mod geom;
 pub mod implicit;
 pub mod io;
-pub mod isosurface;
 pub mod progress;
 pub mod rng;
 pub mod simplify;

@@ -13,6 +13,38 @@ use crate::geom::Volume;
 use crate::implicit::Implicit;
 use crate::progress::{Cancelled, Progress};
 
+/// Samples the negated value of `solid` at the nodes of a grid of spacing `cell`
+/// covering its bounds plus one cell, so the surface is the level 0 of a field that
+/// is positive inside (what [`super::marching_cubes`] extracts) and the border
+/// samples are outside. The grid is shifted by a fraction of a cell so that planar
+/// faces at round coordinates do not pass exactly through grid nodes.
+pub fn sample_field(
+    solid: &dyn Implicit,
+    cell: f32,
+    progress: &Progress,
+) -> Result<Volume, Cancelled> {
+    progress.stage("sampling the solid");
+    let bounds = solid.bounds();
+    let origin = bounds.min - Vec3::splat(cell * (1.0 - 0.123));
+    let dims = [0, 1, 2].map(|a| ((bounds.max[a] - origin[a]) / cell).ceil() as usize + 2);
+    let (nx, ny) = (dims[0], dims[1]);
+    let mut data = vec![0f32; nx * ny * dims[2]];
+    for (z, slab) in data.chunks_mut(nx * ny).enumerate() {
+        progress.check()?;
+        progress.set_fraction(z as f32 / dims[2] as f32);
+        slab.par_iter_mut().enumerate().for_each(|(i, v)| {
+            let p = origin + Vec3::new((i % nx) as f32, (i / nx) as f32, z as f32) * cell;
+            *v = -solid.value(p);
+        });
+    }
+    Ok(Volume {
+        dims,
+        spacing: Vec3::splat(cell),
+        origin,
+        data,
+    })
+}
+
 /// Samples `solid` (value < 0 inside) into an occupancy volume in 0..=1.
 ///
 /// The grid has `resolution` cubic voxels along the longest side of the solid's
