@@ -1,16 +1,21 @@
-//! One edge-collapse build of the open model, done on a worker thread: the
-//! simplified mesh with its certificate, the scenes the viewport shows for it,
-//! and the inspector rows that report it.
+//! One LOD build of the open model, done on a worker thread: the simplified
+//! mesh (with its certificate or topology), the scenes the viewport shows for
+//! it, and the inspector rows that report it.
 
+use std::path::Path;
 use std::sync::Arc;
 use std::time::Instant;
 
 use lodstudio_core::TriMesh;
+use lodstudio_core::builtins;
 use lodstudio_core::io::Model;
 use lodstudio_core::progress::{Cancelled, Progress};
 use lodstudio_core::simplify::{Simplified, SimplifyError, SimplifyOptions, simplify};
+use lodstudio_core::voxel::{VoxelLevel, simplify_implicit};
 
 use crate::heatmap;
+use crate::panels::voxel::VoxelSettings;
+use crate::panels::{BuildParams, Method};
 use crate::viewport::Scene;
 
 /// One inspector row, with what it means when hovered.
@@ -20,22 +25,135 @@ pub struct Row {
     pub hint: &'static str,
 }
 
+/// What a build made, by method.
+pub enum Lod {
+    /// Edge collapse: the simplified mesh and its certificate.
+    Collapsed {
+        simplified: Simplified,
+        input_triangles: usize,
+        /// Bounding-box diagonal of the input (what relative errors refer to).
+        diagonal: f32,
+    },
+    /// Voxel simplification: the iso-surface and its topology.
+    Voxel(VoxelLevel),
+}
+
+/// The simplified mesh coloured by each triangle's certified bound.
+pub struct Heat {
+    pub scene: Arc<Scene>,
+    /// The value the heat map's brightest colour stands for.
+    pub max: f32,
+}
+
 /// A finished build.
 pub struct Built {
-    pub simplified: Simplified,
-    pub options: SimplifyOptions,
-    pub input_triangles: usize,
-    /// Bounding-box diagonal of the input (what relative errors refer to).
-    pub diagonal: f32,
-    /// Time for collapsing and certifying.
+    pub lod: Lod,
+    /// The parameters it was built with.
+    pub params: BuildParams,
+    /// Time for the method itself (without preparing the view).
     pub seconds: f32,
-    /// The simplified mesh as the viewport draws it...
+    /// The simplified mesh as the viewport draws it.
     pub scene: Arc<Scene>,
-    /// ...and coloured by each triangle's certified bound.
-    pub heat_scene: Arc<Scene>,
-    /// The value the heat map's brightest colour stands for.
-    pub heat_max: f32,
+    /// Only for methods with per-triangle bounds (edge collapse).
+    pub heat: Option<Heat>,
     pub rows: Vec<Row>,
+}
+
+impl Built {
+    pub fn method(&self) -> Method {
+        self.params.method()
+    }
+
+    /// The mesh the build made.
+    pub fn mesh(&self) -> &TriMesh {
+        match &self.lod {
+            Lod::Collapsed { simplified, .. } => &simplified.mesh,
+            Lod::Voxel(level) => &level.mesh,
+        }
+    }
+
+    /// The edge-collapse result, if this was one.
+    pub fn simplified(&self) -> Option<&Simplified> {
+        match &self.lod {
+            Lod::Collapsed { simplified, .. } => Some(simplified),
+            Lod::Voxel(_) => None,
+        }
+    }
+
+    /// The voxel level, if this was one.
+    pub fn voxel(&self) -> Option<&VoxelLevel> {
+        match &self.lod {
+            Lod::Voxel(level) => Some(level),
+            Lod::Collapsed { .. } => None,
+        }
+    }
+
+    /// One line for the log, after the job's label.
+    pub fn report(&self) -> String {
+        match &self.lod {
+            Lod::Collapsed {
+                simplified,
+                input_triangles,
+                diagonal,
+            } => {
+                let bound = simplified.error_bound();
+                format!(
+                    "{input_triangles} to {} triangles, certified bound {} ({:.3} % of the diagonal), {:.2} s",
+                    simplified.mesh.triangles.len(),
+                    length(bound),
+                    100.0 * bound / diagonal.max(f32::MIN_POSITIVE),
+                    self.seconds
+                )
+            }
+            Lod::Voxel(level) => format!(
+                "{} triangles, {} components, genus {} (resolution {}, filter radius {:.1} voxels), {:.2} s",
+                level.mesh.triangles.len(),
+                level.components,
+                level.genus,
+                level.resolution,
+                level.radius,
+                self.seconds
+            ),
+        }
+    }
+}
+
+/// Whether `method` can build the model opened from `path`.
+///
+/// # Errors
+/// A one-line message for the user saying why not.
+pub fn check(method: Method, path: &Path, model: &Model) -> Result<(), String> {
+    match method {
+        Method::EdgeCollapse => mesh_of(model).map(|_| ()),
+        Method::Voxel => implicit_of(path, model).map(|_| ()),
+    }
+}
+
+/// The name of the built-in implicit solid voxel simplification samples, or
+/// why there is none.
+///
+/// # Errors
+/// A message for the user naming what the model is instead.
+pub fn implicit_of<'a>(path: &'a Path, model: &Model) -> Result<&'a str, String> {
+    if let Some(name) = path.to_str().and_then(|p| p.strip_prefix("builtin:"))
+        && builtins::implicit(name).is_some()
+    {
+        return Ok(name);
+    }
+    let solids: Vec<String> = builtins::NAMES
+        .iter()
+        .filter(|(name, _)| builtins::implicit(name).is_some())
+        .map(|(name, _)| format!("builtin:{name}"))
+        .collect();
+    let what = match model {
+        Model::Mesh(_) => "a triangle mesh",
+        Model::Points(_) => "a point set",
+        Model::Volume(_) => "a volume",
+    };
+    Err(format!(
+        "Voxel simplification samples an implicit solid ({}); this model is {what}, which it cannot sample yet.",
+        solids.join(" or ")
+    ))
 }
 
 /// The triangle mesh edge collapse works on, or why there is none.
@@ -78,6 +196,7 @@ pub fn run(
     progress.check()?;
     progress.stage("preparing the view");
     let scene = Arc::new(Scene::from_mesh(&simplified.mesh));
+    progress.check()?;
     let bounds = &simplified.certificate.triangle_bounds;
     let heat_max = bounds
         .iter()
@@ -88,24 +207,116 @@ pub fn run(
         .iter()
         .map(|&b| heatmap::linear(if heat_max > 0.0 { b / heat_max } else { 0.0 }))
         .collect();
-    let heat_scene = Arc::new(Scene::from_mesh_with_triangle_colors(
-        &simplified.mesh,
-        &colors,
-    ));
+    let heat = Heat {
+        scene: Arc::new(Scene::from_mesh_with_triangle_colors(
+            &simplified.mesh,
+            &colors,
+        )),
+        max: heat_max,
+    };
     let diagonal = mesh.bounds().diagonal();
     let input_triangles = mesh.triangles.len();
     let rows = rows(&simplified, input_triangles, diagonal, seconds);
     Ok(Ok(Built {
-        simplified,
-        options,
-        input_triangles,
-        diagonal,
+        lod: Lod::Collapsed {
+            simplified,
+            input_triangles,
+            diagonal,
+        },
+        params: BuildParams::EdgeCollapse(options),
         seconds,
         scene,
-        heat_scene,
-        heat_max,
+        heat: Some(heat),
         rows,
     }))
+}
+
+/// Samples the built-in implicit solid `name`, filters and extracts its
+/// surface (voxel paper §2), and prepares everything the studio shows of it.
+///
+/// # Errors
+/// `Err(Cancelled)` when `progress` was cancelled; `Ok(Err(message))` when
+/// `name` is no implicit solid.
+pub fn run_voxel(
+    name: &str,
+    settings: VoxelSettings,
+    progress: &Progress,
+) -> Result<Result<Built, String>, Cancelled> {
+    let Some(solid) = builtins::implicit(name) else {
+        return Ok(Err(format!("builtin:{name} is no implicit solid")));
+    };
+    let settings = settings.sanitized();
+    let start = Instant::now();
+    let level = simplify_implicit(
+        solid.as_ref(),
+        settings.resolution,
+        settings.radius,
+        settings.filter.filter(),
+        settings.iso,
+        progress,
+    )?;
+    let seconds = start.elapsed().as_secs_f32();
+    progress.check()?;
+    progress.stage("preparing the view");
+    let scene = Arc::new(Scene::from_mesh(&level.mesh));
+    let rows = voxel_rows(&level, settings, seconds);
+    Ok(Ok(Built {
+        lod: Lod::Voxel(level),
+        params: BuildParams::Voxel(settings),
+        seconds,
+        scene,
+        heat: None,
+        rows,
+    }))
+}
+
+fn voxel_rows(level: &VoxelLevel, settings: VoxelSettings, seconds: f32) -> Vec<Row> {
+    vec![
+        Row {
+            label: "resolution",
+            value: level.resolution.to_string(),
+            hint: "Voxels of the sampling grid along the longest side of the solid's \
+                   bounds (the volume buffer S of §2).",
+        },
+        Row {
+            label: "filter",
+            value: settings.filter.name().to_string(),
+            hint: "The low-pass filter h of f = h * S: the Gaussian or the hyper-cone \
+                   of eq. 3.",
+        },
+        Row {
+            label: "filter radius",
+            value: format!("{:.1} voxels", level.radius),
+            hint: "Support radius R of the low-pass filter h, in voxels of the \
+                   sampling grid.",
+        },
+        Row {
+            label: "iso-density",
+            value: format!("{}", settings.iso),
+            hint: "The density f at which marching cubes extracted the surface.",
+        },
+        Row {
+            label: "LOD triangles",
+            value: level.mesh.triangles.len().to_string(),
+            hint: "Triangles of the extracted iso-surface.",
+        },
+        Row {
+            label: "LOD components",
+            value: level.components.to_string(),
+            hint: "Connected pieces of the extracted surface.",
+        },
+        Row {
+            label: "LOD genus",
+            value: level.genus.to_string(),
+            hint: "Holes (tunnels) through the extracted surface: a wider filter closes \
+                   the small ones, so the genus falls as the radius grows.",
+        },
+        Row {
+            label: "build time",
+            value: format!("{seconds:.2} s"),
+            hint: "Time to sample, filter and extract, without preparing the view.",
+        },
+    ]
 }
 
 fn rows(simplified: &Simplified, input: usize, diagonal: f32, seconds: f32) -> Vec<Row> {
@@ -203,12 +414,15 @@ mod tests {
         let built = run(&model, options, &Progress::new())
             .expect("not cancelled")
             .expect("a mesh builds");
-        assert!(built.simplified.mesh.triangles.len() <= 256);
+        let simplified = built.simplified().expect("an edge-collapse result");
+        assert!(simplified.mesh.triangles.len() <= 256);
         assert_eq!(
             built.scene.triangle_count(),
-            built.simplified.mesh.triangles.len()
+            simplified.mesh.triangles.len()
         );
-        assert!(built.heat_max > 0.0 && built.heat_max <= built.simplified.error_bound());
+        let heat_max = built.heat.as_ref().expect("a heat map").max;
+        assert!(heat_max > 0.0 && heat_max <= simplified.error_bound());
+        assert_eq!(built.method(), Method::EdgeCollapse);
 
         let points = Model::Points(PointSet::default());
         let message = run(&points, options, &Progress::new())
@@ -220,5 +434,30 @@ mod tests {
         let cancelled = Progress::new();
         cancelled.cancel();
         assert!(run(&model, options, &cancelled).is_err());
+    }
+
+    #[test]
+    fn voxel_builds_only_implicit_solids() {
+        let settings = VoxelSettings {
+            resolution: 24,
+            radius: 1.0,
+            ..Default::default()
+        };
+        let built = run_voxel("csg-part", settings, &Progress::new())
+            .expect("not cancelled")
+            .expect("csg-part is implicit");
+        let level = built.voxel().expect("a voxel result");
+        assert!(!level.mesh.triangles.is_empty());
+        assert_eq!(built.mesh().triangles.len(), level.mesh.triangles.len());
+        assert!(built.heat.is_none());
+        assert_eq!(built.method(), Method::Voxel);
+
+        let mesh = Model::Mesh(torus(1.0, 0.35, 8, 4));
+        assert!(check(Method::EdgeCollapse, Path::new("builtin:torus"), &mesh).is_ok());
+        let message = check(Method::Voxel, Path::new("builtin:torus"), &mesh)
+            .expect_err("a mesh is not sampled");
+        assert!(message.contains("builtin:csg-part"), "{message}");
+        assert!(message.contains("a triangle mesh"), "{message}");
+        assert!(check(Method::Voxel, Path::new("builtin:csg-part"), &mesh).is_ok());
     }
 }

@@ -13,13 +13,14 @@ use std::time::Duration;
 
 use lodstudio_core::builtins;
 use lodstudio_core::io::{LoadError, LoadOptions, Loaded, load};
+use lodstudio_core::progress::{Cancelled, Progress};
 use lodstudio_core::stats::ModelSummary;
 
 use crate::build::{self, Built};
 use crate::export::{self, Saved};
 use crate::heatmap;
 use crate::job::{Job, Poll};
-use crate::panels::{Method, MethodSettings};
+use crate::panels::{BuildParams, Method, MethodSettings};
 use crate::viewport::{Scene, Viewport};
 
 /// Storage key of the recent-files list (JSON array of paths).
@@ -78,6 +79,9 @@ struct Current {
     /// The model as the viewport draws it.
     scene: Arc<Scene>,
 }
+
+/// A build's work on its worker thread (one per method).
+type BuildWork = Box<dyn FnOnce(&Progress) -> Result<Result<Built, String>, Cancelled> + Send>;
 
 /// When a requested build starts.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -481,14 +485,19 @@ impl StudioApp {
         self.build_note = None;
     }
 
+    /// Whether the chosen method can build the model on screen (`None`
+    /// without a model), or why not.
+    fn input_check(&self) -> Option<Result<(), String>> {
+        self.current
+            .as_ref()
+            .map(|c| build::check(self.methods.method, &c.path, &c.loaded.model))
+    }
+
     /// After a parameter changed: schedule a rebuild if wanted and possible.
     fn parameters_changed(&mut self) {
         self.build_note = None;
-        let has_mesh = self
-            .current
-            .as_ref()
-            .is_some_and(|c| build::mesh_of(&c.loaded.model).is_ok());
-        if self.methods.auto_rebuild && has_mesh {
+        let buildable = matches!(self.input_check(), Some(Ok(())));
+        if self.methods.auto_rebuild && buildable {
             self.build_at = Some(BuildRequest::Settled);
         }
     }
@@ -516,25 +525,33 @@ impl StudioApp {
     fn start_build(&mut self, ctx: &egui::Context) {
         let ready = match &self.current {
             None => Err("Open a model first.".to_string()),
-            Some(c) => build::mesh_of(&c.loaded.model).map(|_| (Arc::clone(&c.loaded), &c.name)),
+            Some(c) => build::check(self.methods.method, &c.path, &c.loaded.model).map(|()| c),
         };
-        let (loaded, name) = match ready {
-            Ok(ready) => ready,
+        let current = match ready {
+            Ok(current) => current,
             Err(message) => {
                 self.build_failed(message);
                 return;
             }
         };
+        let label = format!("{} of {}", self.methods.method.name(), current.name);
         // Every method starts here; a new one makes this match incomplete.
-        let (label, work) = match self.methods.method {
-            Method::EdgeCollapse => {
-                let options = self.methods.edge_collapse.options();
-                (
-                    format!("{} of {name}", Method::EdgeCollapse.name()),
-                    move |progress: &lodstudio_core::Progress| {
-                        build::run(&loaded.model, options, progress)
-                    },
-                )
+        let work: BuildWork = match self.methods.params() {
+            BuildParams::EdgeCollapse(options) => {
+                let loaded = Arc::clone(&current.loaded);
+                Box::new(move |progress| build::run(&loaded.model, options, progress))
+            }
+            BuildParams::Voxel(settings) => {
+                let name =
+                    build::implicit_of(&current.path, &current.loaded.model).map(str::to_string);
+                let name = match name {
+                    Ok(name) => name,
+                    Err(message) => {
+                        self.build_failed(message);
+                        return;
+                    }
+                };
+                Box::new(move |progress| build::run_voxel(&name, settings, progress))
             }
         };
         // Replacing the job cancels the running build (see `Job`'s Drop).
@@ -562,16 +579,7 @@ impl StudioApp {
         };
         match outcome {
             Ok(built) => {
-                let bound = built.simplified.error_bound();
-                self.info(format!(
-                    "{}: {} to {} triangles, certified bound {} ({:.3} % of the diagonal), {:.2} s",
-                    job.label(),
-                    built.input_triangles,
-                    built.simplified.mesh.triangles.len(),
-                    build::length(bound),
-                    100.0 * bound / built.diagonal.max(f32::MIN_POSITIVE),
-                    built.seconds
-                ));
+                self.info(format!("{}: {}", job.label(), built.report()));
                 self.result = Some(Arc::new(built));
                 self.view = View::Simplified;
             }
@@ -602,8 +610,10 @@ impl StudioApp {
             return;
         };
         let scene = match (&self.result, self.view) {
-            (Some(built), View::Simplified) if self.heat => &built.heat_scene,
-            (Some(built), View::Simplified) => &built.scene,
+            (Some(built), View::Simplified) => match &built.heat {
+                Some(heat) if self.heat => &heat.scene,
+                _ => &built.scene,
+            },
             _ => &current.scene,
         };
         self.viewport.swap_scene(scene);
@@ -623,7 +633,7 @@ impl StudioApp {
             return;
         };
         match Job::spawn("export", "Exporting".into(), ctx, move |_| {
-            Ok(write(&built.simplified.mesh))
+            Ok(write(built.mesh()))
         }) {
             Ok(job) => self.export = Some(job),
             Err(e) => self.error(format!("cannot start the export: {e}")),
@@ -634,7 +644,7 @@ impl StudioApp {
         let (Some(current), Some(built)) = (&self.current, &self.result) else {
             return;
         };
-        let name = export::suggested_name(&current.path, built.simplified.mesh.triangles.len());
+        let name = export::suggested_name(&current.path, built.mesh().triangles.len());
         self.start_export(ctx, move |mesh| export::choose_and_write(mesh, &name));
     }
 
@@ -784,15 +794,16 @@ impl StudioApp {
         ui.heading("Method");
         let mut changed = self.methods.method_list(ui);
         ui.add_space(4.0);
-        let mesh = self
+        let input_triangles = self
             .current
             .as_ref()
-            .map(|c| build::mesh_of(&c.loaded.model).map(|m| m.triangles.len()));
-        let input_triangles = mesh.as_ref().and_then(|m| m.as_ref().ok()).copied();
+            .and_then(|c| build::mesh_of(&c.loaded.model).ok())
+            .map(|m| m.triangles.len());
         match self.methods.method {
             Method::EdgeCollapse => {
                 changed |= self.methods.edge_collapse.ui(ui, input_triangles);
             }
+            Method::Voxel => changed |= self.methods.voxel.ui(ui),
         }
         ui.add_space(4.0);
         let auto = ui
@@ -801,7 +812,8 @@ impl StudioApp {
         if changed || (auto.changed() && self.methods.auto_rebuild && self.result_is_stale()) {
             self.parameters_changed();
         }
-        let can_build = matches!(mesh, Some(Ok(_)));
+        let input = self.input_check();
+        let can_build = matches!(input, Some(Ok(())));
         ui.horizontal(|ui| {
             let build = ui
                 .add_enabled(can_build, egui::Button::new("Build"))
@@ -819,7 +831,7 @@ impl StudioApp {
             }
         });
         let error_color = ui.visuals().error_fg_color;
-        if let Some(Err(why)) = &mesh {
+        if let Some(Err(why)) = &input {
             ui.colored_label(error_color, why);
         } else if let Some(note) = &self.build_note {
             ui.colored_label(error_color, note);
@@ -832,12 +844,13 @@ impl StudioApp {
     fn result_is_stale(&self) -> bool {
         self.result
             .as_ref()
-            .is_none_or(|r| r.options != self.methods.edge_collapse.options())
+            .is_none_or(|r| r.params != self.methods.params())
     }
 
     /// Original / simplified toggle and the heat-map switch above the viewport.
     fn view_bar(&mut self, ui: &mut egui::Ui) {
         let has_result = self.result.is_some();
+        let has_heat = self.result.as_ref().is_some_and(|r| r.heat.is_some());
         // Without a result the original is what is shown, whatever was chosen.
         let mut shown = if has_result {
             self.view
@@ -857,12 +870,15 @@ impl StudioApp {
                             .on_disabled_hover_text("Build a LOD first.");
                         ui.separator();
                         ui.add_enabled(
-                            shown == View::Simplified,
+                            shown == View::Simplified && has_heat,
                             egui::Checkbox::new(&mut heat, "Colour by certified bound"),
                         )
                         .on_hover_text(
                             "Colour each simplified triangle by its certified Hausdorff \
                              bound, from dark (near 0) to yellow (the largest).",
+                        )
+                        .on_disabled_hover_text(
+                            "Only edge collapse certifies a bound per triangle.",
                         );
                     });
                 });
@@ -892,7 +908,7 @@ impl StudioApp {
                 });
             if let Some(built) = &self.result {
                 ui.separator();
-                ui.label(egui::RichText::new(Method::EdgeCollapse.name()).strong());
+                ui.label(egui::RichText::new(built.method().name()).strong());
                 egui::Grid::new("build grid")
                     .num_columns(2)
                     .striped(true)
@@ -903,10 +919,13 @@ impl StudioApp {
                             ui.end_row();
                         }
                     });
-                if self.heat && self.view == View::Simplified {
+                if let Some(heat) = &built.heat
+                    && self.heat
+                    && self.view == View::Simplified
+                {
                     ui.add_space(4.0);
                     ui.label("certified bound per triangle");
-                    heatmap::legend(ui, &build::length(built.heat_max));
+                    heatmap::legend(ui, &build::length(heat.max));
                 }
             }
         });

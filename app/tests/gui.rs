@@ -8,7 +8,9 @@ use std::time::{Duration, Instant};
 use egui_kittest::Harness;
 use egui_kittest::kittest::Queryable as _;
 use egui_kittest::wgpu::{WgpuTestRenderer, create_render_state, default_wgpu_setup};
+use lodstudio::panels::Method;
 use lodstudio::panels::simplify::TargetMode;
+use lodstudio::panels::voxel::FilterKind;
 use lodstudio::studio::StudioApp;
 
 const MAX_LOAD_FRAMES: usize = 600;
@@ -426,8 +428,11 @@ fn edge_collapse_builds_shows_certificate_and_exports() {
     wait_for_build(&mut harness);
 
     let built = harness.state().result().expect("the build finished");
-    let triangles = built.simplified.mesh.triangles.len();
-    let bound = built.simplified.error_bound();
+    let triangles = built.mesh().triangles.len();
+    let bound = built
+        .simplified()
+        .expect("an edge-collapse result")
+        .error_bound();
     assert!(triangles > 0 && triangles <= 929, "{triangles} triangles");
     assert!(bound.is_finite() && bound > 0.0, "bound {bound}");
     for label in [
@@ -520,8 +525,7 @@ fn cancelling_a_build_keeps_the_previous_result() {
         .state()
         .result()
         .expect("first build")
-        .simplified
-        .mesh
+        .mesh()
         .clone();
     assert!(before.triangles.len() <= input / 2);
 
@@ -545,12 +549,11 @@ fn cancelling_a_build_keeps_the_previous_result() {
     assert!(!harness.state().is_building());
     harness.run();
 
-    let after = &harness
+    let after = harness
         .state()
         .result()
         .expect("previous result kept")
-        .simplified
-        .mesh;
+        .mesh();
     assert_eq!(after, &before);
     assert_eq!(drawn_triangles(&harness), Some(before.triangles.len()));
     assert!(has_label(&harness, &before.triangles.len().to_string()));
@@ -617,6 +620,11 @@ fn method_settings_persist() {
     methods.edge_collapse.triangles = 1234;
     methods.edge_collapse.lock_borders = true;
     methods.edge_collapse.min_quality = 0.3;
+    methods.method = Method::Voxel;
+    methods.voxel.filter = FilterKind::Cone;
+    methods.voxel.resolution = 100;
+    methods.voxel.radius = 3.5;
+    methods.voxel.iso = 0.4;
     first.set_methods(methods);
     let mut storage = MemoryStorage::default();
     eframe::App::save(&mut first, &mut storage);
@@ -632,4 +640,198 @@ fn method_settings_persist() {
     let defaults = *third.methods();
     third.restore(&storage);
     assert_eq!(third.methods(), &defaults);
+}
+
+/// Genus of the last voxel result.
+fn voxel_genus(harness: &Harness<'_, StudioApp>) -> i64 {
+    harness
+        .state()
+        .result()
+        .and_then(|b| b.voxel())
+        .expect("a voxel result")
+        .genus
+}
+
+/// The value of the result's inspector row `label`.
+fn result_row(harness: &Harness<'_, StudioApp>, label: &str) -> String {
+    let built = harness.state().result().expect("a result");
+    let row = built.rows.iter().find(|r| r.label == label);
+    row.map(|r| r.value.clone())
+        .unwrap_or_else(|| panic!("no row {label:?}"))
+}
+
+#[test]
+fn voxel_method_closes_holes_as_the_filter_widens() {
+    let mut harness = studio(Some("builtin:csg-part".into()));
+    wait_for_load(&mut harness);
+    let original = harness
+        .state()
+        .summary()
+        .expect("csg-part loaded")
+        .triangles;
+
+    // Select the method in the list, as a user does.
+    harness
+        .get_by_label("Voxel (low-pass + marching cubes)")
+        .click();
+    harness.run();
+    assert_eq!(harness.state().methods().method, Method::Voxel);
+    for label in ["Gaussian", "Cone", "resolution", "filter radius", "iso"] {
+        assert!(has_label(&harness, label), "control {label:?}");
+    }
+    wait_for_build(&mut harness);
+
+    let mut methods = *harness.state().methods();
+    methods.voxel.resolution = 48;
+    methods.voxel.radius = 1.0;
+    harness.state_mut().set_methods(methods);
+    harness.step();
+    assert!(harness.state().is_building(), "auto rebuild is scheduled");
+    wait_for_build(&mut harness);
+
+    assert_eq!(voxel_genus(&harness), 5);
+    let built = harness.state().result().expect("built");
+    let triangles = built.mesh().triangles.len();
+    assert!(triangles > 0);
+    assert_eq!(result_row(&harness, "LOD genus"), "5");
+    assert_eq!(result_row(&harness, "resolution"), "48");
+    for label in [
+        "Voxel (low-pass + marching cubes)",
+        "resolution",
+        "filter radius",
+        "LOD triangles",
+        "LOD components",
+        "LOD genus",
+        "build time",
+    ] {
+        assert!(has_label(&harness, label), "inspector row {label:?}");
+    }
+    assert!(has_label(&harness, &triangles.to_string()));
+    assert!(
+        harness.state().log_lines().any(|l| l
+            .starts_with("Voxel (low-pass + marching cubes) of builtin:csg-part: ")
+            && l.contains("genus 5")),
+        "the log reports the build"
+    );
+
+    // The viewport shows the result; the toggle switches back and forth.
+    assert_eq!(drawn_triangles(&harness), Some(triangles));
+    harness.get_by_label("Original").click();
+    harness.run();
+    assert_eq!(drawn_triangles(&harness), Some(original));
+    harness.get_by_label("Simplified").click();
+    harness.run();
+    assert_eq!(drawn_triangles(&harness), Some(triangles));
+    let (covered, shades) = viewport_pixels(&mut harness, "studio_voxel");
+    assert!(covered > 0.02, "covers {:.1}%", covered * 100.0);
+    assert!(shades > 20, "only {shades} shades");
+
+    // A wide filter closes the small holes.
+    methods.voxel.radius = 10.0;
+    harness.state_mut().set_methods(methods);
+    harness.step();
+    wait_for_build(&mut harness);
+    let genus = voxel_genus(&harness);
+    assert!(genus < 5, "genus {genus} at radius 10");
+    assert_eq!(result_row(&harness, "LOD genus"), genus.to_string());
+
+    // Export writes the voxel mesh.
+    let out = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("gui-voxel-export.ply");
+    let _ = std::fs::remove_file(&out);
+    let wide = harness
+        .state()
+        .result()
+        .expect("built")
+        .mesh()
+        .triangles
+        .len();
+    let ctx = harness.ctx.clone();
+    harness.state_mut().export_to(&out, &ctx);
+    wait_while(&mut harness, "exporting", StudioApp::is_exporting);
+    let reread = lodstudio_core::io::load(
+        &out,
+        &lodstudio_core::io::LoadOptions::default(),
+        &lodstudio_core::Progress::new(),
+    )
+    .expect("the export loads");
+    let lodstudio_core::Model::Mesh(mesh) = reread.model else {
+        panic!("the export is a mesh");
+    };
+    assert_eq!(mesh.triangles.len(), wide);
+}
+
+#[test]
+fn voxel_on_a_mesh_file_explains_instead_of_building() {
+    let mut harness = studio(None);
+    wait_for_load(&mut harness);
+    harness
+        .get_by_label("Voxel (low-pass + marching cubes)")
+        .click();
+    harness.run();
+    assert!(!harness.state().is_building(), "nothing to build");
+    let message = "Voxel simplification samples an implicit solid (builtin:sphereflake or \
+                   builtin:csg-part); this model is a triangle mesh, which it cannot sample yet.";
+    assert!(has_label(&harness, message), "the method section says why");
+
+    // Asked anyway (the Build button is disabled): the same message, no result.
+    harness.state_mut().build();
+    wait_for_build(&mut harness);
+    assert!(harness.state().result().is_none());
+    assert!(harness.state().log_lines().any(|l| l == message));
+
+    // Changing parameters schedules nothing.
+    let mut methods = *harness.state().methods();
+    methods.voxel.radius = 3.0;
+    harness.state_mut().set_methods(methods);
+    assert!(!harness.state().is_building());
+}
+
+#[test]
+fn cancelling_a_voxel_build_keeps_the_previous_result() {
+    let mut harness = studio(Some("builtin:csg-part".into()));
+    wait_for_load(&mut harness);
+    let mut methods = *harness.state().methods();
+    methods.method = Method::Voxel;
+    methods.auto_rebuild = false;
+    methods.voxel.resolution = 32;
+    methods.voxel.radius = 1.0;
+    harness.state_mut().set_methods(methods);
+    // The voxel controls move the Build button: lay out the panel first.
+    harness.run();
+    harness.get_by_label("Build").click();
+    wait_for_build(&mut harness);
+    let before = harness
+        .state()
+        .result()
+        .expect("first build")
+        .mesh()
+        .clone();
+
+    // The hyper-cone is not separable: this wide one takes seconds. Cancel it.
+    methods.voxel.filter = FilterKind::Cone;
+    methods.voxel.resolution = 64;
+    methods.voxel.radius = 16.0;
+    harness.state_mut().set_methods(methods);
+    harness.get_by_label("Build").click();
+    harness.step();
+    harness.step();
+    assert!(harness.state().is_building(), "the build is still running");
+    harness.get_by_label("Cancel").click();
+    harness.step();
+    assert!(!harness.state().is_building());
+    harness.run();
+
+    let after = harness
+        .state()
+        .result()
+        .expect("previous result kept")
+        .mesh();
+    assert_eq!(after, &before);
+    assert_eq!(drawn_triangles(&harness), Some(before.triangles.len()));
+    assert!(harness.state().log_lines().any(|l| l
+        == "Cancelled Voxel (low-pass + marching cubes) of builtin:csg-part; the previous result is kept"));
+    assert!(has_label(
+        &harness,
+        "Parameters changed since the last build."
+    ));
 }

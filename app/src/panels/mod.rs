@@ -3,10 +3,13 @@
 //! between sessions.
 
 pub mod simplify;
+pub mod voxel;
 
+use lodstudio_core::simplify::SimplifyOptions;
 use serde::{Deserialize, Serialize};
 
 use self::simplify::EdgeCollapseSettings;
+use self::voxel::VoxelSettings;
 
 /// The LOD methods the studio can build.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
@@ -14,15 +17,18 @@ pub enum Method {
     /// Edge collapse with a certified Hausdorff bound (hybrid paper §5.2).
     #[default]
     EdgeCollapse,
+    /// Low-pass filtering of a sampled volume and marching cubes (voxel paper §2).
+    Voxel,
 }
 
 impl Method {
     /// Every method, in the order the list shows them.
-    pub const ALL: &[Method] = &[Method::EdgeCollapse];
+    pub const ALL: &[Method] = &[Method::EdgeCollapse, Method::Voxel];
 
     pub fn name(self) -> &'static str {
         match self {
             Method::EdgeCollapse => "Edge collapse",
+            Method::Voxel => "Voxel (low-pass + marching cubes)",
         }
     }
 
@@ -32,6 +38,12 @@ impl Method {
                 "Collapses edges in order of quadric error and certifies the result: a \
                  guaranteed bound on the two-sided Hausdorff distance between the original \
                  and the simplified surface (hybrid simplification paper, §5.2)."
+            }
+            Method::Voxel => {
+                "Samples the solid into a volume buffer, low-pass filters it into a density \
+                 (Gaussian or hyper-cone) and extracts the iso-density surface by marching \
+                 cubes: wider filters remove small features, holes and tunnels, so the genus \
+                 falls (voxel-based object simplification paper, §2)."
             }
         }
     }
@@ -45,6 +57,24 @@ pub struct MethodSettings {
     /// Rebuild by itself shortly after a parameter changes.
     pub auto_rebuild: bool,
     pub edge_collapse: EdgeCollapseSettings,
+    pub voxel: VoxelSettings,
+}
+
+/// What one build of one method depends on besides its input: a result built
+/// with other parameters than the shown ones is stale.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum BuildParams {
+    EdgeCollapse(SimplifyOptions),
+    Voxel(VoxelSettings),
+}
+
+impl BuildParams {
+    pub fn method(&self) -> Method {
+        match self {
+            BuildParams::EdgeCollapse(_) => Method::EdgeCollapse,
+            BuildParams::Voxel(_) => Method::Voxel,
+        }
+    }
 }
 
 impl Default for MethodSettings {
@@ -53,6 +83,7 @@ impl Default for MethodSettings {
             method: Method::default(),
             auto_rebuild: true,
             edge_collapse: EdgeCollapseSettings::default(),
+            voxel: VoxelSettings::default(),
         }
     }
 }
@@ -63,7 +94,16 @@ impl MethodSettings {
     pub fn from_json(json: &str) -> Option<MethodSettings> {
         let mut settings: MethodSettings = serde_json::from_str(json).ok()?;
         settings.edge_collapse = settings.edge_collapse.sanitized();
+        settings.voxel = settings.voxel.sanitized();
         Some(settings)
+    }
+
+    /// What a build of the chosen method gets.
+    pub fn params(&self) -> BuildParams {
+        match self.method {
+            Method::EdgeCollapse => BuildParams::EdgeCollapse(self.edge_collapse.options()),
+            Method::Voxel => BuildParams::Voxel(self.voxel.sanitized()),
+        }
     }
 
     pub fn to_json(&self) -> Option<String> {
@@ -98,11 +138,15 @@ mod tests {
         let json = settings.to_json().expect("serialises");
         assert_eq!(MethodSettings::from_json(&json), Some(settings));
 
-        let odd = r#"{"edge_collapse": {"ratio": 7.0, "min_quality": -2.0}}"#;
+        let odd = r#"{"edge_collapse": {"ratio": 7.0, "min_quality": -2.0},
+                      "voxel": {"resolution": 9999, "iso": 0.0}}"#;
         let restored = MethodSettings::from_json(odd).expect("partial settings parse");
         assert!(restored.auto_rebuild, "missing fields take their defaults");
         assert_eq!(restored.edge_collapse.ratio, 1.0);
         assert_eq!(restored.edge_collapse.min_quality, 0.0);
+        assert_eq!(restored.voxel.resolution, 256);
+        assert_eq!(restored.voxel.iso, 0.05);
+        assert_eq!(restored.voxel.radius, VoxelSettings::default().radius);
         assert_eq!(MethodSettings::from_json("not json"), None);
     }
 }

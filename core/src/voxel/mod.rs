@@ -14,7 +14,7 @@ pub mod sampling;
 pub use filter::Filter;
 pub use marching_cubes::{DENSITY_ISO, marching_cubes};
 
-use crate::geom::{Topology, TriMesh};
+use crate::geom::{Topology, TriMesh, Volume};
 use crate::implicit::Implicit;
 use crate::progress::{Cancelled, Progress};
 
@@ -50,20 +50,72 @@ pub fn simplify_implicit(
     let s = sampling::sample_implicit(solid, resolution, world_radius, SUPERSAMPLE, progress)?;
     let f = filter::apply(filter, &s, world_radius, progress)?;
     let mesh = marching_cubes(&f, iso, progress)?;
+    Ok(level(mesh, resolution, radius))
+}
+
+/// The same for a scalar volume (CT, MRI): S is the set of samples at or above
+/// `iso`, filtered with support `radius` voxels (of the smallest spacing), and the
+/// density surface 0.5 is extracted on the volume's own grid.
+pub fn simplify_volume(
+    volume: &Volume,
+    iso: f32,
+    radius: f32,
+    filter: Filter,
+    progress: &Progress,
+) -> Result<VoxelLevel, Cancelled> {
+    let h = volume.spacing.min_element();
+    let world_radius = radius.max(0.0) * h;
+    let pad = radius.max(0.0).ceil() as usize + 1;
+    let s = sampling::binarize(volume, iso, pad);
+    let f = filter::apply(filter, &s, world_radius, progress)?;
+    let mesh = marching_cubes(&f, DENSITY_ISO, progress)?;
+    Ok(level(
+        mesh,
+        volume.dims.into_iter().max().unwrap_or(0),
+        radius,
+    ))
+}
+
+fn level(mesh: TriMesh, resolution: usize, radius: f32) -> VoxelLevel {
     let topo = Topology::of(&mesh);
-    Ok(VoxelLevel {
+    VoxelLevel {
         resolution,
         radius,
         components: topo.components.len(),
         genus: topo.genus,
         mesh,
-    })
+    }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::implicit::{Sphereflake, csg_part};
+
+    /// A sampled sphere volume (values = distance from the centre, inside below
+    /// the iso level is outside here: S is `value >= iso`) gives one closed surface.
+    #[test]
+    fn volumes_are_simplified_on_their_own_grid() {
+        let n = 40;
+        let mut data = Vec::with_capacity(n * n * n);
+        for z in 0..n {
+            for y in 0..n {
+                for x in 0..n {
+                    let d = glam::Vec3::new(x as f32, y as f32, z as f32) - glam::Vec3::splat(19.5);
+                    data.push(15.0 - d.length());
+                }
+            }
+        }
+        let v = Volume {
+            dims: [n; 3],
+            spacing: glam::Vec3::new(1.0, 1.0, 2.0),
+            origin: glam::Vec3::ZERO,
+            data,
+        };
+        let l = simplify_volume(&v, 0.0, 2.0, Filter::Gaussian, &Progress::new()).unwrap();
+        assert_eq!((l.components, l.genus, l.resolution), (1, 0, n));
+        assert!(Topology::of(&l.mesh).is_closed());
+    }
 
     #[test]
     fn csg_part_loses_genus_as_the_filter_widens() {
