@@ -64,12 +64,8 @@ struct VoxelArgs {
     /// Output mesh (.obj, .ply, .glb); with --pyramid, a folder for one .ply per level.
     #[arg(short = 'o', long = "output", value_name = "OUT")]
     output: Option<PathBuf>,
-    /// Overwrite existing output.
-    #[arg(long)]
-    force: bool,
-    /// Print one JSON object.
-    #[arg(long)]
-    json: bool,
+    #[command(flatten)]
+    report: ReportArgs,
     #[command(flatten)]
     input: InputArgs,
 }
@@ -117,14 +113,21 @@ struct SimplifyArgs {
     /// Sliver guard: minimum triangle quality 4√3·area/Σl² (merge-tree paper eq. 3); 0 disables.
     #[arg(long, value_name = "Q", default_value_t = 0.0)]
     min_quality: f32,
-    /// Overwrite OUT if it exists.
+    #[command(flatten)]
+    report: ReportArgs,
+    #[command(flatten)]
+    input: InputArgs,
+}
+
+/// How results are reported and written.
+#[derive(Args, Debug)]
+struct ReportArgs {
+    /// Overwrite output files that exist.
     #[arg(long)]
     force: bool,
     /// Print one JSON object.
     #[arg(long)]
     json: bool,
-    #[command(flatten)]
-    input: InputArgs,
 }
 
 #[derive(Args, Debug)]
@@ -378,7 +381,7 @@ fn parse_error_target(e: &str) -> Result<Target, CliError> {
 }
 
 fn simplify(args: SimplifyArgs) -> Result<(), CliError> {
-    check_output(&args.output, args.force)?;
+    check_output(&args.output, args.report.force)?;
     let target = match (args.triangles, args.ratio, &args.error) {
         (Some(n), _, _) => Target::Triangles(n),
         (_, Some(r), _) => Target::Ratio(r),
@@ -412,7 +415,7 @@ fn simplify(args: SimplifyArgs) -> Result<(), CliError> {
     write_mesh(&args.output, &result.mesh)?;
     let diag = mesh.bounds().diagonal();
     let bound = result.error_bound();
-    if args.json {
+    if args.report.json {
         println!(
             "{}",
             serde_json::json!({
@@ -535,7 +538,7 @@ fn voxel(args: VoxelArgs) -> Result<(), CliError> {
     };
     let input = voxel_input(&args)?;
     if let Some(out) = &args.output {
-        check_output(out, args.force || (args.pyramid && out.is_dir()))?;
+        check_output(out, args.report.force || (args.pyramid && out.is_dir()))?;
     }
     let progress = Progress::new();
     let run = |resolution: usize, radius: f32| match &input {
@@ -568,7 +571,7 @@ fn voxel(args: VoxelArgs) -> Result<(), CliError> {
         let mut j = level_json(&l, l.resolution);
         j["layers"] = 1.into();
         j["seconds"] = start.elapsed().as_secs_f64().into();
-        if args.json {
+        if args.report.json {
             println!("{j}");
         } else {
             println!(
@@ -598,11 +601,11 @@ fn voxel(args: VoxelArgs) -> Result<(), CliError> {
         let l = run(resolution, args.radius).map_err(failed)?;
         if let Some(dir) = &args.output {
             let path = dir.join(format!("level{}_{}.ply", levels.len(), resolution));
-            check_output(&path, args.force)?;
+            check_output(&path, args.report.force)?;
             write_mesh(&path, &l.mesh)?;
         }
         let j = level_json(&l, args.resolution);
-        if !args.json {
+        if !args.report.json {
             println!(
                 "resolution {:>5}  radius {:>7.2}  triangles {:>8}  components {:>4}  genus {:>4}",
                 j["resolution"],
@@ -615,7 +618,7 @@ fn voxel(args: VoxelArgs) -> Result<(), CliError> {
         levels.push(j);
         resolution /= 2;
     }
-    if args.json {
+    if args.report.json {
         println!(
             "{}",
             serde_json::json!({ "levels": levels, "seconds": start.elapsed().as_secs_f64() })

@@ -43,6 +43,24 @@ fn wait_for_build(harness: &mut Harness<'_, StudioApp>) {
     wait_while(harness, "building", StudioApp::is_building);
 }
 
+/// Exports the current result to `out`, waits, and returns the triangle count of
+/// the file read back.
+fn export_and_reload(harness: &mut Harness<'_, StudioApp>, out: &std::path::Path) -> usize {
+    let ctx = harness.ctx.clone();
+    harness.state_mut().export_to(out, &ctx);
+    wait_while(harness, "exporting", StudioApp::is_exporting);
+    let reread = lodstudio_core::io::load(
+        out,
+        &lodstudio_core::io::LoadOptions::default(),
+        &lodstudio_core::Progress::new(),
+    )
+    .expect("the export loads");
+    let lodstudio_core::Model::Mesh(mesh) = reread.model else {
+        panic!("the export is a mesh");
+    };
+    mesh.triangles.len()
+}
+
 /// Steps frames while `busy` holds (bounded in frames and time), then settles.
 fn wait_while(harness: &mut Harness<'_, StudioApp>, what: &str, busy: fn(&StudioApp) -> bool) {
     let start = Instant::now();
@@ -477,21 +495,10 @@ fn edge_collapse_builds_shows_certificate_and_exports() {
     let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR"));
     let out = dir.join("gui-export.obj");
     let _ = std::fs::remove_file(&out);
-    let ctx = harness.ctx.clone();
-    harness.state_mut().export_to(&out, &ctx);
-    wait_while(&mut harness, "exporting", StudioApp::is_exporting);
-    let reread = lodstudio_core::io::load(
-        &out,
-        &lodstudio_core::io::LoadOptions::default(),
-        &lodstudio_core::Progress::new(),
-    )
-    .expect("the export loads");
-    let lodstudio_core::Model::Mesh(mesh) = reread.model else {
-        panic!("the export is a mesh");
-    };
-    assert_eq!(mesh.triangles.len(), triangles);
+    assert_eq!(export_and_reload(&mut harness, &out), triangles);
 
     // A format the writer does not know is reported, not written.
+    let ctx = harness.ctx.clone();
     harness
         .state_mut()
         .export_to(dir.join("gui-export.xyz"), &ctx);
@@ -745,19 +752,7 @@ fn voxel_method_closes_holes_as_the_filter_widens() {
         .mesh()
         .triangles
         .len();
-    let ctx = harness.ctx.clone();
-    harness.state_mut().export_to(&out, &ctx);
-    wait_while(&mut harness, "exporting", StudioApp::is_exporting);
-    let reread = lodstudio_core::io::load(
-        &out,
-        &lodstudio_core::io::LoadOptions::default(),
-        &lodstudio_core::Progress::new(),
-    )
-    .expect("the export loads");
-    let lodstudio_core::Model::Mesh(mesh) = reread.model else {
-        panic!("the export is a mesh");
-    };
-    assert_eq!(mesh.triangles.len(), wide);
+    assert_eq!(export_and_reload(&mut harness, &out), wide);
 }
 
 #[test]
