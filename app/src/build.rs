@@ -8,13 +8,14 @@ use std::time::Instant;
 
 use lodstudio_core::TriMesh;
 use lodstudio_core::builtins;
+use lodstudio_core::geom::Volume;
 use lodstudio_core::io::Model;
 use lodstudio_core::progress::{Cancelled, Progress};
 use lodstudio_core::simplify::{Simplified, SimplifyError, SimplifyOptions, simplify};
-use lodstudio_core::voxel::{VoxelLevel, simplify_implicit};
+use lodstudio_core::voxel::{VoxelLevel, simplify_implicit, simplify_volume};
 
 use crate::heatmap;
-use crate::panels::voxel::VoxelSettings;
+use crate::panels::voxel::{VolumeGrid, VoxelSettings};
 use crate::panels::{BuildParams, Method};
 use crate::viewport::Scene;
 
@@ -125,20 +126,32 @@ impl Built {
 pub fn check(method: Method, path: &Path, model: &Model) -> Result<(), String> {
     match method {
         Method::EdgeCollapse => mesh_of(model).map(|_| ()),
-        Method::Voxel => implicit_of(path, model).map(|_| ()),
+        Method::Voxel => voxel_source(path, model).map(|_| ()),
     }
 }
 
-/// The name of the built-in implicit solid voxel simplification samples, or
-/// why there is none.
+/// What voxel simplification works on.
+#[derive(Debug, Clone, Copy)]
+pub enum VoxelSource<'a> {
+    /// The name of a built-in implicit solid, sampled on a grid of its own.
+    Implicit(&'a str),
+    /// A scalar volume (CT, MRI), thresholded on its own grid.
+    Volume(&'a Volume),
+}
+
+/// What voxel simplification samples of the model opened from `path`, or why
+/// there is nothing.
 ///
 /// # Errors
 /// A message for the user naming what the model is instead.
-pub fn implicit_of<'a>(path: &'a Path, model: &Model) -> Result<&'a str, String> {
+pub fn voxel_source<'a>(path: &'a Path, model: &'a Model) -> Result<VoxelSource<'a>, String> {
     if let Some(name) = path.to_str().and_then(|p| p.strip_prefix("builtin:"))
         && builtins::implicit(name).is_some()
     {
-        return Ok(name);
+        return Ok(VoxelSource::Implicit(name));
+    }
+    if let Model::Volume(volume) = model {
+        return Ok(VoxelSource::Volume(volume));
     }
     let solids: Vec<String> = builtins::NAMES
         .iter()
@@ -151,7 +164,7 @@ pub fn implicit_of<'a>(path: &'a Path, model: &Model) -> Result<&'a str, String>
         Model::Volume(_) => "a volume",
     };
     Err(format!(
-        "Voxel simplification samples an implicit solid ({}); this model is {what}, which it cannot sample yet.",
+        "Voxel simplification samples an implicit solid ({}) or thresholds a volume; this model is {what}, which it cannot sample yet.",
         solids.join(" or ")
     ))
 }
@@ -245,7 +258,7 @@ pub fn run_voxel(
     let Some(solid) = builtins::implicit(name) else {
         return Ok(Err(format!("builtin:{name} is no implicit solid")));
     };
-    let settings = settings.sanitized();
+    let settings = settings.for_implicit();
     let start = Instant::now();
     let level = simplify_implicit(
         solid.as_ref(),
@@ -256,6 +269,47 @@ pub fn run_voxel(
         progress,
     )?;
     let seconds = start.elapsed().as_secs_f32();
+    voxel_built(level, settings, seconds, progress)
+}
+
+/// Thresholds the volume `model` (whose grid is `grid`) into S, filters it and
+/// extracts its surface on the volume's own grid (voxel paper §2), and prepares
+/// everything the studio shows of it. Only the filter, the radius and the
+/// threshold of `settings` take effect.
+///
+/// # Errors
+/// `Err(Cancelled)` when `progress` was cancelled; `Ok(Err(message))` when
+/// `model` is no volume.
+pub fn run_voxel_volume(
+    model: &Model,
+    grid: &VolumeGrid,
+    settings: VoxelSettings,
+    progress: &Progress,
+) -> Result<Result<Built, String>, Cancelled> {
+    let Model::Volume(volume) = model else {
+        return Ok(Err("this model is no volume".to_string()));
+    };
+    let settings = settings.for_volume(grid);
+    let threshold = grid.threshold(settings.threshold);
+    let start = Instant::now();
+    let level = simplify_volume(
+        volume,
+        threshold,
+        settings.radius,
+        settings.filter.filter(),
+        progress,
+    )?;
+    let seconds = start.elapsed().as_secs_f32();
+    voxel_built(level, settings, seconds, progress)
+}
+
+/// A finished voxel build, its scene and its inspector rows.
+fn voxel_built(
+    level: VoxelLevel,
+    settings: VoxelSettings,
+    seconds: f32,
+    progress: &Progress,
+) -> Result<Result<Built, String>, Cancelled> {
     progress.check()?;
     progress.stage("preparing the view");
     let scene = Arc::new(Scene::from_mesh(&level.mesh));
@@ -270,13 +324,41 @@ pub fn run_voxel(
     }))
 }
 
+/// The rows of a voxel build; `settings.threshold` is set for volumes only.
 fn voxel_rows(level: &VoxelLevel, settings: VoxelSettings, seconds: f32) -> Vec<Row> {
+    let (resolution_hint, radius_hint) = if settings.threshold.is_some() {
+        (
+            "Largest dimension of the volume's own grid, whose thresholded samples \
+             are the volume buffer S of §2.",
+            "Support radius R of the low-pass filter h, in voxels of the volume's \
+             smallest spacing.",
+        )
+    } else {
+        (
+            "Voxels of the sampling grid along the longest side of the solid's \
+             bounds (the volume buffer S of §2).",
+            "Support radius R of the low-pass filter h, in voxels of the \
+             sampling grid.",
+        )
+    };
+    let surface = match settings.threshold {
+        Some(threshold) => Row {
+            label: "threshold",
+            value: length(threshold),
+            hint: "Samples at or above this value (the volume's own units) formed the \
+                   solid S; the surface is the density 0.5 of the filtered S.",
+        },
+        None => Row {
+            label: "iso-density",
+            value: format!("{}", settings.iso),
+            hint: "The density f at which marching cubes extracted the surface.",
+        },
+    };
     vec![
         Row {
             label: "resolution",
             value: level.resolution.to_string(),
-            hint: "Voxels of the sampling grid along the longest side of the solid's \
-                   bounds (the volume buffer S of §2).",
+            hint: resolution_hint,
         },
         Row {
             label: "filter",
@@ -287,14 +369,9 @@ fn voxel_rows(level: &VoxelLevel, settings: VoxelSettings, seconds: f32) -> Vec<
         Row {
             label: "filter radius",
             value: format!("{:.1} voxels", level.radius),
-            hint: "Support radius R of the low-pass filter h, in voxels of the \
-                   sampling grid.",
+            hint: radius_hint,
         },
-        Row {
-            label: "iso-density",
-            value: format!("{}", settings.iso),
-            hint: "The density f at which marching cubes extracted the surface.",
-        },
+        surface,
         Row {
             label: "LOD triangles",
             value: level.mesh.triangles.len().to_string(),
@@ -459,5 +536,48 @@ mod tests {
         assert!(message.contains("builtin:csg-part"), "{message}");
         assert!(message.contains("a triangle mesh"), "{message}");
         assert!(check(Method::Voxel, Path::new("builtin:csg-part"), &mesh).is_ok());
+    }
+
+    #[test]
+    fn voxel_builds_volumes_at_their_threshold() {
+        // A ball of radius 8 voxels: values fall from 10 at the centre outwards.
+        let n = 24;
+        let data = (0..n * n * n)
+            .map(|i| {
+                let p = glam::Vec3::new((i % n) as f32, (i / n % n) as f32, (i / (n * n)) as f32);
+                10.0 - p.distance(glam::Vec3::splat(11.5))
+            })
+            .collect();
+        let model = Model::Volume(Volume {
+            dims: [n; 3],
+            spacing: glam::Vec3::ONE,
+            origin: glam::Vec3::ZERO,
+            data,
+        });
+        assert!(check(Method::Voxel, Path::new("ball.nrrd"), &model).is_ok());
+        let Model::Volume(volume) = &model else {
+            unreachable!()
+        };
+        let grid = VolumeGrid::of(volume);
+        let settings = VoxelSettings {
+            radius: 1.0,
+            threshold: Some(2.0),
+            ..Default::default()
+        };
+        let built = run_voxel_volume(&model, &grid, settings, &Progress::new())
+            .expect("not cancelled")
+            .expect("a volume builds");
+        let level = built.voxel().expect("a voxel result");
+        assert_eq!((level.resolution, level.components, level.genus), (n, 1, 0));
+        assert_eq!(built.params, BuildParams::Voxel(settings.for_volume(&grid)));
+        let threshold = built.rows.iter().find(|r| r.label == "threshold");
+        assert_eq!(threshold.map(|r| r.value.as_str()), Some("2.000"));
+
+        let mesh = Model::Mesh(torus(1.0, 0.35, 8, 4));
+        let message = run_voxel_volume(&mesh, &grid, settings, &Progress::new())
+            .expect("not cancelled")
+            .err()
+            .expect("a mesh is no volume");
+        assert!(message.contains("no volume"), "{message}");
     }
 }

@@ -20,6 +20,7 @@ use crate::build::{self, Built};
 use crate::export::{self, Saved};
 use crate::heatmap;
 use crate::job::{Job, Poll};
+use crate::panels::voxel::VolumeGrid;
 use crate::panels::{BuildParams, Method, MethodSettings};
 use crate::viewport::{Scene, Viewport};
 
@@ -78,6 +79,8 @@ struct Current {
     rows: Vec<(String, String)>,
     /// The model as the viewport draws it.
     scene: Arc<Scene>,
+    /// The grid and value range of a volume model.
+    volume: Option<VolumeGrid>,
 }
 
 /// A build's work on its worker thread (one per method).
@@ -108,6 +111,7 @@ struct Finished {
     loaded: Loaded,
     summary: ModelSummary,
     scene: Scene,
+    volume: Option<VolumeGrid>,
 }
 
 struct LoadJob {
@@ -133,8 +137,14 @@ pub struct StudioApp {
     log: Vec<LogLine>,
     /// Message of the last failed load, shown in a window until dismissed.
     error: Option<String>,
-    /// The chosen method and its parameters (persisted).
+    /// The chosen method and its parameters (persisted, except the voxel
+    /// threshold: see `threshold_volume`).
     methods: MethodSettings,
+    /// The volume the voxel threshold (`methods.voxel.threshold`) was chosen
+    /// for. The threshold is in that volume's value units, so it resets to the
+    /// middle of the value range when a different volume opens (and is not
+    /// persisted between sessions); reopening the same volume keeps it.
+    threshold_volume: Option<PathBuf>,
     build: Option<Job<Result<Built, String>>>,
     /// The last finished build of the model on screen.
     result: Option<Arc<Built>>,
@@ -190,6 +200,7 @@ impl StudioApp {
             log: Vec::new(),
             error: None,
             methods: MethodSettings::default(),
+            threshold_volume: None,
             build: None,
             result: None,
             build_at: None,
@@ -396,10 +407,15 @@ impl StudioApp {
             progress.check()?;
             progress.stage("preparing the view");
             let scene = Scene::from_model(&loaded.model);
+            let volume = match &loaded.model {
+                lodstudio_core::io::Model::Volume(v) => Some(VolumeGrid::of(v)),
+                _ => None,
+            };
             Ok(Ok(Box::new(Finished {
                 loaded,
                 summary,
                 scene,
+                volume,
             })))
         });
         match spawned {
@@ -438,6 +454,7 @@ impl StudioApp {
                     loaded,
                     summary,
                     scene,
+                    volume,
                 } = *done;
                 let seconds = job.elapsed().as_secs_f32();
                 let counts = match (summary.triangles, summary.points) {
@@ -450,6 +467,10 @@ impl StudioApp {
                     summary.format.name()
                 ));
                 self.forget_result();
+                if volume.is_some() && self.threshold_volume.as_ref() != Some(&path) {
+                    self.methods.voxel.threshold = None;
+                    self.threshold_volume = Some(path.clone());
+                }
                 let scene = Arc::new(scene);
                 self.viewport.frame_scene(Arc::clone(&scene));
                 if !is_builtin(&path) {
@@ -463,6 +484,7 @@ impl StudioApp {
                     loaded: Arc::new(loaded),
                     summary,
                     scene,
+                    volume,
                 });
             }
             Err(e) => self.load_failed(e.to_string()),
@@ -536,22 +558,29 @@ impl StudioApp {
         };
         let label = format!("{} of {}", self.methods.method.name(), current.name);
         // Every method starts here; a new one makes this match incomplete.
-        let work: BuildWork = match self.methods.params() {
+        let work: BuildWork = match self.methods.params(current.volume.as_ref()) {
             BuildParams::EdgeCollapse(options) => {
                 let loaded = Arc::clone(&current.loaded);
                 Box::new(move |progress| build::run(&loaded.model, options, progress))
             }
             BuildParams::Voxel(settings) => {
-                let name =
-                    build::implicit_of(&current.path, &current.loaded.model).map(str::to_string);
-                let name = match name {
-                    Ok(name) => name,
+                match build::voxel_source(&current.path, &current.loaded.model) {
+                    Ok(build::VoxelSource::Implicit(name)) => {
+                        let name = name.to_string();
+                        Box::new(move |progress| build::run_voxel(&name, settings, progress))
+                    }
+                    Ok(build::VoxelSource::Volume(volume)) => {
+                        let loaded = Arc::clone(&current.loaded);
+                        let grid = current.volume.unwrap_or_else(|| VolumeGrid::of(volume));
+                        Box::new(move |progress| {
+                            build::run_voxel_volume(&loaded.model, &grid, settings, progress)
+                        })
+                    }
                     Err(message) => {
                         self.build_failed(message);
                         return;
                     }
-                };
-                Box::new(move |progress| build::run_voxel(&name, settings, progress))
+                }
             }
         };
         // Replacing the job cancels the running build (see `Job`'s Drop).
@@ -803,7 +832,10 @@ impl StudioApp {
             Method::EdgeCollapse => {
                 changed |= self.methods.edge_collapse.ui(ui, input_triangles);
             }
-            Method::Voxel => changed |= self.methods.voxel.ui(ui),
+            Method::Voxel => {
+                let volume = self.current.as_ref().and_then(|c| c.volume);
+                changed |= self.methods.voxel.ui(ui, volume.as_ref());
+            }
         }
         ui.add_space(4.0);
         let auto = ui
@@ -844,7 +876,12 @@ impl StudioApp {
     fn result_is_stale(&self) -> bool {
         self.result
             .as_ref()
-            .is_none_or(|r| r.params != self.methods.params())
+            .is_none_or(|r| r.params != self.methods.params(self.volume_grid()))
+    }
+
+    /// The grid of the model on screen, when it is a volume.
+    fn volume_grid(&self) -> Option<&VolumeGrid> {
+        self.current.as_ref().and_then(|c| c.volume.as_ref())
     }
 
     /// Original / simplified toggle and the heat-map switch above the viewport.

@@ -765,7 +765,8 @@ fn voxel_on_a_mesh_file_explains_instead_of_building() {
     harness.run();
     assert!(!harness.state().is_building(), "nothing to build");
     let message = "Voxel simplification samples an implicit solid (builtin:sphereflake or \
-                   builtin:csg-part); this model is a triangle mesh, which it cannot sample yet.";
+                   builtin:csg-part) or thresholds a volume; this model is a triangle mesh, \
+                   which it cannot sample yet.";
     assert!(has_label(&harness, message), "the method section says why");
 
     // Asked anyway (the Build button is disabled): the same message, no result.
@@ -829,4 +830,114 @@ fn cancelling_a_voxel_build_keeps_the_previous_result() {
         &harness,
         "Parameters changed since the last build."
     ));
+}
+
+/// A CT volume (64 x 64 x 64 floats) whose bone surface lies at the value 2.9.
+const SKULL: &str = concat!(
+    env!("CARGO_MANIFEST_DIR"),
+    "/../../shared/models/skull_2.9.inr"
+);
+
+#[test]
+fn voxel_method_builds_a_volume_at_its_threshold() {
+    let mut harness = studio(Some(SKULL.into()));
+    wait_for_load(&mut harness);
+    assert!(matches!(
+        harness.state().loaded().map(|l| &l.model),
+        Some(lodstudio_core::Model::Volume(_))
+    ));
+
+    harness
+        .get_by_label("Voxel (low-pass + marching cubes)")
+        .click();
+    harness.step();
+    assert!(
+        !has_label(&harness, "Voxel simplification samples an implicit solid"),
+        "a volume builds"
+    );
+    // A volume keeps its grid and has a threshold instead of a resolution; its
+    // density surface is always 0.5, so there is no iso control.
+    for label in [
+        "Gaussian",
+        "Cone",
+        "grid 64 x 64 x 64 (the volume's own)",
+        "threshold",
+        "filter radius",
+    ] {
+        assert!(has_label(&harness, label), "control {label:?}");
+    }
+    for label in ["resolution", "iso"] {
+        assert!(!has_label(&harness, label), "no control {label:?}");
+    }
+    assert_eq!(
+        harness.state().methods().voxel.threshold,
+        None,
+        "the middle"
+    );
+
+    // Set the sliders (as assistive technology does) before the auto rebuild
+    // of the selection starts: each change postpones it, so one build runs.
+    harness
+        .get_by_role_and_label(egui::Role::Slider, "threshold")
+        .set_value_accesskit(2.9);
+    harness.step();
+    harness
+        .get_by_role_and_label(egui::Role::Slider, "filter radius")
+        .set_value_accesskit(1.0);
+    harness.step();
+    let voxel = harness.state().methods().voxel;
+    assert_eq!((voxel.threshold, voxel.radius), (Some(2.9), 1.0));
+    assert!(harness.state().is_building(), "auto rebuild is scheduled");
+    wait_for_build(&mut harness);
+
+    let built = harness.state().result().expect("the build finished");
+    let triangles = built.mesh().triangles.len();
+    assert!(triangles > 1000, "{triangles} triangles");
+    assert_eq!(result_row(&harness, "resolution"), "64");
+    assert_eq!(result_row(&harness, "threshold"), "2.900");
+    assert_eq!(result_row(&harness, "filter radius"), "1.0 voxels");
+    for label in [
+        "Voxel (low-pass + marching cubes)",
+        "resolution",
+        "filter radius",
+        "LOD triangles",
+        "LOD components",
+        "LOD genus",
+        "build time",
+    ] {
+        assert!(has_label(&harness, label), "inspector row {label:?}");
+    }
+    assert!(has_label(&harness, &triangles.to_string()));
+    assert!(!has_label(
+        &harness,
+        "Parameters changed since the last build."
+    ));
+    assert!(
+        harness
+            .state()
+            .log_lines()
+            .any(|l| l.starts_with("Voxel (low-pass + marching cubes) of skull_2.9.inr: ")),
+        "the log reports the build"
+    );
+    assert_eq!(drawn_triangles(&harness), Some(triangles));
+
+    let out = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("gui-voxel-volume-export.obj");
+    let _ = std::fs::remove_file(&out);
+    assert_eq!(export_and_reload(&mut harness, &out), triangles);
+
+    // The threshold belongs to the volume: reopening it keeps it, another
+    // volume starts from the middle of its own value range.
+    harness.state_mut().open(SKULL);
+    wait_for_load(&mut harness);
+    assert_eq!(harness.state().methods().voxel.threshold, Some(2.9));
+    let other = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("gui-ramp.nrrd");
+    let mut nrrd =
+        b"NRRD0004\ntype: uint8\ndimension: 3\nsizes: 4 4 4\nencoding: raw\nendian: little\n\n"
+            .to_vec();
+    nrrd.extend((0..64u8).map(|i| i * 3));
+    std::fs::write(&other, nrrd).expect("write the test volume");
+    harness.state_mut().open(&other);
+    wait_for_load(&mut harness);
+    assert_eq!(harness.state().methods().voxel.threshold, None);
+    assert!(has_label(&harness, "grid 4 x 4 x 4 (the volume's own)"));
 }

@@ -1,6 +1,7 @@
 //! The left panel's "Method" section: which LOD method builds, and the
 //! parameters of each (one module per method). Everything here is persisted
-//! between sessions.
+//! between sessions except the voxel threshold, which is in the units of one
+//! volume's values (see [`voxel::VoxelSettings::threshold`]).
 
 pub mod simplify;
 pub mod voxel;
@@ -9,7 +10,7 @@ use lodstudio_core::simplify::SimplifyOptions;
 use serde::{Deserialize, Serialize};
 
 use self::simplify::EdgeCollapseSettings;
-use self::voxel::VoxelSettings;
+use self::voxel::{VolumeGrid, VoxelSettings};
 
 /// The LOD methods the studio can build.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
@@ -40,7 +41,8 @@ impl Method {
                  and the simplified surface (hybrid simplification paper, §5.2)."
             }
             Method::Voxel => {
-                "Samples the solid into a volume buffer, low-pass filters it into a density \
+                "Samples the solid (or thresholds a volume) into a volume buffer, low-pass \
+                 filters it into a density \
                  (Gaussian or hyper-cone) and extracts the iso-density surface by marching \
                  cubes: wider filters remove small features, holes and tunnels, so the genus \
                  falls (voxel-based object simplification paper, §2)."
@@ -98,11 +100,15 @@ impl MethodSettings {
         Some(settings)
     }
 
-    /// What a build of the chosen method gets.
-    pub fn params(&self) -> BuildParams {
+    /// What a build of the chosen method gets; `volume` is the grid of the
+    /// open model when it is a volume (voxel builds depend on other values then).
+    pub fn params(&self, volume: Option<&VolumeGrid>) -> BuildParams {
         match self.method {
             Method::EdgeCollapse => BuildParams::EdgeCollapse(self.edge_collapse.options()),
-            Method::Voxel => BuildParams::Voxel(self.voxel.sanitized()),
+            Method::Voxel => BuildParams::Voxel(match volume {
+                Some(grid) => self.voxel.for_volume(grid),
+                None => self.voxel.for_implicit(),
+            }),
         }
     }
 

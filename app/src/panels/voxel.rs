@@ -1,9 +1,11 @@
 //! Parameters of voxel-based simplification (voxel paper §2) and their
-//! controls: sample the solid into a volume buffer S, low-pass filter it into a
-//! density f = h ∗ S, and extract the iso-density surface by marching cubes.
+//! controls: sample the solid (or threshold a volume model) into a volume buffer
+//! S, low-pass filter it into a density f = h ∗ S, and extract the iso-density
+//! surface by marching cubes.
 
 use std::ops::RangeInclusive;
 
+use lodstudio_core::geom::Volume;
 use lodstudio_core::voxel::{DENSITY_ISO, Filter};
 use serde::{Deserialize, Serialize};
 
@@ -24,10 +26,17 @@ const RESOLUTION_HINT: &str = "Voxels of the grid overlaid on the object, along 
     longest side of its bounds. The volume buffer S samples the solid on this grid \
     (3x3x3 sub-samples per voxel near the surface); a finer grid keeps finer detail \
     and gives more triangles.";
-const RADIUS_HINT: &str = "The filter's support radius R (in voxels of the grid): how far \
+const RADIUS_HINT: &str = "The filter's support radius R (in voxels of the grid; for a \
+    volume, of its smallest spacing): how far \
     each grid point's filtered density f(i, j, k) gathers the samples of S. A wider \
     filter removes lower frequencies: small holes close and the genus falls. 0 means \
     no filtering.";
+const THRESHOLD_HINT: &str = "Samples of the volume at or above this value (in the \
+    volume's own units) form the solid S of §2 eq. 2, which is then low-pass filtered. \
+    Lower takes in fainter tissue, higher keeps only the densest.";
+const GRID_HINT: &str = "A volume keeps its own grid: S is its samples, and the filter \
+    radius counts voxels of its smallest spacing. The extracted surface is the density \
+    0.5 of the filtered S.";
 const ISO_HINT: &str = "The iso-density at which marching cubes extracts the surface \
     f = iso, on the normalised density scale 0 (empty) to 1 (solid). The paper uses \
     0.5; lower grows the object, higher shrinks it.";
@@ -65,8 +74,47 @@ pub struct VoxelSettings {
     pub resolution: usize,
     /// Filter support radius, in voxels of that grid.
     pub radius: f32,
-    /// Density of the extracted surface (0..1).
+    /// Density of the extracted surface (0..1); implicit solids only (a volume's
+    /// surface is always the density 0.5 of its filtered S).
     pub iso: f32,
+    /// Volumes only: samples at or above this value, in the volume's own units,
+    /// form the solid S. It is model-specific, so it is not persisted: `None`
+    /// stands for the middle of the open volume's value range, and the studio
+    /// resets it to `None` whenever a different volume opens.
+    #[serde(skip)]
+    pub threshold: Option<f32>,
+}
+
+/// What the voxel controls and a volume build need to know of a volume,
+/// computed once when it opens (its value range takes a pass over the data).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct VolumeGrid {
+    pub dims: [usize; 3],
+    /// (min, max) of the finite samples; (0, 0) when there are none.
+    pub range: (f32, f32),
+}
+
+impl VolumeGrid {
+    pub fn of(volume: &Volume) -> Self {
+        let (lo, hi) = volume.value_range();
+        VolumeGrid {
+            dims: volume.dims,
+            range: if lo <= hi { (lo, hi) } else { (0.0, 0.0) },
+        }
+    }
+
+    /// The default threshold: the middle of the value range.
+    pub fn middle(&self) -> f32 {
+        0.5 * (self.range.0 + self.range.1)
+    }
+
+    /// `threshold` inside the value range (the middle for `None` or NaN).
+    pub fn threshold(&self, threshold: Option<f32>) -> f32 {
+        match threshold {
+            Some(t) if !t.is_nan() => t.clamp(self.range.0, self.range.1),
+            _ => self.middle(),
+        }
+    }
 }
 
 impl Default for VoxelSettings {
@@ -76,6 +124,7 @@ impl Default for VoxelSettings {
             resolution: 64,
             radius: 2.0,
             iso: DENSITY_ISO,
+            threshold: None,
         }
     }
 }
@@ -100,11 +149,34 @@ impl VoxelSettings {
                 .clamp(*RESOLUTION_RANGE.start(), *RESOLUTION_RANGE.end()),
             radius: clamp_or(self.radius, RADIUS_RANGE, d.radius),
             iso: clamp_or(self.iso, ISO_RANGE, d.iso),
+            threshold: self.threshold.filter(|t| !t.is_nan()),
         }
     }
 
-    /// The controls; true when any value changed.
-    pub fn ui(&mut self, ui: &mut egui::Ui) -> bool {
+    /// What a build of an implicit solid depends on: the threshold has no effect.
+    pub fn for_implicit(self) -> Self {
+        VoxelSettings {
+            threshold: None,
+            ..self.sanitized()
+        }
+    }
+
+    /// What a build of `grid`'s volume depends on: its threshold (resolved),
+    /// filter and radius; resolution and iso have no effect and keep their
+    /// defaults, so changing them does not make a volume's result stale.
+    pub fn for_volume(self, grid: &VolumeGrid) -> Self {
+        let d = Self::default();
+        VoxelSettings {
+            resolution: d.resolution,
+            iso: d.iso,
+            threshold: Some(grid.threshold(self.threshold)),
+            ..self.sanitized()
+        }
+    }
+
+    /// The controls (for `volume`'s grid when the model is a volume); true
+    /// when any value changed.
+    pub fn ui(&mut self, ui: &mut egui::Ui, volume: Option<&VolumeGrid>) -> bool {
         let before = *self;
         ui.label("Filter").on_hover_text(FILTER_HINT);
         ui.horizontal(|ui| {
@@ -116,16 +188,32 @@ impl VoxelSettings {
                     .on_hover_text(hint);
             }
         });
-        ui.add(egui::Slider::new(&mut self.resolution, RESOLUTION_RANGE).text("resolution"))
-            .on_hover_text(RESOLUTION_HINT);
+        if let Some(grid) = volume {
+            let [x, y, z] = grid.dims;
+            ui.label(format!("grid {x} x {y} x {z} (the volume's own)"))
+                .on_hover_text(GRID_HINT);
+            let mut threshold = grid.threshold(self.threshold);
+            let (lo, hi) = grid.range;
+            let slider = ui
+                .add(egui::Slider::new(&mut threshold, lo..=hi).text("threshold"))
+                .on_hover_text(THRESHOLD_HINT);
+            if slider.changed() {
+                self.threshold = Some(threshold);
+            }
+        } else {
+            ui.add(egui::Slider::new(&mut self.resolution, RESOLUTION_RANGE).text("resolution"))
+                .on_hover_text(RESOLUTION_HINT);
+        }
         ui.add(
             egui::Slider::new(&mut self.radius, RADIUS_RANGE)
                 .suffix(" vx")
                 .text("filter radius"),
         )
         .on_hover_text(RADIUS_HINT);
-        ui.add(egui::Slider::new(&mut self.iso, ISO_RANGE).text("iso"))
-            .on_hover_text(ISO_HINT);
+        if volume.is_none() {
+            ui.add(egui::Slider::new(&mut self.iso, ISO_RANGE).text("iso"))
+                .on_hover_text(ISO_HINT);
+        }
         *self != before
     }
 }
@@ -141,8 +229,10 @@ mod tests {
             resolution: 4,
             radius: f32::NAN,
             iso: 3.0,
+            threshold: Some(f32::NAN),
         }
         .sanitized();
+        assert_eq!(odd.threshold, None);
         assert_eq!(odd.filter.filter(), Filter::Cone);
         assert_eq!(odd.resolution, 16);
         assert_eq!(odd.radius, VoxelSettings::default().radius);
@@ -151,5 +241,35 @@ mod tests {
             VoxelSettings::default().sanitized(),
             VoxelSettings::default()
         );
+    }
+
+    #[test]
+    fn volume_builds_depend_only_on_what_has_an_effect() {
+        let volume = Volume {
+            dims: [2, 1, 1],
+            spacing: glam::Vec3::ONE,
+            origin: glam::Vec3::ZERO,
+            data: vec![-4.0, 10.0],
+        };
+        let grid = VolumeGrid::of(&volume);
+        assert_eq!(
+            (grid.dims, grid.range, grid.middle()),
+            ([2, 1, 1], (-4.0, 10.0), 3.0)
+        );
+        let settings = VoxelSettings::default();
+        assert_eq!(settings.for_volume(&grid).threshold, Some(3.0));
+        let moved = VoxelSettings {
+            resolution: 200,
+            iso: 0.3,
+            threshold: Some(3.0),
+            ..settings
+        };
+        assert_eq!(moved.for_volume(&grid), settings.for_volume(&grid));
+        let clamped = VoxelSettings {
+            threshold: Some(99.0),
+            ..settings
+        };
+        assert_eq!(clamped.for_volume(&grid).threshold, Some(10.0));
+        assert_eq!(clamped.for_implicit(), settings);
     }
 }
