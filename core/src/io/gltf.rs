@@ -224,92 +224,207 @@ fn read_primitive(
     Ok(Some(mesh))
 }
 
-/// Writes one mesh as a binary glTF (GLB): positions, normals, vertex colours,
-/// UVs and 32-bit indices in one buffer, one node, one scene.
+/// Writes one mesh as a binary glTF (GLB): positions, normals (area-weighted
+/// vertex normals when the mesh has none), vertex colours and UVs when it has
+/// them, and 32-bit indices in one buffer, one node, one scene.
 pub fn write_glb(mesh: &TriMesh) -> Vec<u8> {
+    let (doc, bin) = glb_document(std::slice::from_ref(mesh));
+    glb_container(doc.to_string().into_bytes(), bin)
+}
+
+/// Writes an LOD chain as a binary glTF with the `MSFT_lod` node extension.
+///
+/// `lods` are in decreasing quality (LOD0 first). Node `i` holds `lods[i]`; the
+/// scene lists node 0 only, whose `extensions.MSFT_lod.ids` are `[1, 2, …]`
+/// (the lower LODs, in decreasing quality) and whose
+/// `extras.MSFT_screencoverage` is `coverages`: one value per LOD, LOD0's
+/// included, each the smallest screen coverage at which that LOD is shown
+/// (see [`lod_screen_coverages`]). Loaders without the extension see LOD0
+/// alone. A LOD without triangles becomes a node without a mesh.
+///
+/// # Panics
+/// If `lods` is empty or `coverages.len() != lods.len()`.
+pub fn write_lod_chain_glb(lods: &[TriMesh], coverages: &[f32]) -> Vec<u8> {
+    assert!(!lods.is_empty(), "an LOD chain needs LOD0");
+    assert_eq!(
+        coverages.len(),
+        lods.len(),
+        "one screen coverage per LOD, LOD0's included"
+    );
+    let (mut doc, bin) = glb_document(lods);
+    if lods.len() > 1 {
+        let ids: Vec<usize> = (1..lods.len()).collect();
+        let node0 = &mut doc["nodes"][0];
+        node0["extensions"] = serde_json::json!({"MSFT_lod": {"ids": ids}});
+        node0["extras"] = serde_json::json!({"MSFT_screencoverage": coverages});
+        doc["extensionsUsed"] = serde_json::json!(["MSFT_lod"]);
+    }
+    glb_container(doc.to_string().into_bytes(), bin)
+}
+
+/// The `MSFT_screencoverage` thresholds of an LOD chain.
+///
+/// `error_bounds[i]` is LOD i's guaranteed (object-space) error bound, in
+/// increasing order; `radius` is the object's bounding-sphere radius; the
+/// tolerance is `pixels` on a viewport `viewport_height` pixels high.
+///
+/// The screen coverage `c` is the object's projected height (its bounding
+/// sphere's diameter) as a fraction of the viewport height. With a vertical
+/// field of view θ at distance d, a length `l` covers `l·H / (2 d tan(θ/2))`
+/// pixels, so `c = 2r / (2 d tan(θ/2))` and an error bound `e` covers
+/// `e·H·c / (2r)` pixels: it stays within `p` pixels exactly while
+///
+/// ```text
+/// c <= c(e) = 2 r p / (e H)        (independent of θ and d)
+/// ```
+///
+/// A loader shows LOD i while the coverage is at least `coverages[i]` (and
+/// below `coverages[i-1]`), so LOD i+1 may take over once LOD i+1's bound
+/// projects within the tolerance: `coverages[i] = c(e[i+1])`. The last value is
+/// `p / H`, where the whole object spans `p` pixels (below it, leaving the
+/// object out stays within the tolerance). Values are clamped to (0, 1] and
+/// made strictly decreasing by lowering, never raising, a value, which only
+/// keeps a finer LOD longer; so every shown LOD's bound projects to at most
+/// `p` pixels (LOD0 excepted above `c(e[0])`, as nothing finer exists).
+pub fn lod_screen_coverages(
+    error_bounds: &[f32],
+    radius: f32,
+    pixels: f32,
+    viewport_height: f32,
+) -> Vec<f32> {
+    let (r, p, h) = (radius as f64, pixels as f64, viewport_height as f64);
+    let coverage = |e: f64| {
+        let c = 2.0 * r * p / (e * h);
+        if c.is_nan() { 1.0 } else { c }
+    };
+    let n = error_bounds.len();
+    let mut out: Vec<f32> = Vec::with_capacity(n);
+    for i in 0..n {
+        let raw = match error_bounds.get(i + 1) {
+            Some(&e) => coverage(e as f64),
+            None => p / h,
+        };
+        let mut c = raw.clamp(0.0, 1.0) as f32;
+        if let Some(&prev) = out.last() {
+            c = c.min(prev * (1.0 - 1e-4));
+        }
+        if c.is_nan() || c <= 0.0 {
+            // Degenerate input (zero radius or pixels): keep the order positive.
+            c = out.last().map_or(1.0, |prev| prev * 0.5);
+        }
+        out.push(c);
+    }
+    out
+}
+
+/// The glTF document and binary buffer of `meshes`, one node each (named
+/// `lod{i}`); the default scene lists node 0 only.
+fn glb_document(meshes: &[TriMesh]) -> (serde_json::Value, Vec<u8>) {
     use serde_json::json;
     let mut bin: Vec<u8> = Vec::new();
     let mut views = Vec::new();
     let mut accessors = Vec::new();
-    let mut attributes = serde_json::Map::new();
-    let n = mesh.positions.len();
-    let bounds = mesh.bounds();
-    let mut add = |bin: &mut Vec<u8>,
-                   data: &[f32],
-                   kind: &str,
-                   target: u32,
-                   extra: serde_json::Value| {
+    let mut nodes = Vec::new();
+    let mut gltf_meshes = Vec::new();
+    let mut add = |bin: &mut Vec<u8>, bytes: &[u8], target: u32, acc: serde_json::Value| {
         let offset = bin.len();
-        bin.extend(data.iter().flat_map(|x| x.to_le_bytes()));
-        views.push(json!({"buffer": 0, "byteOffset": offset, "byteLength": data.len() * 4, "target": target}));
-        let mut acc =
-            json!({"bufferView": views.len() - 1, "componentType": 5126, "count": n, "type": kind});
-        if let (Some(a), Some(e)) = (acc.as_object_mut(), extra.as_object()) {
-            a.extend(e.clone());
-        }
+        bin.extend_from_slice(bytes);
+        views.push(
+            json!({"buffer": 0, "byteOffset": offset, "byteLength": bytes.len(), "target": target}),
+        );
+        let mut acc = acc;
+        acc["bufferView"] = json!(views.len() - 1);
         accessors.push(acc);
         accessors.len() - 1
     };
-    let flat3 = |v: &[Vec3]| v.iter().flat_map(|p| p.to_array()).collect::<Vec<f32>>();
-    let pos = add(
-        &mut bin,
-        &flat3(&mesh.positions),
-        "VEC3",
-        34962,
-        json!({"min": bounds.min.to_array(), "max": bounds.max.to_array()}),
-    );
-    attributes.insert("POSITION".into(), pos.into());
-    if let Some(nr) = &mesh.normals {
+    let le = |data: &[f32]| {
+        data.iter()
+            .flat_map(|x| x.to_le_bytes())
+            .collect::<Vec<u8>>()
+    };
+    let flat3 = |v: &[Vec3]| le(&v.iter().flat_map(|p| p.to_array()).collect::<Vec<f32>>());
+    for (i, mesh) in meshes.iter().enumerate() {
+        let name = format!("lod{i}");
+        if mesh.triangles.is_empty() || mesh.positions.is_empty() {
+            nodes.push(json!({"name": name}));
+            continue;
+        }
+        let n = mesh.positions.len();
+        let vec = |kind: &str| json!({"componentType": 5126, "count": n, "type": kind});
+        let mut attributes = serde_json::Map::new();
+        let bounds = mesh.bounds();
+        let mut pos_acc = vec("VEC3");
+        pos_acc["min"] = json!(bounds.min.to_array());
+        pos_acc["max"] = json!(bounds.max.to_array());
+        let pos = add(&mut bin, &flat3(&mesh.positions), 34962, pos_acc);
+        attributes.insert("POSITION".into(), pos.into());
+        // Every LOD shades: meshes without normals get area-weighted ones.
+        let computed;
+        let nr = match &mesh.normals {
+            Some(nr) => nr,
+            None => {
+                computed = mesh.vertex_normals();
+                &computed
+            }
+        };
         let unit: Vec<Vec3> = nr
             .iter()
             .map(|v| v.try_normalize().unwrap_or(Vec3::Z))
             .collect();
-        let a = add(&mut bin, &flat3(&unit), "VEC3", 34962, json!({}));
+        let a = add(&mut bin, &flat3(&unit), 34962, vec("VEC3"));
         attributes.insert("NORMAL".into(), a.into());
-    }
-    if let Some(c) = &mesh.colors {
-        let clamped: Vec<Vec3> = c.iter().map(|v| v.clamp(Vec3::ZERO, Vec3::ONE)).collect();
-        let a = add(&mut bin, &flat3(&clamped), "VEC3", 34962, json!({}));
-        attributes.insert("COLOR_0".into(), a.into());
-    }
-    if let Some(uv) = &mesh.uvs {
-        let flat: Vec<f32> = uv.iter().flat_map(|v| v.to_array()).collect();
-        let a = add(&mut bin, &flat, "VEC2", 34962, json!({}));
-        attributes.insert("TEXCOORD_0".into(), a.into());
-    }
-    let offset = bin.len();
-    bin.extend(
-        mesh.triangles
+        if let Some(c) = &mesh.colors {
+            let clamped: Vec<Vec3> = c.iter().map(|v| v.clamp(Vec3::ZERO, Vec3::ONE)).collect();
+            let a = add(&mut bin, &flat3(&clamped), 34962, vec("VEC3"));
+            attributes.insert("COLOR_0".into(), a.into());
+        }
+        if let Some(uv) = &mesh.uvs {
+            let flat: Vec<f32> = uv.iter().flat_map(|v| v.to_array()).collect();
+            let a = add(&mut bin, &le(&flat), 34962, vec("VEC2"));
+            attributes.insert("TEXCOORD_0".into(), a.into());
+        }
+        let index_bytes: Vec<u8> = mesh
+            .triangles
             .iter()
             .flatten()
-            .flat_map(|i| i.to_le_bytes()),
-    );
-    views.push(json!({"buffer": 0, "byteOffset": offset, "byteLength": mesh.triangles.len() * 12, "target": 34963}));
-    accessors.push(json!({"bufferView": views.len() - 1, "componentType": 5125, "count": mesh.triangles.len() * 3, "type": "SCALAR"}));
-    let indices = accessors.len() - 1;
+            .flat_map(|i| i.to_le_bytes())
+            .collect();
+        let indices = add(
+            &mut bin,
+            &index_bytes,
+            34963,
+            json!({"componentType": 5125, "count": mesh.triangles.len() * 3, "type": "SCALAR"}),
+        );
+        nodes.push(json!({"mesh": gltf_meshes.len(), "name": name}));
+        gltf_meshes.push(json!({"primitives": [{"attributes": attributes, "indices": indices, "mode": 4, "material": 0}]}));
+    }
     while !bin.len().is_multiple_of(4) {
         bin.push(0);
     }
-    let doc = json!({
+    let mut doc = json!({
         "asset": {"version": "2.0", "generator": "lodstudio"},
         "scene": 0,
         "scenes": [{"nodes": [0]}],
-        "nodes": [{"mesh": 0, "name": "lod0"}],
-        "meshes": [{"primitives": [{"attributes": attributes, "indices": indices, "mode": 4, "material": 0}]}],
-        "materials": [{"pbrMetallicRoughness": {"baseColorFactor": [1.0, 1.0, 1.0, 1.0], "metallicFactor": 0.0, "roughnessFactor": 0.8}, "doubleSided": false}],
-        "buffers": [{"byteLength": bin.len()}],
-        "bufferViews": views,
-        "accessors": accessors,
+        "nodes": nodes,
     });
-    glb_container(doc.to_string().into_bytes(), bin)
+    if !gltf_meshes.is_empty() {
+        doc["meshes"] = json!(gltf_meshes);
+        doc["materials"] = json!([{"pbrMetallicRoughness": {"baseColorFactor": [1.0, 1.0, 1.0, 1.0], "metallicFactor": 0.0, "roughnessFactor": 0.8}, "doubleSided": false}]);
+        doc["buffers"] = json!([{"byteLength": bin.len()}]);
+        doc["bufferViews"] = json!(views);
+        doc["accessors"] = json!(accessors);
+    }
+    (doc, bin)
 }
 
-/// Packs a JSON chunk (space-padded) and a binary chunk (zero-padded) into GLB.
+/// Packs a JSON chunk (space-padded) and a binary chunk (zero-padded; left out
+/// when empty) into GLB.
 fn glb_container(mut json: Vec<u8>, bin: Vec<u8>) -> Vec<u8> {
     while !json.len().is_multiple_of(4) {
         json.push(b' ');
     }
-    let total = 12 + 8 + json.len() + 8 + bin.len();
+    let bin_chunk = if bin.is_empty() { 0 } else { 8 + bin.len() };
+    let total = 12 + 8 + json.len() + bin_chunk;
     let mut out = Vec::with_capacity(total);
     out.extend_from_slice(b"glTF");
     out.extend_from_slice(&2u32.to_le_bytes());
@@ -317,9 +432,11 @@ fn glb_container(mut json: Vec<u8>, bin: Vec<u8>) -> Vec<u8> {
     out.extend_from_slice(&(json.len() as u32).to_le_bytes());
     out.extend_from_slice(b"JSON");
     out.extend_from_slice(&json);
-    out.extend_from_slice(&(bin.len() as u32).to_le_bytes());
-    out.extend_from_slice(b"BIN\0");
-    out.extend_from_slice(&bin);
+    if !bin.is_empty() {
+        out.extend_from_slice(&(bin.len() as u32).to_le_bytes());
+        out.extend_from_slice(b"BIN\0");
+        out.extend_from_slice(&bin);
+    }
     out
 }
 
@@ -337,5 +454,102 @@ mod tests {
         assert_eq!(back.positions, m.positions);
         assert!(back.normals.is_some() && back.uvs.is_some());
         assert_eq!(back.colors.as_ref().unwrap()[3], Vec3::new(0.2, 0.5, 0.9));
+    }
+
+    /// The JSON chunk of a GLB.
+    fn glb_json(glb: &[u8]) -> serde_json::Value {
+        let len = u32::from_le_bytes(glb[12..16].try_into().unwrap()) as usize;
+        assert_eq!(&glb[16..20], b"JSON");
+        serde_json::from_slice(&glb[20..20 + len]).unwrap()
+    }
+
+    #[test]
+    fn lod_chain_carries_msft_lod_and_readers_without_it_see_lod0() {
+        let lods = [
+            crate::builtins::torus(1.0, 0.3, 32, 16),
+            crate::builtins::torus(1.0, 0.3, 16, 8),
+            crate::builtins::torus(1.0, 0.3, 8, 4),
+        ];
+        let coverages = lod_screen_coverages(&[0.001, 0.01, 0.1], 1.3, 2.0, 1080.0);
+        let glb = write_lod_chain_glb(&lods, &coverages);
+        let doc = glb_json(&glb);
+        assert_eq!(doc["extensionsUsed"], serde_json::json!(["MSFT_lod"]));
+        assert_eq!(doc["scenes"][0]["nodes"], serde_json::json!([0]));
+        assert_eq!(
+            doc["nodes"][0]["extensions"]["MSFT_lod"]["ids"],
+            serde_json::json!([1, 2])
+        );
+        let stated: Vec<f32> = doc["nodes"][0]["extras"]["MSFT_screencoverage"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|v| v.as_f64().unwrap() as f32)
+            .collect();
+        assert_eq!(stated, coverages);
+        // Each LOD node's index accessor holds its triangles.
+        for (i, lod) in lods.iter().enumerate() {
+            let mesh = doc["nodes"][i]["mesh"].as_u64().unwrap() as usize;
+            let prim = &doc["meshes"][mesh]["primitives"][0];
+            let acc = prim["indices"].as_u64().unwrap() as usize;
+            assert_eq!(
+                doc["accessors"][acc]["count"].as_u64().unwrap() as usize,
+                lod.triangles.len() * 3
+            );
+            for attr in ["POSITION", "NORMAL", "TEXCOORD_0"] {
+                assert!(prim["attributes"][attr].is_u64(), "lod{i} {attr}");
+            }
+        }
+        let back = read(&glb, None).unwrap();
+        assert_eq!(back.triangles, lods[0].triangles);
+        assert_eq!(back.positions, lods[0].positions);
+        // One LOD: the plain file, no extension.
+        let single = write_lod_chain_glb(&lods[..1], &coverages[..1]);
+        assert_eq!(single, write_glb(&lods[0]));
+    }
+
+    #[test]
+    fn lod_chain_without_triangles_in_a_lod_stays_readable() {
+        let lods = [crate::builtins::torus(1.0, 0.3, 8, 4), TriMesh::default()];
+        let glb = write_lod_chain_glb(&lods, &[0.5, 0.1]);
+        let doc = glb_json(&glb);
+        assert!(doc["nodes"][1].get("mesh").is_none());
+        assert_eq!(read(&glb, None).unwrap().triangles, lods[0].triangles);
+        // Nothing at all: a valid GLB without a binary chunk.
+        let empty = write_glb(&TriMesh::default());
+        assert_eq!(
+            empty.len(),
+            20 + glb_json(&empty).to_string().len().next_multiple_of(4)
+        );
+        assert!(read(&empty, None).unwrap().triangles.is_empty());
+        // A mesh without normals is written with computed ones.
+        let mut bare = crate::builtins::torus(1.0, 0.3, 8, 4);
+        bare.normals = None;
+        let back = read(&write_glb(&bare), None).unwrap();
+        let expected = bare.vertex_normals();
+        for (a, b) in back.normals.unwrap().iter().zip(&expected) {
+            assert!(a.distance(*b) < 1e-5);
+        }
+    }
+
+    #[test]
+    fn screen_coverage_is_where_the_next_bound_projects_to_the_tolerance() {
+        // r = 1, p = 2 px, H = 1000: c(e) = 2·1·2 / (e·1000) = 0.004 / e.
+        let c = lod_screen_coverages(&[0.001, 0.01, 0.1], 1.0, 2.0, 1000.0);
+        assert_eq!(c.len(), 3);
+        assert!((c[0] - 0.4).abs() < 1e-6, "{c:?}");
+        assert!((c[1] - 0.04).abs() < 1e-6, "{c:?}");
+        assert!((c[2] - 0.002).abs() < 1e-6, "{c:?}");
+        // At coverage c[0], LOD1's bound projects to exactly p pixels:
+        // pixels = e·H·c / (2r).
+        assert!((0.01 * 1000.0 * c[0] / 2.0 - 2.0).abs() < 1e-4);
+        // Zero bounds, equal bounds and huge bounds: clamped, strictly decreasing, positive.
+        let c = lod_screen_coverages(&[0.0, 0.0, 0.5, 0.5, 1e9], 1.0, 1.0, 1080.0);
+        assert!(c.iter().all(|v| *v > 0.0 && *v <= 1.0), "{c:?}");
+        assert!(c.windows(2).all(|w| w[1] < w[0]), "{c:?}");
+        let c = lod_screen_coverages(&[0.1, 0.2], 0.0, 1.0, 1080.0);
+        assert!(
+            c.iter().all(|v| *v > 0.0 && *v <= 1.0) && c[1] < c[0],
+            "{c:?}"
+        );
     }
 }

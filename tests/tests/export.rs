@@ -1,0 +1,378 @@
+//! `export` (issue 9): an LOD chain as one GLB with the MSFT_lod node extension
+//! and MSFT_screencoverage thresholds. The file is read back two ways: through
+//! core's glTF reader (a loader without the extension: it must see LOD0) and as
+//! raw glTF JSON (the extension, the LOD order and the thresholds).
+
+use std::path::{Path, PathBuf};
+
+use lodstudio_core::io::gltf;
+use lodstudio_tests::{lodstudio, lodstudio_json, shared_model};
+use serde_json::Value;
+
+fn temp(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("lodstudio-export-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join(name);
+    let _ = std::fs::remove_file(&path);
+    path
+}
+
+/// The JSON chunk of a GLB.
+fn glb_json(glb: &[u8]) -> Value {
+    assert_eq!(&glb[0..4], b"glTF");
+    let len = u32::from_le_bytes(glb[12..16].try_into().unwrap()) as usize;
+    assert_eq!(&glb[16..20], b"JSON");
+    serde_json::from_slice(&glb[20..20 + len]).expect("glTF JSON chunk")
+}
+
+fn f64s(v: &Value) -> Vec<f64> {
+    v.as_array()
+        .expect("an array")
+        .iter()
+        .map(|x| x.as_f64().expect("a number"))
+        .collect()
+}
+
+fn strictly_decreasing(v: &[f64]) -> bool {
+    v.windows(2).all(|w| w[1] < w[0])
+}
+
+/// Checks the written file against the reported `lods` and returns them.
+fn check_chain(out: &Path, report: &Value) -> Vec<Value> {
+    let glb = std::fs::read(out).expect("export wrote the GLB");
+    assert_eq!(report["bytes"].as_u64().unwrap() as usize, glb.len());
+    let lods = report["lods"].as_array().expect("lods").clone();
+    let triangles: Vec<u64> = lods
+        .iter()
+        .map(|l| l["triangles"].as_u64().unwrap())
+        .collect();
+    for l in &lods {
+        assert_eq!(l["points"], 0);
+        assert_eq!(l["splats"], 0);
+        assert!(l["tolerance"].is_string());
+    }
+    // Decreasing quality: bounds grow, triangle counts shrink.
+    let bounds: Vec<f64> = lods
+        .iter()
+        .map(|l| l["error_bound"].as_f64().unwrap())
+        .collect();
+    assert!(bounds.windows(2).all(|w| w[0] <= w[1]), "{bounds:?}");
+    assert!(triangles.windows(2).all(|w| w[0] > w[1]), "{triangles:?}");
+
+    // A reader without MSFT_lod sees LOD0 alone.
+    let back = gltf::read(&glb, None).expect("the GLB reads back");
+    assert_eq!(back.triangles.len() as u64, triangles[0]);
+    assert!(back.normals.is_some(), "every LOD has normals");
+
+    let doc = glb_json(&glb);
+    assert!(
+        doc["extensionsUsed"]
+            .as_array()
+            .unwrap()
+            .contains(&Value::from("MSFT_lod"))
+    );
+    assert!(doc.get("extensionsRequired").is_none());
+    assert_eq!(doc["scenes"][0]["nodes"], serde_json::json!([0]));
+    let node0 = &doc["nodes"][0];
+    let ids: Vec<u64> = node0["extensions"]["MSFT_lod"]["ids"]
+        .as_array()
+        .expect("MSFT_lod ids")
+        .iter()
+        .map(|v| v.as_u64().unwrap())
+        .collect();
+    assert_eq!(ids, (1..lods.len() as u64).collect::<Vec<_>>());
+    let coverage = f64s(&node0["extras"]["MSFT_screencoverage"]);
+    assert_eq!(
+        coverage.len(),
+        lods.len(),
+        "one threshold per LOD, LOD0's included"
+    );
+    assert!(strictly_decreasing(&coverage), "{coverage:?}");
+    assert!(
+        coverage.iter().all(|c| *c > 0.0 && *c <= 1.0),
+        "{coverage:?}"
+    );
+    let reported: Vec<f64> = lods
+        .iter()
+        .map(|l| l["screen_coverage"].as_f64().unwrap())
+        .collect();
+    for (a, b) in coverage.iter().zip(&reported) {
+        assert!(
+            (a - b).abs() <= 1e-6 * a.max(1e-3),
+            "{coverage:?} vs {reported:?}"
+        );
+    }
+    // Node i (LOD0, then the ids in order) holds LOD i's triangles and attributes.
+    let nodes: Vec<u64> = std::iter::once(0).chain(ids).collect();
+    for (i, node) in nodes.iter().enumerate() {
+        let mesh = doc["nodes"][*node as usize]["mesh"].as_u64().unwrap() as usize;
+        let prim = &doc["meshes"][mesh]["primitives"][0];
+        assert_eq!(prim["mode"], 4);
+        let acc = prim["indices"].as_u64().unwrap() as usize;
+        assert_eq!(
+            doc["accessors"][acc]["count"].as_u64().unwrap(),
+            3 * triangles[i],
+            "lod{i}"
+        );
+        for attr in ["POSITION", "NORMAL"] {
+            assert!(prim["attributes"][attr].is_u64(), "lod{i} has {attr}");
+        }
+    }
+    lods
+}
+
+fn export_json(file: &str, lods: &str, out: &Path, extra: &[&str]) -> Value {
+    let mut args = vec![
+        "export",
+        file,
+        "--method",
+        "simplify",
+        "--lods",
+        lods,
+        "-o",
+        out.to_str().unwrap(),
+    ];
+    args.extend_from_slice(extra);
+    lodstudio_json(&args)
+}
+
+#[test]
+fn torus_chain_round_trips() {
+    let out = temp("torus.glb");
+    let report = export_json("builtin:torus", "0.5%,2%,8%", &out, &[]);
+    let lods = check_chain(&out, &report);
+    assert_eq!(lods.len(), 3);
+    for (l, tol) in lods.iter().zip([0.005, 0.02, 0.08]) {
+        assert_eq!(l["tolerance"], format!("{}%", tol * 100.0));
+        let rel = l["error_bound_relative"].as_f64().unwrap();
+        assert!(rel <= tol * (1.0 + 1e-5), "{l}");
+    }
+    // UVs travel too (the torus has them).
+    let doc = glb_json(&std::fs::read(&out).unwrap());
+    assert!(doc["meshes"][0]["primitives"][0]["attributes"]["TEXCOORD_0"].is_u64());
+}
+
+#[test]
+fn bunny_chain_round_trips() {
+    let out = temp("bunny.glb");
+    let bunny = shared_model("stanford-bunny.obj");
+    let report = export_json(bunny.to_str().unwrap(), "0.5%,2%,8%", &out, &[]);
+    let lods = check_chain(&out, &report);
+    assert_eq!(lods.len(), 3);
+    assert_eq!(report["input_triangles"], 69_451);
+    assert!(lods[0]["triangles"].as_u64().unwrap() < 69_451);
+}
+
+#[test]
+fn pixel_and_ratio_items_are_sorted_by_decreasing_quality() {
+    let out = temp("mixed.glb");
+    let (pixels, height) = (2.0, 1000.0);
+    let report = export_json(
+        "builtin:torus",
+        "0.25,16px,2px",
+        &out,
+        &["--pixels", "2", "--viewport-height", "1000"],
+    );
+    let lods = check_chain(&out, &report);
+    let diag = report["bbox_diagonal"].as_f64().unwrap();
+    // 2px then 16px (bounds grow with the tolerance); the ratio LOD wherever its bound falls.
+    let order: Vec<&str> = lods
+        .iter()
+        .map(|l| l["tolerance"].as_str().unwrap())
+        .collect();
+    let at = |t: &str| order.iter().position(|o| *o == t).unwrap();
+    assert!(at("2px") < at("16px"), "{order:?}");
+    for (t, px) in [("2px", 2.0), ("16px", 16.0)] {
+        // p pixels with the object filling the viewport: e = p · diag / H.
+        let bound = lods[at(t)]["error_bound"].as_f64().unwrap();
+        assert!(bound <= px * diag / height * (1.0 + 1e-5), "{t}: {bound}");
+    }
+    let ratio = &lods[at("0.25")];
+    assert!(ratio["triangles"].as_u64().unwrap() <= 1024);
+    // Each threshold but the last is where the next LOD's bound projects to
+    // --pixels: c = 2r·p / (e·H) with r = diag / 2 (clamped to 1).
+    let coverage: Vec<f64> = lods
+        .iter()
+        .map(|l| l["screen_coverage"].as_f64().unwrap())
+        .collect();
+    for i in 0..lods.len() - 1 {
+        let e = lods[i + 1]["error_bound"].as_f64().unwrap();
+        let expected = (diag * pixels / (e * height)).min(1.0);
+        assert!(
+            coverage[i] <= expected * (1.0 + 1e-5) && coverage[i] >= expected * 0.999,
+            "{i}: {coverage:?} vs {expected}"
+        );
+    }
+    assert!((coverage[lods.len() - 1] - pixels / height).abs() < 1e-6);
+}
+
+#[test]
+fn bad_input_exits_2_and_loses_nothing() {
+    let out = temp("existing.glb");
+    std::fs::write(&out, b"keep me").unwrap();
+    let o = out.to_str().unwrap();
+    let runs: &[&[&str]] = &[
+        // An existing file without --force.
+        &[
+            "export",
+            "builtin:torus",
+            "--method",
+            "simplify",
+            "--lods",
+            "1%",
+            "-o",
+            o,
+        ],
+        // Bad LIST items.
+        &[
+            "export",
+            "builtin:torus",
+            "--method",
+            "simplify",
+            "--lods",
+            "1%,abc",
+            "-o",
+            o,
+            "--force",
+        ],
+        &[
+            "export",
+            "builtin:torus",
+            "--method",
+            "simplify",
+            "--lods",
+            "2",
+            "-o",
+            o,
+            "--force",
+        ],
+        &[
+            "export",
+            "builtin:torus",
+            "--method",
+            "simplify",
+            "--lods",
+            "1%,,2%",
+            "-o",
+            o,
+            "--force",
+        ],
+        &[
+            "export",
+            "builtin:torus",
+            "--method",
+            "simplify",
+            "--lods",
+            "-1px",
+            "-o",
+            o,
+            "--force",
+        ],
+        &[
+            "export",
+            "builtin:torus",
+            "--method",
+            "simplify",
+            "--lods",
+            "",
+            "-o",
+            o,
+            "--force",
+        ],
+        // Methods not built yet.
+        &[
+            "export",
+            "builtin:torus",
+            "--method",
+            "hybrid",
+            "--lods",
+            "1%",
+            "-o",
+            o,
+            "--force",
+        ],
+        // Not a triangle mesh.
+        &[
+            "export",
+            "builtin:octahedron-points",
+            "--method",
+            "simplify",
+            "--lods",
+            "1%",
+            "-o",
+            o,
+            "--force",
+        ],
+        // Bad thresholds.
+        &[
+            "export",
+            "builtin:torus",
+            "--method",
+            "simplify",
+            "--lods",
+            "1%",
+            "-o",
+            o,
+            "--force",
+            "--pixels",
+            "0",
+        ],
+        &[
+            "export",
+            "builtin:torus",
+            "--method",
+            "simplify",
+            "--lods",
+            "1%",
+            "-o",
+            o,
+            "--force",
+            "--viewport-height",
+            "nan",
+        ],
+        // A missing input.
+        &[
+            "export",
+            "/nonexistent/model.obj",
+            "--method",
+            "simplify",
+            "--lods",
+            "1%",
+            "-o",
+            o,
+            "--force",
+        ],
+    ];
+    for args in runs {
+        let r = lodstudio(args);
+        assert_eq!(r.status.code(), Some(2), "{args:?}");
+        let err = String::from_utf8_lossy(&r.stderr);
+        assert_eq!(err.trim().lines().count(), 1, "{args:?}: one line: {err}");
+        assert!(r.stdout.is_empty(), "{args:?}");
+        assert_eq!(std::fs::read(&out).unwrap(), b"keep me", "{args:?}");
+    }
+    // Not a .glb name: refused before anything is written.
+    let obj = temp("chain.obj");
+    let r = lodstudio(&[
+        "export",
+        "builtin:torus",
+        "--method",
+        "simplify",
+        "--lods",
+        "1%",
+        "-o",
+        obj.to_str().unwrap(),
+    ]);
+    assert_eq!(r.status.code(), Some(2));
+    assert!(!obj.exists());
+    // --force replaces it; a one-LOD chain is a plain GLB.
+    let report = export_json("builtin:torus", "1%", &out, &["--force"]);
+    assert_eq!(report["lods"].as_array().unwrap().len(), 1);
+    let glb = std::fs::read(&out).unwrap();
+    assert_eq!(report["bytes"].as_u64().unwrap() as usize, glb.len());
+    assert!(glb_json(&glb).get("extensionsUsed").is_none());
+    assert_eq!(
+        gltf::read(&glb, None).unwrap().triangles.len() as u64,
+        report["lods"][0]["triangles"].as_u64().unwrap()
+    );
+}
