@@ -43,6 +43,22 @@ fn wait_for_build(harness: &mut Harness<'_, StudioApp>) {
     wait_while(harness, "building", StudioApp::is_building);
 }
 
+/// The inspector shows the voxel result's rows and its triangle count.
+fn assert_voxel_rows(harness: &Harness<'_, StudioApp>, triangles: usize) {
+    for label in [
+        "Voxel (low-pass + marching cubes)",
+        "resolution",
+        "filter radius",
+        "LOD triangles",
+        "LOD components",
+        "LOD genus",
+        "build time",
+    ] {
+        assert!(has_label(harness, label), "inspector row {label:?}");
+    }
+    assert!(has_label(harness, &triangles.to_string()));
+}
+
 /// Exports the current result to `out`, waits, and returns the triangle count of
 /// the file read back.
 fn export_and_reload(harness: &mut Harness<'_, StudioApp>, out: &std::path::Path) -> usize {
@@ -702,18 +718,7 @@ fn voxel_method_closes_holes_as_the_filter_widens() {
     assert!(triangles > 0);
     assert_eq!(result_row(&harness, "LOD genus"), "5");
     assert_eq!(result_row(&harness, "resolution"), "48");
-    for label in [
-        "Voxel (low-pass + marching cubes)",
-        "resolution",
-        "filter radius",
-        "LOD triangles",
-        "LOD components",
-        "LOD genus",
-        "build time",
-    ] {
-        assert!(has_label(&harness, label), "inspector row {label:?}");
-    }
-    assert!(has_label(&harness, &triangles.to_string()));
+    assert_voxel_rows(&harness, triangles);
     assert!(
         harness.state().log_lines().any(|l| l
             .starts_with("Voxel (low-pass + marching cubes) of builtin:csg-part: ")
@@ -896,18 +901,7 @@ fn voxel_method_builds_a_volume_at_its_threshold() {
     assert_eq!(result_row(&harness, "resolution"), "64");
     assert_eq!(result_row(&harness, "threshold"), "2.900");
     assert_eq!(result_row(&harness, "filter radius"), "1.0 voxels");
-    for label in [
-        "Voxel (low-pass + marching cubes)",
-        "resolution",
-        "filter radius",
-        "LOD triangles",
-        "LOD components",
-        "LOD genus",
-        "build time",
-    ] {
-        assert!(has_label(&harness, label), "inspector row {label:?}");
-    }
-    assert!(has_label(&harness, &triangles.to_string()));
+    assert_voxel_rows(&harness, triangles);
     assert!(!has_label(
         &harness,
         "Parameters changed since the last build."

@@ -211,140 +211,40 @@ fn bad_input_exits_2_and_loses_nothing() {
     let out = temp("existing.glb");
     std::fs::write(&out, b"keep me").unwrap();
     let o = out.to_str().unwrap();
-    let runs: &[&[&str]] = &[
+    // (input, method, LIST, further arguments): each exits 2 with one line on
+    // stderr and leaves the existing file as it was.
+    let cases: &[(&str, &str, &str, &[&str])] = &[
         // An existing file without --force.
-        &[
-            "export",
-            "builtin:torus",
-            "--method",
-            "simplify",
-            "--lods",
-            "1%",
-            "-o",
-            o,
-        ],
+        ("builtin:torus", "simplify", "1%", &[]),
         // Bad LIST items.
-        &[
-            "export",
-            "builtin:torus",
-            "--method",
-            "simplify",
-            "--lods",
-            "1%,abc",
-            "-o",
-            o,
-            "--force",
-        ],
-        &[
-            "export",
-            "builtin:torus",
-            "--method",
-            "simplify",
-            "--lods",
-            "2",
-            "-o",
-            o,
-            "--force",
-        ],
-        &[
-            "export",
-            "builtin:torus",
-            "--method",
-            "simplify",
-            "--lods",
-            "1%,,2%",
-            "-o",
-            o,
-            "--force",
-        ],
-        &[
-            "export",
-            "builtin:torus",
-            "--method",
-            "simplify",
-            "--lods",
-            "-1px",
-            "-o",
-            o,
-            "--force",
-        ],
-        &[
-            "export",
-            "builtin:torus",
-            "--method",
-            "simplify",
-            "--lods",
-            "",
-            "-o",
-            o,
-            "--force",
-        ],
-        // Methods not built yet.
-        &[
-            "export",
-            "builtin:torus",
-            "--method",
-            "hybrid",
-            "--lods",
-            "1%",
-            "-o",
-            o,
-            "--force",
-        ],
-        // Not a triangle mesh.
-        &[
-            "export",
-            "builtin:octahedron-points",
-            "--method",
-            "simplify",
-            "--lods",
-            "1%",
-            "-o",
-            o,
-            "--force",
-        ],
+        ("builtin:torus", "simplify", "1%,abc", &["--force"]),
+        ("builtin:torus", "simplify", "2", &["--force"]),
+        ("builtin:torus", "simplify", "1%,,2%", &["--force"]),
+        ("builtin:torus", "simplify", "-1px", &["--force"]),
+        ("builtin:torus", "simplify", "", &["--force"]),
+        // A method that does not export yet, and a point set.
+        ("builtin:torus", "hybrid", "1%", &["--force"]),
+        ("builtin:octahedron-points", "simplify", "1%", &["--force"]),
         // Bad thresholds.
-        &[
-            "export",
+        (
             "builtin:torus",
-            "--method",
             "simplify",
-            "--lods",
             "1%",
-            "-o",
-            o,
-            "--force",
-            "--pixels",
-            "0",
-        ],
-        &[
-            "export",
+            &["--force", "--pixels", "0"],
+        ),
+        (
             "builtin:torus",
-            "--method",
             "simplify",
-            "--lods",
             "1%",
-            "-o",
-            o,
-            "--force",
-            "--viewport-height",
-            "nan",
-        ],
+            &["--force", "--viewport-height", "nan"],
+        ),
         // A missing input.
-        &[
-            "export",
-            "/nonexistent/model.obj",
-            "--method",
-            "simplify",
-            "--lods",
-            "1%",
-            "-o",
-            o,
-            "--force",
-        ],
+        ("/nonexistent/model.obj", "simplify", "1%", &["--force"]),
     ];
-    for args in runs {
-        let r = lodstudio(args);
+    for (input, method, lods, rest) in cases {
+        let mut args = vec!["export", input, "--method", method, "--lods", lods, "-o", o];
+        args.extend_from_slice(rest);
+        let r = lodstudio(&args);
         assert_eq!(r.status.code(), Some(2), "{args:?}");
         let err = String::from_utf8_lossy(&r.stderr);
         assert_eq!(err.trim().lines().count(), 1, "{args:?}: one line: {err}");
