@@ -43,6 +43,22 @@ fn wait_for_build(harness: &mut Harness<'_, StudioApp>) {
     wait_while(harness, "building", StudioApp::is_building);
 }
 
+/// Cancels the running build and checks that `before` is still the result and
+/// is what the viewport draws.
+fn cancel_keeps(harness: &mut Harness<'_, StudioApp>, before: &lodstudio_core::TriMesh) {
+    harness.get_by_label("Cancel").click();
+    harness.step();
+    assert!(!harness.state().is_building());
+    harness.run();
+    let after = harness
+        .state()
+        .result()
+        .expect("previous result kept")
+        .mesh();
+    assert_eq!(after, before);
+    assert_eq!(drawn_triangles(harness), Some(before.triangles.len()));
+}
+
 /// The inspector shows the voxel result's rows and its triangle count.
 fn assert_voxel_rows(harness: &Harness<'_, StudioApp>, triangles: usize) {
     for label in [
@@ -567,18 +583,7 @@ fn cancelling_a_build_keeps_the_previous_result() {
             .is_some(),
         "the progress row names the build and its stage"
     );
-    harness.get_by_label("Cancel").click();
-    harness.step();
-    assert!(!harness.state().is_building());
-    harness.run();
-
-    let after = harness
-        .state()
-        .result()
-        .expect("previous result kept")
-        .mesh();
-    assert_eq!(after, &before);
-    assert_eq!(drawn_triangles(&harness), Some(before.triangles.len()));
+    cancel_keeps(&mut harness, &before);
     assert!(has_label(&harness, &before.triangles.len().to_string()));
     assert!(
         harness
@@ -817,18 +822,7 @@ fn cancelling_a_voxel_build_keeps_the_previous_result() {
     harness.step();
     harness.step();
     assert!(harness.state().is_building(), "the build is still running");
-    harness.get_by_label("Cancel").click();
-    harness.step();
-    assert!(!harness.state().is_building());
-    harness.run();
-
-    let after = harness
-        .state()
-        .result()
-        .expect("previous result kept")
-        .mesh();
-    assert_eq!(after, &before);
-    assert_eq!(drawn_triangles(&harness), Some(before.triangles.len()));
+    cancel_keeps(&mut harness, &before);
     assert!(harness.state().log_lines().any(|l| l
         == "Cancelled Voxel (low-pass + marching cubes) of builtin:csg-part; the previous result is kept"));
     assert!(has_label(

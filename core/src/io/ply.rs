@@ -880,16 +880,21 @@ impl Writer {
         self.row_start = false;
     }
 
-    fn f32(&mut self, v: f32) {
+    /// One scalar: its Display text in ascii (the shortest text that reads back to
+    /// the same value), else its bytes in the file's byte order.
+    fn scalar<const N: usize>(&mut self, v: impl std::fmt::Display, le: [u8; N], be: [u8; N]) {
         match self.enc {
             Encoding::Ascii => {
                 self.sep();
-                // Display prints the shortest text that reads back to the same f32.
                 let _ = write!(self.out, "{v}");
             }
-            Encoding::BinaryLittleEndian => self.out.extend_from_slice(&v.to_le_bytes()),
-            Encoding::BinaryBigEndian => self.out.extend_from_slice(&v.to_be_bytes()),
+            Encoding::BinaryLittleEndian => self.out.extend_from_slice(&le),
+            Encoding::BinaryBigEndian => self.out.extend_from_slice(&be),
         }
+    }
+
+    fn f32(&mut self, v: f32) {
+        self.scalar(v, v.to_le_bytes(), v.to_be_bytes());
     }
 
     fn vec3(&mut self, v: Vec3) {
@@ -899,13 +904,7 @@ impl Writer {
     }
 
     fn u8(&mut self, v: u8) {
-        match self.enc {
-            Encoding::Ascii => {
-                self.sep();
-                let _ = write!(self.out, "{v}");
-            }
-            _ => self.out.push(v),
-        }
+        self.scalar(v, [v], [v]);
     }
 
     fn color(&mut self, c: Vec3) {
@@ -915,14 +914,7 @@ impl Writer {
     }
 
     fn u32(&mut self, v: u32) {
-        match self.enc {
-            Encoding::Ascii => {
-                self.sep();
-                let _ = write!(self.out, "{v}");
-            }
-            Encoding::BinaryLittleEndian => self.out.extend_from_slice(&v.to_le_bytes()),
-            Encoding::BinaryBigEndian => self.out.extend_from_slice(&v.to_be_bytes()),
-        }
+        self.scalar(v, v.to_le_bytes(), v.to_be_bytes());
     }
 
     fn end_row(&mut self) {
