@@ -6,6 +6,7 @@
 //! cancel at once.
 
 pub mod builtins;
+pub mod cut;
 pub mod distance;
 pub mod geom;
 pub mod implicit;
@@ -14,6 +15,7 @@ pub mod progress;
 pub mod rng;
 pub mod simplify;
 pub mod stats;
+pub mod view;
 pub mod voxel;
 
 pub use geom::{Aabb, PointSet, TriMesh, Volume};

@@ -1,0 +1,50 @@
+//! `info`: counts, topology and the repairs made on load.
+
+use super::*;
+
+#[derive(Args, Debug)]
+pub struct InfoArgs {
+    /// A model file, or builtin:NAME.
+    #[arg(required_unless_present = "builtins")]
+    file: Option<PathBuf>,
+    /// List the built-in models.
+    #[arg(long)]
+    builtins: bool,
+    /// Print one JSON object.
+    #[arg(long)]
+    json: bool,
+    #[command(flatten)]
+    input: InputArgs,
+}
+
+pub fn run(args: InfoArgs) -> Result<(), CliError> {
+    if args.builtins {
+        if args.json {
+            let list: Vec<_> = builtins::NAMES
+                .iter()
+                .map(|(n, d)| serde_json::json!({"name": format!("builtin:{n}"), "description": d}))
+                .collect();
+            println!("{}", serde_json::json!({ "builtins": list }));
+        } else {
+            for (n, d) in builtins::NAMES {
+                println!("builtin:{n:<20} {d}");
+            }
+        }
+        return Ok(());
+    }
+    let file = args.file.expect("clap requires FILE without --builtins");
+    let opts = args.input.load_options()?;
+    let loaded = io::load(&file, &opts, &Progress::new())?;
+    let summary = ModelSummary::of(&loaded);
+    if args.json {
+        let mut v = summary.to_json();
+        v["file"] = serde_json::json!(file.display().to_string());
+        println!("{v}");
+    } else {
+        println!("{}", file.display());
+        for (label, value) in summary.lines() {
+            println!("  {label:<22} {value}");
+        }
+    }
+    Ok(())
+}

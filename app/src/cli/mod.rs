@@ -1,0 +1,256 @@
+//! Command-line interface: subcommands print a human summary, or exactly one
+//! JSON object with `--json` (the contract in DESIGN.md).
+
+use std::path::PathBuf;
+
+use clap::{Args, Parser, Subcommand};
+use lodstudio_core::geom::{RepairOptions, Weld};
+use lodstudio_core::io::{self, LoadError, LoadOptions, Model, RawSpec, ScalarType};
+use lodstudio_core::simplify::{CollapseOptions, SimplifyOptions, Target};
+use lodstudio_core::stats::ModelSummary;
+use lodstudio_core::{Progress, builtins};
+
+mod export;
+mod info;
+mod measure;
+mod simplify;
+mod voxel;
+
+#[derive(Parser, Debug)]
+#[command(
+    name = "lodstudio",
+    version,
+    about = "Build, inspect and export level-of-detail hierarchies. With no subcommand, opens the studio."
+)]
+struct Cli {
+    #[command(subcommand)]
+    pub command: Option<Command>,
+}
+
+#[derive(Subcommand, Debug)]
+enum Command {
+    /// Open the studio on FILE (or a builtin:NAME).
+    Open { file: PathBuf },
+    /// Print counts, topology and the repairs made on load.
+    Info(info::InfoArgs),
+    /// Simplify a mesh by edge collapse with a certified two-sided Hausdorff bound.
+    Simplify(simplify::SimplifyArgs),
+    /// Measure the two-sided Hausdorff distance between two meshes by dense sampling.
+    Measure(measure::MeasureArgs),
+    /// Voxel simplification: low-pass filter the solid's volume and extract its
+    /// iso-surface; lower genus as the filter widens (voxel paper §2).
+    Voxel(voxel::VoxelArgs),
+    /// Export an LOD chain as one GLB: the MSFT_lod node extension with
+    /// MSFT_screencoverage thresholds from each LOD's guaranteed error bound.
+    Export(export::ExportArgs),
+}
+
+/// How results are reported and written.
+#[derive(Args, Debug)]
+pub struct ReportArgs {
+    /// Overwrite output files that exist.
+    #[arg(long)]
+    pub force: bool,
+    /// Print one JSON object.
+    #[arg(long)]
+    pub json: bool,
+}
+
+#[derive(Args, Debug)]
+pub struct InputArgs {
+    /// Merge vertices closer than this distance (default: only identical ones).
+    #[arg(long, value_name = "DISTANCE")]
+    pub weld_tolerance: Option<f32>,
+    /// Keep vertex records as they are (no welding).
+    #[arg(long, conflicts_with = "weld_tolerance")]
+    pub no_weld: bool,
+    /// Raw volume: grid size X,Y,Z.
+    #[arg(long, value_name = "X,Y,Z", value_parser = parse_triple::<usize>)]
+    pub raw_dims: Option<[usize; 3]>,
+    /// Raw volume: scalar type (u8, i8, u16, i16, u32, i32, f32, f64).
+    #[arg(long, value_name = "TYPE", requires = "raw_dims")]
+    pub raw_type: Option<String>,
+    /// Raw volume: voxel spacing X,Y,Z.
+    #[arg(long, value_name = "X,Y,Z", value_parser = parse_triple::<f32>, requires = "raw_dims")]
+    pub raw_spacing: Option<[f32; 3]>,
+    /// Raw volume: bytes to skip before the samples.
+    #[arg(long, value_name = "BYTES", default_value_t = 0, requires = "raw_dims")]
+    pub raw_header: usize,
+    /// Raw volume: samples are big-endian.
+    #[arg(long, requires = "raw_dims")]
+    pub raw_big_endian: bool,
+}
+
+#[derive(Args, Debug)]
+struct InfoArgs {
+    /// A model file, or builtin:NAME.
+    #[arg(required_unless_present = "builtins")]
+    pub file: Option<PathBuf>,
+    /// List the built-in models.
+    #[arg(long)]
+    pub builtins: bool,
+    /// Print one JSON object.
+    #[arg(long)]
+    pub json: bool,
+    #[command(flatten)]
+    input: InputArgs,
+}
+
+/// A CLI failure: bad input (exit 2) or anything else (exit 1).
+#[derive(Debug)]
+pub enum CliError {
+    BadInput(String),
+    Failure(String),
+}
+
+impl CliError {
+    pub fn code(&self) -> u8 {
+        match self {
+            CliError::BadInput(_) => 2,
+            CliError::Failure(_) => 1,
+        }
+    }
+    pub fn message(&self) -> &str {
+        match self {
+            CliError::BadInput(m) | CliError::Failure(m) => m,
+        }
+    }
+}
+
+impl From<LoadError> for CliError {
+    fn from(e: LoadError) -> Self {
+        match e {
+            LoadError::Cancelled => CliError::Failure(e.to_string()),
+            _ => CliError::BadInput(e.to_string()),
+        }
+    }
+}
+
+pub fn run() -> Result<(), CliError> {
+    let cli = match Cli::try_parse() {
+        Ok(c) => c,
+        Err(e) => {
+            use clap::error::ErrorKind;
+            if matches!(e.kind(), ErrorKind::DisplayHelp | ErrorKind::DisplayVersion) {
+                let _ = e.print();
+                return Ok(());
+            }
+            let text = e.to_string();
+            let line = text
+                .lines()
+                .find(|l| l.starts_with("error:"))
+                .unwrap_or("bad arguments")
+                .trim_start_matches("error: ");
+            return Err(CliError::BadInput(format!("{line} (see --help)")));
+        }
+    };
+    match cli.command {
+        None => studio(None),
+        Some(Command::Open { file }) => studio(Some(file)),
+        Some(Command::Info(args)) => info::run(args),
+        Some(Command::Simplify(args)) => simplify::run(args),
+        Some(Command::Measure(args)) => measure::run(args),
+        Some(Command::Voxel(args)) => voxel::run(args),
+        Some(Command::Export(args)) => export::run(args),
+    }
+}
+
+fn studio(file: Option<PathBuf>) -> Result<(), CliError> {
+    lodstudio::run_studio(file).map_err(CliError::Failure)
+}
+
+impl InputArgs {
+    fn load_options(&self) -> Result<LoadOptions, CliError> {
+        let weld = match (self.no_weld, self.weld_tolerance) {
+            (true, _) => Weld::Off,
+            (false, Some(t)) if t.is_finite() && t >= 0.0 => Weld::Tolerance(t),
+            (false, Some(t)) => {
+                return Err(CliError::BadInput(format!(
+                    "--weld-tolerance must be a finite distance >= 0, got {t}"
+                )));
+            }
+            (false, None) => Weld::Exact,
+        };
+        let raw = match &self.raw_dims {
+            None => None,
+            Some(d) => {
+                let scalar = self
+                    .raw_type
+                    .as_deref()
+                    .map(ScalarType::parse)
+                    .unwrap_or(Some(ScalarType::U8))
+                    .ok_or_else(|| {
+                        CliError::BadInput(format!(
+                            "--raw-type: unknown scalar type {:?}",
+                            self.raw_type.as_deref().unwrap_or_default()
+                        ))
+                    })?;
+                let s = self.raw_spacing.unwrap_or([1.0; 3]);
+                if s.iter().any(|v| !(v.is_finite() && *v > 0.0)) {
+                    return Err(CliError::BadInput(
+                        "--raw-spacing values must be finite and > 0".into(),
+                    ));
+                }
+                Some(RawSpec {
+                    dims: *d,
+                    scalar,
+                    big_endian: self.raw_big_endian,
+                    spacing: glam::Vec3::new(s[0], s[1], s[2]),
+                    header_bytes: self.raw_header,
+                })
+            }
+        };
+        Ok(LoadOptions {
+            repair: RepairOptions { weld },
+            raw,
+        })
+    }
+}
+
+/// Parses `X,Y,Z` into three values.
+pub fn parse_triple<T: std::str::FromStr + Copy + Default>(s: &str) -> Result<[T; 3], String> {
+    let parts: Vec<&str> = s.split(',').map(str::trim).collect();
+    let mut out = [T::default(); 3];
+    if parts.len() != 3 {
+        return Err(format!("expected three comma-separated values, got {s:?}"));
+    }
+    for (o, p) in out.iter_mut().zip(parts) {
+        *o = p
+            .parse()
+            .map_err(|_| format!("{p:?} is not a valid number"))?;
+    }
+    Ok(out)
+}
+
+/// Loads FILE and insists on a triangle mesh.
+pub fn load_mesh(
+    file: &std::path::Path,
+    input: &InputArgs,
+) -> Result<lodstudio_core::TriMesh, CliError> {
+    let loaded = io::load(file, &input.load_options()?, &Progress::new())?;
+    match loaded.model {
+        Model::Mesh(m) => Ok(m),
+        other => Err(CliError::BadInput(format!(
+            "{}: this command needs a triangle mesh, not a {}",
+            file.display(),
+            other.kind()
+        ))),
+    }
+}
+
+/// Refuses to replace an existing file unless `--force` was given.
+pub fn check_output(out: &std::path::Path, force: bool) -> Result<(), CliError> {
+    if out.exists() && !force {
+        return Err(CliError::BadInput(format!(
+            "{} exists (use --force to overwrite)",
+            out.display()
+        )));
+    }
+    Ok(())
+}
+
+pub fn write_mesh(out: &std::path::Path, mesh: &lodstudio_core::TriMesh) -> Result<(), CliError> {
+    let bytes = io::encode_mesh(out, mesh).map_err(CliError::BadInput)?;
+    io::write_atomic(out, &bytes)
+        .map_err(|e| CliError::BadInput(format!("{}: cannot write: {e}", out.display())))
+}

@@ -1,0 +1,172 @@
+//! The camera every view-dependent cut is taken for, and the projection of an
+//! object-space error to pixels (hybrid paper §6, merge-tree paper §5.1).
+
+use glam::{Mat4, Vec3};
+
+/// A perspective camera with its viewport and a light, as a cut needs it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct View {
+    pub eye: Vec3,
+    pub target: Vec3,
+    pub up: Vec3,
+    /// Vertical field of view in radians.
+    pub fov_y: f32,
+    /// Viewport size in pixels.
+    pub width: u32,
+    pub height: u32,
+    /// Direction towards the light (normalised), for the lighting criterion.
+    pub light_dir: Vec3,
+}
+
+/// Nearest depth used when projecting, so a primitive at the eye gets a large
+/// but finite pixel size.
+const NEAR: f32 = 1e-4;
+
+impl View {
+    /// A camera on a sphere around `center` looking at it: `azimuth` about +Y,
+    /// `elevation` above the XZ plane (radians), light from the eye.
+    pub fn orbit(center: Vec3, distance: f32, azimuth: f32, elevation: f32) -> View {
+        let dir = Vec3::new(
+            elevation.cos() * azimuth.sin(),
+            elevation.sin(),
+            elevation.cos() * azimuth.cos(),
+        );
+        View {
+            eye: center + dir * distance,
+            target: center,
+            up: Vec3::Y,
+            fov_y: 60f32.to_radians(),
+            width: 1024,
+            height: 768,
+            light_dir: dir,
+        }
+    }
+
+    /// Unit vector from the eye towards the target.
+    pub fn forward(&self) -> Vec3 {
+        (self.target - self.eye).normalize_or(Vec3::NEG_Z)
+    }
+
+    pub fn aspect(&self) -> f32 {
+        self.width.max(1) as f32 / self.height.max(1) as f32
+    }
+
+    pub fn view_matrix(&self) -> Mat4 {
+        glam::camera::rh::view::look_at_mat4(self.eye, self.target, self.up)
+    }
+
+    /// Perspective projection (wgpu depth range 0..1).
+    pub fn projection(&self, near: f32, far: f32) -> Mat4 {
+        glam::camera::rh::proj::directx::perspective(self.fov_y, self.aspect(), near, far)
+    }
+
+    /// Pixels covered by a unit length seen face-on at depth 1.
+    pub fn focal_pixels(&self) -> f32 {
+        self.height.max(1) as f32 / (2.0 * (0.5 * self.fov_y).tan())
+    }
+
+    /// A conservative pixel size of an object-space length anywhere in the
+    /// sphere (`center`, `radius`): projected at the sphere's nearest depth, and
+    /// enlarged by the worst off-axis stretch at the viewport's corner.
+    pub fn pixels(&self, length: f32, center: Vec3, radius: f32) -> f32 {
+        let depth = ((center - self.eye).dot(self.forward()) - radius).max(NEAR);
+        let half_h = (0.5 * self.fov_y).tan();
+        let corner = (1.0 + half_h * half_h * (1.0 + self.aspect() * self.aspect())).sqrt();
+        length * self.focal_pixels() * corner / depth
+    }
+
+    /// Whether the sphere can be seen at all (inside the view frustum, any depth
+    /// in front of the eye).
+    pub fn sees_sphere(&self, center: Vec3, radius: f32) -> bool {
+        let v = center - self.eye;
+        let f = self.forward();
+        let depth = v.dot(f);
+        if depth < -radius {
+            return false;
+        }
+        let right = f.cross(self.up).normalize_or(Vec3::X);
+        let up = right.cross(f);
+        let ty = (0.5 * self.fov_y).tan();
+        let tx = ty * self.aspect();
+        // Each side plane through the eye; the sphere is out if wholly beyond one.
+        let planes = [
+            (f * ty - up).normalize(),
+            (f * ty + up).normalize(),
+            (f * tx - right).normalize(),
+            (f * tx + right).normalize(),
+        ];
+        planes.iter().all(|n| v.dot(*n) >= -radius)
+    }
+}
+
+/// An error tolerance for a cut.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Tolerance {
+    /// Object space, as a fraction of the bounding-box diagonal.
+    Relative(f32),
+    /// Screen space, in pixels of the view.
+    Pixels(f32),
+}
+
+impl Tolerance {
+    /// Whether an element with error bound `error` (object space) inside the
+    /// sphere (`center`, `radius`) is fine enough for `view`; `diagonal` is the
+    /// model's bounding-box diagonal.
+    pub fn accepts(
+        &self,
+        view: &View,
+        diagonal: f32,
+        error: f32,
+        center: Vec3,
+        radius: f32,
+    ) -> bool {
+        match *self {
+            Tolerance::Relative(f) => error <= f * diagonal,
+            Tolerance::Pixels(p) => view.pixels(error, center, radius) <= p,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn unit(rng: &mut crate::rng::Rng) -> Vec3 {
+        loop {
+            let v = Vec3::new(rng.f32(), rng.f32(), rng.f32()) * 2.0 - 1.0;
+            if (1e-3..=1.0).contains(&v.length_squared()) {
+                return v.normalize();
+            }
+        }
+    }
+
+    #[test]
+    fn pixels_bound_the_true_projection_everywhere_in_the_sphere() {
+        let view = View::orbit(Vec3::ZERO, 5.0, 0.7, 0.3);
+        let vp = view.projection(0.01, 100.0) * view.view_matrix();
+        let to_px = |p: Vec3| {
+            let c = vp.project_point3(p);
+            glam::Vec2::new(
+                c.x * 0.5 * view.width as f32,
+                c.y * 0.5 * view.height as f32,
+            )
+        };
+        let mut rng = crate::rng::Rng::new(3);
+        let (center, radius, len) = (Vec3::new(0.3, -0.2, 0.1), 1.0, 0.01);
+        let bound = view.pixels(len, center, radius);
+        for _ in 0..2000 {
+            let p = center + unit(&mut rng) * radius * rng.f32();
+            let d = unit(&mut rng) * len;
+            let seen = to_px(p).distance(to_px(p + d));
+            assert!(seen <= bound * 1.001, "{seen} > {bound}");
+        }
+    }
+
+    #[test]
+    fn frustum_keeps_the_target_and_drops_what_is_behind() {
+        let view = View::orbit(Vec3::ZERO, 5.0, 0.0, 0.0);
+        assert!(view.sees_sphere(Vec3::ZERO, 0.1));
+        assert!(!view.sees_sphere(view.eye - view.forward() * 3.0, 0.5));
+        assert!(!view.sees_sphere(Vec3::new(100.0, 0.0, 0.0), 1.0));
+    }
+}
