@@ -9,6 +9,7 @@ use std::time::Instant;
 use lodstudio_core::TriMesh;
 use lodstudio_core::builtins;
 use lodstudio_core::geom::Volume;
+use lodstudio_core::implicit::Implicit;
 use lodstudio_core::io::Model;
 use lodstudio_core::progress::{Cancelled, Progress};
 use lodstudio_core::simplify::{Simplified, SimplifyError, SimplifyOptions, simplify};
@@ -137,6 +138,8 @@ pub enum VoxelSource<'a> {
     Implicit(&'a str),
     /// A scalar volume (CT, MRI), thresholded on its own grid.
     Volume(&'a Volume),
+    /// A triangle mesh, inside where its generalised winding number is ≥ ½.
+    Mesh(&'a TriMesh),
 }
 
 /// What voxel simplification samples of the model opened from `path`, or why
@@ -150,23 +153,17 @@ pub fn voxel_source<'a>(path: &'a Path, model: &'a Model) -> Result<VoxelSource<
     {
         return Ok(VoxelSource::Implicit(name));
     }
-    if let Model::Volume(volume) = model {
-        return Ok(VoxelSource::Volume(volume));
+    match model {
+        Model::Volume(volume) => Ok(VoxelSource::Volume(volume)),
+        Model::Mesh(mesh) if !mesh.triangles.is_empty() => Ok(VoxelSource::Mesh(mesh)),
+        Model::Mesh(_) => {
+            Err("Voxel simplification needs a solid: this mesh has no triangles.".into())
+        }
+        Model::Points(points) => Err(format!(
+            "Voxel simplification samples solids (meshes, implicit built-ins, volumes); this model is a point set ({} points) with no inside.",
+            points.positions.len()
+        )),
     }
-    let solids: Vec<String> = builtins::NAMES
-        .iter()
-        .filter(|(name, _)| builtins::implicit(name).is_some())
-        .map(|(name, _)| format!("builtin:{name}"))
-        .collect();
-    let what = match model {
-        Model::Mesh(_) => "a triangle mesh",
-        Model::Points(_) => "a point set",
-        Model::Volume(_) => "a volume",
-    };
-    Err(format!(
-        "Voxel simplification samples an implicit solid ({}) or thresholds a volume; this model is {what}, which it cannot sample yet.",
-        solids.join(" or ")
-    ))
 }
 
 /// The triangle mesh edge collapse works on, or why there is none.
@@ -244,24 +241,21 @@ pub fn run(
     }))
 }
 
-/// Samples the built-in implicit solid `name`, filters and extracts its
-/// surface (voxel paper §2), and prepares everything the studio shows of it.
+/// Samples a solid (a built-in implicit or a mesh's winding number), filters
+/// and extracts its surface (voxel paper §2), and prepares everything the
+/// studio shows of it.
 ///
 /// # Errors
-/// `Err(Cancelled)` when `progress` was cancelled; `Ok(Err(message))` when
-/// `name` is no implicit solid.
+/// `Err(Cancelled)` when `progress` was cancelled.
 pub fn run_voxel(
-    name: &str,
+    solid: &dyn Implicit,
     settings: VoxelSettings,
     progress: &Progress,
 ) -> Result<Result<Built, String>, Cancelled> {
-    let Some(solid) = builtins::implicit(name) else {
-        return Ok(Err(format!("builtin:{name} is no implicit solid")));
-    };
     let settings = settings.for_implicit();
     let start = Instant::now();
     let level = simplify_implicit(
-        solid.as_ref(),
+        solid,
         settings.resolution,
         settings.radius,
         settings.filter.filter(),
@@ -469,6 +463,7 @@ mod tests {
     use super::*;
     use lodstudio_core::builtins::torus;
     use lodstudio_core::geom::PointSet;
+    use lodstudio_core::implicit::MeshSolid;
     use lodstudio_core::simplify::{CollapseOptions, Target};
 
     #[test]
@@ -514,15 +509,16 @@ mod tests {
     }
 
     #[test]
-    fn voxel_builds_only_implicit_solids() {
+    fn voxel_builds_solids_and_meshes_but_not_points() {
         let settings = VoxelSettings {
             resolution: 24,
             radius: 1.0,
             ..Default::default()
         };
-        let built = run_voxel("csg-part", settings, &Progress::new())
+        let solid = builtins::implicit("csg-part").expect("csg-part is implicit");
+        let built = run_voxel(solid.as_ref(), settings, &Progress::new())
             .expect("not cancelled")
-            .expect("csg-part is implicit");
+            .expect("csg-part builds");
         let level = built.voxel().expect("a voxel result");
         assert!(!level.mesh.triangles.is_empty());
         assert_eq!(built.mesh().triangles.len(), level.mesh.triangles.len());
@@ -531,11 +527,23 @@ mod tests {
 
         let mesh = Model::Mesh(torus(1.0, 0.35, 8, 4));
         assert!(check(Method::EdgeCollapse, Path::new("builtin:torus"), &mesh).is_ok());
-        let message = check(Method::Voxel, Path::new("builtin:torus"), &mesh)
-            .expect_err("a mesh is not sampled");
-        assert!(message.contains("builtin:csg-part"), "{message}");
-        assert!(message.contains("a triangle mesh"), "{message}");
-        assert!(check(Method::Voxel, Path::new("builtin:csg-part"), &mesh).is_ok());
+        assert!(check(Method::Voxel, Path::new("builtin:torus"), &mesh).is_ok());
+        let Model::Mesh(torus_mesh) = &mesh else {
+            unreachable!()
+        };
+        let built = run_voxel(&MeshSolid::new(torus_mesh), settings, &Progress::new())
+            .expect("not cancelled")
+            .expect("a closed mesh builds");
+        let level = built.voxel().expect("a voxel result");
+        assert_eq!(
+            (level.components, level.genus),
+            (1, 1),
+            "the torus keeps its hole"
+        );
+        let points = Model::Points(lodstudio_core::builtins::octahedron_points(100, 1));
+        let message =
+            check(Method::Voxel, Path::new("p.ply"), &points).expect_err("points have no inside");
+        assert!(message.contains("a point set"), "{message}");
     }
 
     #[test]

@@ -12,6 +12,7 @@ use std::sync::mpsc::{self, Receiver, TryRecvError};
 use std::time::Duration;
 
 use lodstudio_core::builtins;
+use lodstudio_core::implicit::MeshSolid;
 use lodstudio_core::io::{LoadError, LoadOptions, Loaded, load};
 use lodstudio_core::progress::{Cancelled, Progress};
 use lodstudio_core::stats::ModelSummary;
@@ -566,8 +567,20 @@ impl StudioApp {
             BuildParams::Voxel(settings) => {
                 match build::voxel_source(&current.path, &current.loaded.model) {
                     Ok(build::VoxelSource::Implicit(name)) => {
-                        let name = name.to_string();
-                        Box::new(move |progress| build::run_voxel(&name, settings, progress))
+                        let Some(solid) = lodstudio_core::builtins::implicit(name) else {
+                            self.build_failed(format!("builtin:{name} is no implicit solid"));
+                            return;
+                        };
+                        Box::new(move |progress| {
+                            build::run_voxel(solid.as_ref(), settings, progress)
+                        })
+                    }
+                    Ok(build::VoxelSource::Mesh(_)) => {
+                        let loaded = Arc::clone(&current.loaded);
+                        Box::new(move |progress| match build::mesh_of(&loaded.model) {
+                            Ok(mesh) => build::run_voxel(&MeshSolid::new(mesh), settings, progress),
+                            Err(message) => Ok(Err(message)),
+                        })
                     }
                     Ok(build::VoxelSource::Volume(volume)) => {
                         let loaded = Arc::clone(&current.loaded);

@@ -12,6 +12,12 @@ use crate::geom::Aabb;
 pub trait Implicit: Send + Sync {
     fn value(&self, p: Vec3) -> f32;
     fn bounds(&self) -> Aabb;
+    /// `Some(inside)` when the whole box (`center` ± `half`) is on one side of
+    /// the surface; lets the sampler skip the box voxel by voxel.
+    fn classify_block(&self, center: Vec3, half: Vec3) -> Option<bool> {
+        let v = self.value(center);
+        (v.abs() > half.length()).then_some(v < 0.0)
+    }
 }
 
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -251,6 +257,38 @@ pub fn csg_part() -> Csg {
             },
         ],
     )
+}
+
+/// A triangle mesh as a solid: inside where its generalised winding number is at
+/// least ½, so open and self-overlapping meshes (the bunny's open base, CAD
+/// assemblies) sample sensibly; |value| is the exact distance to the surface, which
+/// keeps the [`Implicit`] contract the sampler relies on.
+pub struct MeshSolid<'a> {
+    winding: crate::distance::WindingNumber<'a>,
+    bounds: Aabb,
+}
+
+impl<'a> MeshSolid<'a> {
+    pub fn new(mesh: &'a crate::geom::TriMesh) -> Self {
+        Self {
+            winding: crate::distance::WindingNumber::new(mesh),
+            bounds: mesh.bounds(),
+        }
+    }
+}
+
+impl Implicit for MeshSolid<'_> {
+    fn value(&self, p: Vec3) -> f32 {
+        let d = self.winding.distance(p);
+        if self.winding.winding(p) >= 0.5 {
+            -d
+        } else {
+            d
+        }
+    }
+    fn bounds(&self) -> Aabb {
+        self.bounds
+    }
 }
 
 #[cfg(test)]

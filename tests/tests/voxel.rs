@@ -76,7 +76,7 @@ fn pyramid_lists_levels_finest_first_and_loses_genus() {
 }
 
 #[test]
-fn volumes_use_their_grid_and_meshes_are_refused_clearly() {
+fn volumes_use_their_grid_and_point_sets_are_refused_clearly() {
     let skull = shared_model("skull_2.9.inr");
     let j = lodstudio_json(&[
         "voxel",
@@ -89,8 +89,7 @@ fn volumes_use_their_grid_and_meshes_are_refused_clearly() {
     assert_eq!(j["resolution"], 64);
     assert!(j["triangles"].as_u64().unwrap() > 1000);
     for args in [
-        &["voxel", shared_model("horse.ply").to_str().unwrap()][..],
-        &["voxel", "builtin:sphere"],
+        &["voxel", "builtin:octahedron-points"][..],
         &["voxel", "builtin:csg-part", "--resolution", "2"],
         &["voxel", "builtin:csg-part", "--radius", "-1"],
         &["voxel", "builtin:csg-part", "--filter", "box"],
@@ -101,6 +100,51 @@ fn volumes_use_their_grid_and_meshes_are_refused_clearly() {
             String::from_utf8_lossy(&out.stderr).trim().lines().count(),
             1,
             "{args:?}"
+        );
+    }
+}
+
+/// Meshes are sampled through their generalised winding number: the bunny's
+/// open base still has an inside, and the holes of the coupling close one by
+/// one as the filter widens (Tables 1–3).
+#[test]
+fn meshes_are_solids_and_their_genus_falls_along_the_pyramid() {
+    let bunny = shared_model("stanford-bunny.obj");
+    let j = lodstudio_json(&[
+        "voxel",
+        bunny.to_str().unwrap(),
+        "--resolution",
+        "40",
+        "--radius",
+        "1",
+    ]);
+    assert_eq!(
+        (j["components"].as_i64(), j["genus"].as_i64()),
+        (Some(1), Some(0))
+    );
+
+    let coupling = shared_model("couplingdown.off");
+    let j = lodstudio_json(&[
+        "voxel",
+        coupling.to_str().unwrap(),
+        "--pyramid",
+        "--resolution",
+        "64",
+    ]);
+    let levels = j["levels"].as_array().unwrap();
+    let column = |k: &str| -> Vec<i64> { levels.iter().map(|l| l[k].as_i64().unwrap()).collect() };
+    let (genus, triangles) = (column("genus"), column("triangles"));
+    assert!(genus[0] >= 5, "the finest level keeps the holes: {genus:?}");
+    assert!(
+        genus.windows(2).all(|w| w[1] <= w[0]),
+        "never rises: {genus:?}"
+    );
+    assert_eq!(*genus.last().unwrap(), 0, "{genus:?}");
+    for w in triangles.windows(2) {
+        let ratio = w[0] as f64 / w[1] as f64;
+        assert!(
+            (3.0..6.0).contains(&ratio),
+            "about 4x per halving: {triangles:?}"
         );
     }
 }

@@ -10,7 +10,8 @@ enum FilterArg {
 
 #[derive(Args, Debug)]
 pub struct VoxelArgs {
-    /// builtin:sphereflake, builtin:csg-part, or a volume (NRRD, NIfTI, INR, raw).
+    /// A mesh (sampled through its generalised winding number), builtin:sphereflake,
+    /// builtin:csg-part, or a volume (NRRD, NIfTI, INR, raw).
     file: PathBuf,
     /// Voxels along the longest side of an implicit solid's bounds (volumes keep their grid).
     #[arg(long, default_value_t = 128)]
@@ -40,15 +41,18 @@ pub struct VoxelArgs {
 enum VoxelInput {
     Solid(Box<dyn lodstudio_core::implicit::Implicit>),
     Volume(lodstudio_core::Volume, f32),
+    /// A mesh, inside where its generalised winding number is ≥ ½.
+    Mesh(lodstudio_core::TriMesh),
 }
 
 fn voxel_input(args: &VoxelArgs) -> Result<VoxelInput, CliError> {
-    if let Some(name) = args.file.to_str().and_then(|s| s.strip_prefix("builtin:")) {
-        return builtins::implicit(name).map(VoxelInput::Solid).ok_or_else(|| {
-            CliError::BadInput(format!(
-                "builtin:{name}: the voxel method needs a solid: builtin:sphereflake or builtin:csg-part"
-            ))
-        });
+    if let Some(solid) = args
+        .file
+        .to_str()
+        .and_then(|s| s.strip_prefix("builtin:"))
+        .and_then(builtins::implicit)
+    {
+        return Ok(VoxelInput::Solid(solid));
     }
     let loaded = io::load(&args.file, &args.input.load_options()?, &Progress::new())?;
     match loaded.model {
@@ -60,8 +64,9 @@ fn voxel_input(args: &VoxelArgs) -> Result<VoxelInput, CliError> {
             }
             Ok(VoxelInput::Volume(v, iso))
         }
+        Model::Mesh(m) if !m.triangles.is_empty() => Ok(VoxelInput::Mesh(m)),
         other => Err(CliError::BadInput(format!(
-            "{}: the voxel method takes implicit solids and volumes; {} input needs an inside test that is not built yet",
+            "{}: the voxel method samples solids (meshes, implicit built-ins, volumes), not {} input",
             args.file.display(),
             other.kind()
         ))),
@@ -91,16 +96,23 @@ pub fn run(args: VoxelArgs) -> Result<(), CliError> {
         check_output(out, args.report.force || (args.pyramid && out.is_dir()))?;
     }
     let progress = Progress::new();
-    let run = |resolution: usize, radius: f32| match &input {
-        VoxelInput::Solid(solid) => voxel::simplify_implicit(
-            solid.as_ref(),
-            resolution,
-            radius,
-            filter,
-            DENSITY_ISO,
-            &progress,
-        ),
-        VoxelInput::Volume(v, iso) => voxel::simplify_volume(v, *iso, radius, filter, &progress),
+    // What is sampled: a solid (built-in, or a mesh through its winding number)
+    // or a volume on its own grid.
+    let mesh_solid;
+    let sampled: Result<&dyn lodstudio_core::implicit::Implicit, (&lodstudio_core::Volume, f32)> =
+        match &input {
+            VoxelInput::Solid(solid) => Ok(solid.as_ref()),
+            VoxelInput::Mesh(m) => {
+                mesh_solid = lodstudio_core::implicit::MeshSolid::new(m);
+                Ok(&mesh_solid)
+            }
+            VoxelInput::Volume(v, iso) => Err((v, *iso)),
+        };
+    let run = |resolution: usize, radius: f32| match sampled {
+        Ok(solid) => {
+            voxel::simplify_implicit(solid, resolution, radius, filter, DENSITY_ISO, &progress)
+        }
+        Err((v, iso)) => voxel::simplify_volume(v, iso, radius, filter, &progress),
     };
     let level_json = |l: &voxel::VoxelLevel, finest: usize| {
         serde_json::json!({

@@ -68,6 +68,28 @@ impl Bvh {
         self.nodes[id].count = 0;
     }
 
+    /// Number of nodes; node 0 is the root and children follow their parent
+    /// (a child always has a larger id), so a reverse sweep visits children first.
+    pub fn node_count(&self) -> usize {
+        self.nodes.len()
+    }
+
+    /// The box of node `n`.
+    pub fn node_bounds(&self, n: u32) -> Aabb {
+        self.nodes[n as usize].bounds
+    }
+
+    /// `Ok(primitives)` for a leaf, `Err((left, right))` for an internal node.
+    pub fn node(&self, n: u32) -> Result<&[u32], (u32, u32)> {
+        let node = &self.nodes[n as usize];
+        if node.count > 0 {
+            let s = node.start_or_right as usize;
+            Ok(&self.order[s..s + node.count as usize])
+        } else {
+            Err((n + 1, node.start_or_right))
+        }
+    }
+
     /// The primitive nearest to `p` under `dist` (which must be at least the
     /// distance to the primitive's box), and its distance; `None` when empty.
     pub fn nearest(&self, p: Vec3, dist: impl Fn(u32) -> f32) -> Option<(f32, u32)> {
@@ -109,8 +131,8 @@ impl Bvh {
 
 /// Distance from points to a triangle mesh's surface.
 pub struct MeshDistance<'a> {
-    mesh: &'a TriMesh,
-    bvh: Bvh,
+    pub(crate) mesh: &'a TriMesh,
+    pub(crate) bvh: Bvh,
 }
 
 impl<'a> MeshDistance<'a> {

@@ -5,9 +5,11 @@
 pub mod bvh;
 pub mod hausdorff;
 pub mod triangle;
+pub mod winding;
 
 pub use bvh::{Bvh, MeshDistance, SphereSetDistance};
 pub use hausdorff::{
     HausdorffReport, SamplingOptions, hausdorff_mesh_mesh, hausdorff_mesh_spheres, sample_surface,
 };
 pub use triangle::closest_point_on_triangle;
+pub use winding::WindingNumber;
