@@ -148,3 +148,71 @@ fn meshes_are_solids_and_their_genus_falls_along_the_pyramid() {
         );
     }
 }
+
+/// §3: a tighter layer error takes more, increasingly translucent layers; a GLB
+/// holds them all, one alpha-blended node each.
+#[test]
+fn layers_follow_the_error_bound_and_export_together() {
+    let out = std::env::temp_dir().join(format!("lodstudio-layers-{}.glb", std::process::id()));
+    let o = out.to_str().unwrap();
+    let args = |d: &'static str| {
+        [
+            "voxel",
+            "builtin:csg-part",
+            "--resolution",
+            "32",
+            "--layers-error",
+            d,
+        ]
+    };
+    let one = lodstudio_json(&args("0.5"));
+    assert_eq!(one["layers"], 1);
+    let mut many_args = args("0.03").to_vec();
+    many_args.extend(["-o", o, "--force"]);
+    let many = lodstudio_json(&many_args);
+    let n = many["layers"].as_u64().unwrap() as usize;
+    assert!(n >= 3, "{many}");
+    assert!(many["layers_error"].as_f64().unwrap() <= 0.03);
+    let alpha: Vec<f64> = many["opacities"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|a| a.as_f64().unwrap())
+        .collect();
+    assert_eq!(alpha[0], 1.0);
+    assert!(alpha.windows(2).all(|w| w[1] < w[0]), "{alpha:?}");
+    let per_layer: u64 = many["layer_triangles"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|t| t.as_u64().unwrap())
+        .sum();
+    let back = lodstudio_json(&["info", o]);
+    assert_eq!(back["triangles"].as_u64(), Some(per_layer));
+    assert_eq!(back["parts"].as_u64(), Some(n as u64));
+    std::fs::remove_file(&out).unwrap();
+}
+
+/// Table 3: the MRI head's pyramid pools the thresholded scan into coarser
+/// grids; triangles fall by about 4× per level and the genus never rises.
+#[test]
+fn the_mri_head_pyramid_and_in_between_levels() {
+    let head = shared_model("ch2.nii.gz");
+    let h = head.to_str().unwrap();
+    let j = lodstudio_json(&["voxel", h, "--pyramid", "--radius", "1", "--filter", "cone"]);
+    let levels = j["levels"].as_array().unwrap();
+    let column = |k: &str| -> Vec<i64> { levels.iter().map(|l| l[k].as_i64().unwrap()).collect() };
+    assert_eq!(column("resolution"), [217, 108, 54, 27, 13]);
+    let (genus, triangles) = (column("genus"), column("triangles"));
+    assert!(genus.windows(2).all(|w| w[1] <= w[0]), "{genus:?}");
+    assert!(
+        triangles.windows(2).all(|w| w[0] > 3 * w[1]),
+        "{triangles:?}"
+    );
+    // §5: halfway between the two finest levels lies between them.
+    let mid = lodstudio_json(&[
+        "voxel", h, "--at", "0.5", "--radius", "1", "--filter", "cone",
+    ]);
+    let t = mid["triangles"].as_i64().unwrap();
+    assert!(triangles[1] < t && t < triangles[0], "{t} in {triangles:?}");
+}

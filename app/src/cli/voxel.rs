@@ -28,7 +28,18 @@ pub struct VoxelArgs {
     /// The whole chain: resolution halves and the radius (in finest voxels) doubles per level (Tables 1–3).
     #[arg(long)]
     pyramid: bool,
-    /// Output mesh (.obj, .ply, .glb); with --pyramid, a folder for one .ply per level.
+    /// Multi-layered surfaces (§3): the fewest translucent layers whose
+    /// piecewise-constant fit of the density fall-off has a mean density error
+    /// at most D (eq. 6); 0.5 gives one layer, 0.03 several.
+    #[arg(long, value_name = "D", conflicts_with = "pyramid")]
+    layers_error: Option<f32>,
+    /// §5: extract at a continuous pyramid position T (0 = finest level, 1 =
+    /// the next, 1.5 = halfway between them) from interpolated buffers.
+    #[arg(long, value_name = "T", conflicts_with = "pyramid")]
+    at: Option<f32>,
+    /// Output mesh (.obj, .ply, .glb); with --pyramid, a folder for one .ply per
+    /// level; with layers, a .glb holds them all (other formats get one file
+    /// per layer, OUT.layerK.EXT beside OUT for K ≥ 1).
     #[arg(short = 'o', long = "output", value_name = "OUT")]
     output: Option<PathBuf>,
     #[command(flatten)]
@@ -74,7 +85,7 @@ fn voxel_input(args: &VoxelArgs) -> Result<VoxelInput, CliError> {
 }
 
 pub fn run(args: VoxelArgs) -> Result<(), CliError> {
-    use lodstudio_core::voxel::{self, DENSITY_ISO, Filter};
+    use lodstudio_core::voxel::{self, DENSITY_ISO, Filter, Pyramid, Source};
     if !(8..=1024).contains(&args.resolution) {
         return Err(CliError::BadInput(format!(
             "--resolution must be in 8..=1024, got {}",
@@ -99,25 +110,32 @@ pub fn run(args: VoxelArgs) -> Result<(), CliError> {
     // What is sampled: a solid (built-in, or a mesh through its winding number)
     // or a volume on its own grid.
     let mesh_solid;
-    let sampled: Result<&dyn lodstudio_core::implicit::Implicit, (&lodstudio_core::Volume, f32)> =
-        match &input {
-            VoxelInput::Solid(solid) => Ok(solid.as_ref()),
-            VoxelInput::Mesh(m) => {
-                mesh_solid = lodstudio_core::implicit::MeshSolid::new(m);
-                Ok(&mesh_solid)
-            }
-            VoxelInput::Volume(v, iso) => Err((v, *iso)),
-        };
-    let run = |resolution: usize, radius: f32| match sampled {
-        Ok(solid) => {
-            voxel::simplify_implicit(solid, resolution, radius, filter, DENSITY_ISO, &progress)
+    let source = match &input {
+        VoxelInput::Solid(solid) => Source::Solid(solid.as_ref()),
+        VoxelInput::Mesh(m) => {
+            mesh_solid = lodstudio_core::implicit::MeshSolid::new(m);
+            Source::Solid(&mesh_solid)
         }
-        Err((v, iso)) => voxel::simplify_volume(v, iso, radius, filter, &progress),
+        VoxelInput::Volume(v, iso) => Source::Volume(v, *iso),
     };
-    let level_json = |l: &voxel::VoxelLevel, finest: usize| {
+    if let Some(d) = args.layers_error
+        && !(d.is_finite() && d >= 0.0)
+    {
+        return Err(CliError::BadInput(format!(
+            "--layers-error must be a number >= 0, got {d}"
+        )));
+    }
+    if let Some(t) = args.at
+        && !(t.is_finite() && t >= 0.0)
+    {
+        return Err(CliError::BadInput(format!(
+            "--at must be a pyramid position >= 0, got {t}"
+        )));
+    }
+    let level_json = |l: &voxel::VoxelLevel| {
         serde_json::json!({
             "resolution": l.resolution,
-            "radius": l.radius * finest as f32 / l.resolution.max(1) as f32,
+            "radius": l.radius,
             "triangles": l.mesh.triangles.len(),
             "components": l.components,
             "genus": l.genus,
@@ -125,66 +143,138 @@ pub fn run(args: VoxelArgs) -> Result<(), CliError> {
     };
     let start = std::time::Instant::now();
     let failed = |_| CliError::Failure("cancelled".into());
-    if !args.pyramid {
-        let l = run(args.resolution, args.radius).map_err(failed)?;
-        if let Some(out) = &args.output {
-            write_mesh(out, &l.mesh)?;
+    if args.pyramid || args.at.is_some() {
+        let pyramid = Pyramid::build(source, args.resolution, args.radius, filter, &progress)
+            .map_err(failed)?;
+        if let Some(t) = args.at {
+            let l = pyramid.in_between(t, &progress).map_err(failed)?;
+            if let Some(out) = &args.output {
+                write_mesh(out, &l.mesh)?;
+            }
+            let mut j = level_json(&l);
+            j["at"] = t.into();
+            j["layers"] = 1.into();
+            j["seconds"] = start.elapsed().as_secs_f64().into();
+            return report_level(&args, &l, j);
         }
-        let mut j = level_json(&l, l.resolution);
-        j["layers"] = 1.into();
-        j["seconds"] = start.elapsed().as_secs_f64().into();
+        if let Some(dir) = &args.output {
+            std::fs::create_dir_all(dir).map_err(|e| {
+                CliError::BadInput(format!("{}: cannot create: {e}", dir.display()))
+            })?;
+        }
+        let mut levels = Vec::new();
+        for i in 0..pyramid.levels.len() {
+            let l = pyramid.level(i, &progress).map_err(failed)?;
+            if let Some(dir) = &args.output {
+                let path = dir.join(format!("level{i}_{}.ply", l.resolution));
+                check_output(&path, args.report.force)?;
+                write_mesh(&path, &l.mesh)?;
+            }
+            let j = level_json(&l);
+            if !args.report.json {
+                println!(
+                    "resolution {:>5}  radius {:>7.2}  triangles {:>8}  components {:>4}  genus {:>4}",
+                    j["resolution"],
+                    j["radius"].as_f64().unwrap_or(0.0),
+                    j["triangles"],
+                    j["components"],
+                    j["genus"]
+                );
+            }
+            levels.push(j);
+        }
         if args.report.json {
-            println!("{j}");
-        } else {
             println!(
-                "{}: resolution {}, radius {} voxels -> {} triangles, {} components, genus {}",
-                args.file.display(),
-                l.resolution,
-                l.radius,
-                l.mesh.triangles.len(),
-                l.components,
-                l.genus
+                "{}",
+                serde_json::json!({ "levels": levels, "seconds": start.elapsed().as_secs_f64() })
             );
         }
         return Ok(());
     }
-    if matches!(input, VoxelInput::Volume(..)) {
-        return Err(CliError::BadInput(
-            "--pyramid needs an implicit solid (volumes keep their own grid)".into(),
-        ));
+    let resolution = match source {
+        Source::Solid(_) => args.resolution,
+        Source::Volume(v, _) => v.dims.into_iter().max().unwrap_or(0),
+    };
+    let density =
+        voxel::density(source, resolution, 1, args.radius, filter, &progress).map_err(failed)?;
+    let plan = voxel::layers::plan(
+        &voxel::layers::profile(filter),
+        args.layers_error.unwrap_or(f32::INFINITY),
+    );
+    let layers = voxel::layers::extract(&density, &plan, &progress).map_err(failed)?;
+    // The level proper is the layer nearest the 0.5 isodensity.
+    let main = layers
+        .iter()
+        .min_by(|a, b| {
+            (a.isodensity - DENSITY_ISO)
+                .abs()
+                .total_cmp(&(b.isodensity - DENSITY_ISO).abs())
+        })
+        .expect("a plan has a layer");
+    let l = voxel::level(main.mesh.clone(), resolution, args.radius);
+    if let Some(out) = &args.output {
+        write_layers(out, &layers)?;
     }
-    if let Some(dir) = &args.output {
-        std::fs::create_dir_all(dir)
-            .map_err(|e| CliError::BadInput(format!("{}: cannot create: {e}", dir.display())))?;
-    }
-    let mut levels = Vec::new();
-    let mut resolution = args.resolution;
-    while resolution >= 8 {
-        let l = run(resolution, args.radius).map_err(failed)?;
-        if let Some(dir) = &args.output {
-            let path = dir.join(format!("level{}_{}.ply", levels.len(), resolution));
-            check_output(&path, args.report.force)?;
-            write_mesh(&path, &l.mesh)?;
-        }
-        let j = level_json(&l, args.resolution);
-        if !args.report.json {
-            println!(
-                "resolution {:>5}  radius {:>7.2}  triangles {:>8}  components {:>4}  genus {:>4}",
-                j["resolution"],
-                j["radius"].as_f64().unwrap_or(0.0),
-                j["triangles"],
-                j["components"],
-                j["genus"]
-            );
-        }
-        levels.push(j);
-        resolution /= 2;
-    }
+    let mut j = level_json(&l);
+    j["layers"] = layers.len().into();
+    j["isodensities"] = serde_json::json!(plan.isodensities);
+    j["opacities"] = serde_json::json!(plan.opacities);
+    j["layer_triangles"] = serde_json::json!(
+        layers
+            .iter()
+            .map(|l| l.mesh.triangles.len())
+            .collect::<Vec<_>>()
+    );
+    j["layers_error"] = plan.error.into();
+    j["seconds"] = start.elapsed().as_secs_f64().into();
+    report_level(&args, &l, j)
+}
+
+/// Prints one level's JSON, or its summary line.
+fn report_level(
+    args: &VoxelArgs,
+    l: &lodstudio_core::voxel::VoxelLevel,
+    j: serde_json::Value,
+) -> Result<(), CliError> {
     if args.report.json {
+        println!("{j}");
+    } else {
         println!(
-            "{}",
-            serde_json::json!({ "levels": levels, "seconds": start.elapsed().as_secs_f64() })
+            "{}: resolution {}, radius {} voxels -> {} triangles, {} components, genus {}, {} layer(s)",
+            args.file.display(),
+            l.resolution,
+            l.radius,
+            l.mesh.triangles.len(),
+            l.components,
+            l.genus,
+            j["layers"]
         );
+    }
+    Ok(())
+}
+
+/// Writes layers: all in one GLB, or one mesh file each (OUT, then
+/// OUT.layerK.EXT).
+fn write_layers(
+    out: &std::path::Path,
+    layers: &[lodstudio_core::cut::Layer],
+) -> Result<(), CliError> {
+    if out
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("glb"))
+    {
+        let bytes = io::gltf::write_layers_glb(layers);
+        return io::write_atomic(out, &bytes)
+            .map_err(|e| CliError::BadInput(format!("{}: cannot write: {e}", out.display())));
+    }
+    for (k, layer) in layers.iter().enumerate() {
+        let path = if k == 0 {
+            out.to_path_buf()
+        } else {
+            let ext = out.extension().and_then(|e| e.to_str()).unwrap_or("ply");
+            out.with_extension(format!("layer{k}.{ext}"))
+        };
+        write_mesh(&path, &layer.mesh)?;
     }
     Ok(())
 }

@@ -262,6 +262,38 @@ pub fn write_lod_chain_glb(lods: &[TriMesh], coverages: &[f32]) -> Vec<u8> {
     glb_container(doc.to_string().into_bytes(), bin)
 }
 
+/// Writes the translucent layers of a multi-layered voxel level (voxel paper
+/// §3) as one GLB: a node per layer, all in the scene, each with its own
+/// material whose base-colour alpha is the layer's opacity (eq. 4), alpha
+/// blended except for an opaque innermost layer. Layers come innermost first,
+/// which is also the order to draw them from outside.
+pub fn write_layers_glb(layers: &[crate::cut::Layer]) -> Vec<u8> {
+    let meshes: Vec<TriMesh> = layers.iter().map(|l| l.mesh.clone()).collect();
+    let (mut doc, bin) = glb_document(&meshes);
+    let mut materials = Vec::new();
+    let mut mesh_id = 0;
+    for (i, layer) in layers.iter().enumerate() {
+        let alpha = layer.alpha.clamp(0.0, 1.0);
+        let mut material = doc["materials"][0].clone();
+        material["pbrMetallicRoughness"]["baseColorFactor"] =
+            serde_json::json!([1.0, 1.0, 1.0, alpha]);
+        material["alphaMode"] = serde_json::json!(if alpha >= 1.0 { "OPAQUE" } else { "BLEND" });
+        material["name"] = serde_json::json!(format!("isodensity {:.3}", layer.isodensity));
+        doc["nodes"][i]["name"] = serde_json::json!(format!("layer{i}"));
+        if doc["nodes"][i].get("mesh").is_some() {
+            doc["meshes"][mesh_id]["primitives"][0]["material"] =
+                serde_json::json!(materials.len());
+            materials.push(material);
+            mesh_id += 1;
+        }
+    }
+    if !materials.is_empty() {
+        doc["materials"] = serde_json::json!(materials);
+    }
+    doc["scenes"][0]["nodes"] = serde_json::json!((0..layers.len()).collect::<Vec<_>>());
+    glb_container(doc.to_string().into_bytes(), bin)
+}
+
 /// The `MSFT_screencoverage` thresholds of an LOD chain.
 ///
 /// `error_bounds[i]` is LOD i's guaranteed (object-space) error bound, in

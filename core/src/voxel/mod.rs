@@ -8,11 +8,14 @@
 //! (Tables 1–3 pair coarser grids with wider filters).
 
 pub mod filter;
+pub mod layers;
 pub mod marching_cubes;
+pub mod pyramid;
 pub mod sampling;
 
 pub use filter::Filter;
 pub use marching_cubes::{DENSITY_ISO, marching_cubes};
+pub use pyramid::{Pyramid, Source};
 
 use crate::geom::{Topology, TriMesh, Volume};
 use crate::implicit::Implicit;
@@ -33,6 +36,35 @@ pub struct VoxelLevel {
     pub genus: i64,
 }
 
+/// The filtered density f = h ∗ S (eq. 1–2) of one level: a solid sampled with
+/// `resolution` voxels along its longest side (k³-supersampled), or a volume's
+/// S pooled over blocks of `factor`³ samples; filtered with support `radius` in
+/// the level's own voxels and padded so the surface closes.
+pub fn density(
+    source: Source,
+    resolution: usize,
+    factor: usize,
+    radius: f32,
+    filter: Filter,
+    progress: &Progress,
+) -> Result<Volume, Cancelled> {
+    let radius = radius.max(0.0);
+    match source {
+        Source::Solid(solid) => {
+            let h = solid.bounds().extent().max_element() / resolution.max(1) as f32;
+            let s =
+                sampling::sample_implicit(solid, resolution, radius * h, SUPERSAMPLE, progress)?;
+            filter::apply(filter, &s, radius * h, progress)
+        }
+        Source::Volume(volume, iso) => {
+            let s = sampling::pool(volume, iso, factor.max(1));
+            let h = s.spacing.min_element();
+            let pad = radius.ceil() as usize + 1;
+            filter::apply(filter, &sampling::pad(&s, pad), radius * h, progress)
+        }
+    }
+}
+
 /// Samples `solid` with `resolution` voxels along its longest side (the finest grid
 /// of this level, k³-supersampled), filters it with support `radius` voxels of that
 /// grid, and extracts the surface at density `iso` (§2; 0.5 in §4).
@@ -44,11 +76,14 @@ pub fn simplify_implicit(
     iso: f32,
     progress: &Progress,
 ) -> Result<VoxelLevel, Cancelled> {
-    let bounds = solid.bounds();
-    let h = bounds.extent().max_element() / resolution.max(1) as f32;
-    let world_radius = radius * h;
-    let s = sampling::sample_implicit(solid, resolution, world_radius, SUPERSAMPLE, progress)?;
-    let f = filter::apply(filter, &s, world_radius, progress)?;
+    let f = density(
+        Source::Solid(solid),
+        resolution,
+        1,
+        radius,
+        filter,
+        progress,
+    )?;
     let mesh = marching_cubes(&f, iso, progress)?;
     Ok(level(mesh, resolution, radius))
 }
@@ -63,11 +98,7 @@ pub fn simplify_volume(
     filter: Filter,
     progress: &Progress,
 ) -> Result<VoxelLevel, Cancelled> {
-    let h = volume.spacing.min_element();
-    let world_radius = radius.max(0.0) * h;
-    let pad = radius.max(0.0).ceil() as usize + 1;
-    let s = sampling::binarize(volume, iso, pad);
-    let f = filter::apply(filter, &s, world_radius, progress)?;
+    let f = density(Source::Volume(volume, iso), 0, 1, radius, filter, progress)?;
     let mesh = marching_cubes(&f, DENSITY_ISO, progress)?;
     Ok(level(
         mesh,
@@ -76,7 +107,8 @@ pub fn simplify_volume(
     ))
 }
 
-fn level(mesh: TriMesh, resolution: usize, radius: f32) -> VoxelLevel {
+/// A level from its extracted mesh: topology (components, genus) measured.
+pub fn level(mesh: TriMesh, resolution: usize, radius: f32) -> VoxelLevel {
     let topo = Topology::of(&mesh);
     VoxelLevel {
         resolution,

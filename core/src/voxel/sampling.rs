@@ -145,26 +145,55 @@ fn occupancy(solid: &dyn Implicit, p: Vec3, half_diagonal: f32, offsets: &[Vec3]
     }
 }
 
-/// The binary S of a scalar volume: 1 where the value is ≥ `iso`, else 0, padded by
-/// `pad` empty voxels on every side (so a filter of that voxel radius sees the
-/// object whole and the surface closes).
-pub fn binarize(volume: &Volume, iso: f32, pad: usize) -> Volume {
-    let [nx, ny, nz] = volume.dims;
+/// S of a volume at `factor` times its voxel size: the fraction of each block of
+/// factor³ samples at or above `iso` (the supersampled S of eq. 2).
+pub fn pool(volume: &Volume, iso: f32, factor: usize) -> Volume {
+    let dims = volume.dims.map(|d| d.div_ceil(factor));
+    let [nx, ny, _] = dims;
+    let mut data = vec![0.0f32; dims[0] * dims[1] * dims[2]];
+    data.par_chunks_mut(nx * ny)
+        .enumerate()
+        .for_each(|(z, slab)| {
+            for (j, out) in slab.iter_mut().enumerate() {
+                let (x, y) = (j % nx, j / nx);
+                let (mut inside, mut count) = (0usize, 0usize);
+                for sz in z * factor..((z + 1) * factor).min(volume.dims[2]) {
+                    for sy in y * factor..((y + 1) * factor).min(volume.dims[1]) {
+                        for sx in x * factor..((x + 1) * factor).min(volume.dims[0]) {
+                            inside += (volume.value(sx, sy, sz) >= iso) as usize;
+                            count += 1;
+                        }
+                    }
+                }
+                *out = inside as f32 / count.max(1) as f32;
+            }
+        });
+    let spacing = volume.spacing * factor as f32;
+    Volume {
+        dims,
+        spacing,
+        // Block centres.
+        origin: volume.origin + volume.spacing * 0.5 * (factor as f32 - 1.0),
+        data,
+    }
+}
+
+/// `v` with `pad` empty voxels on every side, so the filter and marching cubes
+/// see the object whole and the surface closes.
+pub fn pad(v: &Volume, pad: usize) -> Volume {
+    let [nx, ny, nz] = v.dims;
     let dims = [nx + 2 * pad, ny + 2 * pad, nz + 2 * pad];
     let mut data = vec![0.0f32; dims[0] * dims[1] * dims[2]];
     for z in 0..nz {
         for y in 0..ny {
-            let src = &volume.data[nx * (y + ny * z)..][..nx];
-            let dst = &mut data[pad + dims[0] * (y + pad + dims[1] * (z + pad))..][..nx];
-            for (d, &s) in dst.iter_mut().zip(src) {
-                *d = (s >= iso) as u8 as f32;
-            }
+            let src = &v.data[nx * (y + ny * z)..][..nx];
+            data[pad + dims[0] * (y + pad + dims[1] * (z + pad))..][..nx].copy_from_slice(src);
         }
     }
     Volume {
         dims,
-        spacing: volume.spacing,
-        origin: volume.origin - volume.spacing * pad as f32,
+        spacing: v.spacing,
+        origin: v.origin - v.spacing * pad as f32,
         data,
     }
 }
@@ -209,19 +238,24 @@ mod tests {
     }
 
     #[test]
-    fn binarize_thresholds_and_pads() {
+    fn pooling_by_one_thresholds_and_pads() {
         let vol = Volume {
             dims: [3, 2, 1],
             spacing: Vec3::new(1.0, 2.0, 3.0),
             origin: Vec3::ZERO,
             data: vec![0.1, 0.5, 0.9, 0.49, 2.0, -1.0],
         };
-        let b = binarize(&vol, 0.5, 2);
+        let b = pad(&pool(&vol, 0.5, 1), 2);
         assert_eq!(b.dims, [7, 6, 5]);
         assert_eq!(b.origin, Vec3::new(-2.0, -4.0, -6.0));
         assert_eq!(b.data.iter().sum::<f32>(), 3.0);
         assert_eq!(b.value(3, 2, 2), 1.0);
         assert_eq!(b.value(2, 2, 2), 0.0);
         assert_eq!(b.value(3, 3, 2), 1.0);
+        // Pooling by 2: block fractions, at block centres.
+        let p = pool(&vol, 0.5, 2);
+        assert_eq!(p.dims, [2, 1, 1]);
+        assert_eq!(p.data, [0.5, 1.0 / 2.0]);
+        assert_eq!(p.origin, Vec3::new(0.5, 1.0, 1.5));
     }
 }

@@ -1,0 +1,221 @@
+//! The multi-resolution pyramid of §2 (Tables 1–3) and its in-between
+//! resolutions (§5).
+//!
+//! Level k samples S at half the resolution of level k−1 and filters it with the
+//! same support radius in its own voxels, so the radius doubles in units of the
+//! finest grid while the resolution halves: each level removes the next octave of
+//! detail, and the genus falls. The filtered densities are kept, so the
+//! studio's filter-radius slider can ask for any point between two levels: §5
+//! interpolates the two adjacent buffers into an in-between one and extracts it.
+
+use glam::Vec3;
+use rayon::prelude::*;
+
+use super::{DENSITY_ISO, Filter, VoxelLevel, level, marching_cubes};
+use crate::geom::Volume;
+use crate::implicit::Implicit;
+use crate::progress::{Cancelled, Progress};
+
+/// What the pyramid samples.
+#[derive(Clone, Copy)]
+pub enum Source<'a> {
+    /// A solid (implicit function, or a mesh through its winding number).
+    Solid(&'a dyn Implicit),
+    /// A scalar volume and its iso value: S = (value ≥ iso) on its own grid.
+    Volume(&'a Volume, f32),
+}
+
+/// One level: the filtered density f = h ∗ S on its grid.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PyramidLevel {
+    pub density: Volume,
+    /// Voxels along the longest side.
+    pub resolution: usize,
+    /// Filter support in voxels of the finest level.
+    pub radius_finest: f32,
+}
+
+#[derive(Debug, Clone, PartialEq)]
+pub struct Pyramid {
+    /// Finest first.
+    pub levels: Vec<PyramidLevel>,
+}
+
+/// The coarsest grid the pyramid goes down to (Tables 1–3 end near 4–8).
+pub const MIN_RESOLUTION: usize = 8;
+
+impl Pyramid {
+    /// Builds the levels from `finest` voxels along the longest side down to
+    /// [`MIN_RESOLUTION`], each filtered with support `radius` of its own voxels.
+    /// A volume's finest level is its own grid (`finest` is ignored).
+    pub fn build(
+        source: Source,
+        finest: usize,
+        radius: f32,
+        filter: Filter,
+        progress: &Progress,
+    ) -> Result<Pyramid, Cancelled> {
+        let radius = radius.max(0.0);
+        let mut levels = Vec::new();
+        let finest = match source {
+            Source::Solid(_) => finest,
+            Source::Volume(v, _) => v.dims.into_iter().max().unwrap_or(0),
+        };
+        let mut factor = 1;
+        while finest / factor >= MIN_RESOLUTION || levels.is_empty() {
+            progress.check()?;
+            let resolution = finest / factor;
+            let density = super::density(source, resolution, factor, radius, filter, progress)?;
+            levels.push(PyramidLevel {
+                density,
+                resolution,
+                radius_finest: radius * factor as f32,
+            });
+            factor *= 2;
+        }
+        Ok(Pyramid { levels })
+    }
+
+    /// The iso-surface of level `i` (clamped to the pyramid).
+    pub fn level(&self, i: usize, progress: &Progress) -> Result<VoxelLevel, Cancelled> {
+        let l = &self.levels[i.min(self.levels.len() - 1)];
+        let mesh = marching_cubes(&l.density, DENSITY_ISO, progress)?;
+        Ok(level(mesh, l.resolution, l.radius_finest))
+    }
+
+    /// §5: the level at a continuous position `t` (0 = finest, 1 = the next,
+    /// ...): a grid of in-between resolution on which the two adjacent densities
+    /// are interpolated trilinearly and blended, then extracted.
+    pub fn in_between(&self, t: f32, progress: &Progress) -> Result<VoxelLevel, Cancelled> {
+        let last = self.levels.len() - 1;
+        let t = if t.is_finite() {
+            t.clamp(0.0, last as f32)
+        } else {
+            0.0
+        };
+        let i = (t.floor() as usize).min(last);
+        let f = t - i as f32;
+        if f <= 1e-4 || i == last {
+            return self.level(i, progress);
+        }
+        let (a, b) = (&self.levels[i], &self.levels[i + 1]);
+        // The coarser buffer reaches farther (its padding is wider).
+        let bounds = b.density.bounds().union(a.density.bounds());
+        let lerp = |x: f32, y: f32| x + (y - x) * f;
+        let spacing = a.density.spacing.lerp(b.density.spacing, f);
+        let dims = [0, 1, 2].map(|k| (bounds.extent()[k] / spacing[k]).ceil() as usize + 1);
+        let [nx, ny, _] = dims;
+        let mut data = vec![0.0f32; dims[0] * dims[1] * dims[2]];
+        data.par_chunks_mut(nx * ny)
+            .enumerate()
+            .for_each(|(z, slab)| {
+                for (j, v) in slab.iter_mut().enumerate() {
+                    let p = bounds.min
+                        + spacing * Vec3::new((j % nx) as f32, (j / nx) as f32, z as f32);
+                    *v = lerp(trilinear(&a.density, p), trilinear(&b.density, p));
+                }
+            });
+        let grid = Volume {
+            dims,
+            spacing,
+            origin: bounds.min,
+            data,
+        };
+        let mesh = marching_cubes(&grid, DENSITY_ISO, progress)?;
+        Ok(level(
+            mesh,
+            lerp(a.resolution as f32, b.resolution as f32).round() as usize,
+            lerp(a.radius_finest, b.radius_finest),
+        ))
+    }
+}
+
+/// Trilinear interpolation of `v` at world point `p`; 0 outside the grid.
+pub fn trilinear(v: &Volume, p: Vec3) -> f32 {
+    let g = (p - v.origin) / v.spacing;
+    let [nx, ny, nz] = v.dims;
+    if g.min_element() < 0.0
+        || g.x > (nx - 1) as f32
+        || g.y > (ny - 1) as f32
+        || g.z > (nz - 1) as f32
+    {
+        return 0.0;
+    }
+    let base = [g.x, g.y, g.z].map(|c| c.floor() as usize);
+    let b = [0, 1, 2].map(|k| base[k].min(v.dims[k].saturating_sub(2)));
+    let w = g - Vec3::new(b[0] as f32, b[1] as f32, b[2] as f32);
+    let mut sum = 0.0;
+    for corner in 0..8 {
+        let o = [corner & 1, (corner >> 1) & 1, (corner >> 2) & 1];
+        let weight = [0, 1, 2]
+            .map(|k| if o[k] == 1 { w[k] } else { 1.0 - w[k] })
+            .iter()
+            .product::<f32>();
+        if weight > 0.0 {
+            sum += weight * v.value(b[0] + o[0], b[1] + o[1], b[2] + o[2]);
+        }
+    }
+    sum
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::implicit::csg_part;
+
+    #[test]
+    fn levels_halve_and_in_between_levels_sit_between() {
+        let part = csg_part();
+        let p = Progress::new();
+        let pyr = Pyramid::build(Source::Solid(&part), 32, 2.0, Filter::Gaussian, &p).unwrap();
+        let res: Vec<usize> = pyr.levels.iter().map(|l| l.resolution).collect();
+        assert_eq!(res, [32, 16, 8]);
+        let radius: Vec<f32> = pyr.levels.iter().map(|l| l.radius_finest).collect();
+        assert_eq!(radius, [2.0, 4.0, 8.0]);
+        let (l0, l1) = (pyr.level(0, &p).unwrap(), pyr.level(1, &p).unwrap());
+        // At a level, §5's interpolation is that level.
+        assert_eq!(pyr.in_between(0.0, &p).unwrap(), l0);
+        let mid = pyr.in_between(0.5, &p).unwrap();
+        let (lo, hi) = (l1.mesh.triangles.len(), l0.mesh.triangles.len());
+        let n = mid.mesh.triangles.len();
+        assert!(lo < n && n < hi, "{lo} < {n} < {hi}");
+        assert_eq!(mid.resolution, 24);
+        let topo = crate::geom::Topology::of(&mid.mesh);
+        assert!(topo.is_closed() && topo.is_manifold());
+        assert!(mid.genus <= l0.genus && mid.genus >= l1.genus);
+    }
+
+    #[test]
+    fn volumes_pool_into_coarser_levels() {
+        let n = 32;
+        let data = (0..n * n * n)
+            .map(|i| {
+                let q = Vec3::new((i % n) as f32, (i / n % n) as f32, (i / (n * n)) as f32);
+                12.0 - q.distance(Vec3::splat(15.5))
+            })
+            .collect();
+        let v = Volume {
+            dims: [n; 3],
+            spacing: Vec3::ONE,
+            origin: Vec3::ZERO,
+            data,
+        };
+        let p = Progress::new();
+        let pyr = Pyramid::build(Source::Volume(&v, 0.0), 0, 1.0, Filter::Gaussian, &p).unwrap();
+        let res: Vec<usize> = pyr.levels.iter().map(|l| l.resolution).collect();
+        assert_eq!(res, [32, 16, 8]);
+        for i in 0..3 {
+            let l = pyr.level(i, &p).unwrap();
+            assert_eq!((l.components, l.genus), (1, 0), "level {i}");
+            // The sphere keeps its size: radius 12 from the centre.
+            let m = &l.mesh;
+            let mean = m
+                .positions
+                .iter()
+                .map(|q| q.distance(Vec3::splat(15.5)))
+                .sum::<f32>()
+                / m.positions.len() as f32;
+            assert!((mean - 12.0).abs() < 1.0, "level {i}: {mean}");
+        }
+    }
+}
