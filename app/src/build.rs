@@ -13,9 +13,12 @@ use lodstudio_core::implicit::Implicit;
 use lodstudio_core::io::Model;
 use lodstudio_core::progress::{Cancelled, Progress};
 use lodstudio_core::simplify::{Simplified, SimplifyError, SimplifyOptions, simplify};
-use lodstudio_core::voxel::{VoxelLevel, simplify_implicit, simplify_volume};
+use lodstudio_core::view::{Tolerance, View};
+use lodstudio_core::voxel::layers::{self, Layered};
+use lodstudio_core::voxel::{self, DENSITY_ISO, Source, VoxelLevel, density, marching_cubes};
 
 use crate::heatmap;
+use crate::live_cut::LiveCut;
 use crate::panels::voxel::{VolumeGrid, VoxelSettings};
 use crate::panels::{BuildParams, Method};
 use crate::viewport::Scene;
@@ -59,6 +62,9 @@ pub struct Built {
     /// Only for methods with per-triangle bounds (edge collapse).
     pub heat: Option<Heat>,
     pub rows: Vec<Row>,
+    /// Hierarchies cut live for the camera and the threshold (and layered
+    /// voxel levels, ordered back to front for the camera).
+    pub live: Option<LiveCut>,
 }
 
 impl Built {
@@ -238,6 +244,7 @@ pub fn run(
         scene,
         heat: Some(heat),
         rows,
+        live: None,
     }))
 }
 
@@ -254,16 +261,16 @@ pub fn run_voxel(
 ) -> Result<Result<Built, String>, Cancelled> {
     let settings = settings.for_implicit();
     let start = Instant::now();
-    let level = simplify_implicit(
-        solid,
+    let source = Source::Solid(solid);
+    let f = density(
+        source,
         settings.resolution,
+        1,
         settings.radius,
         settings.filter.filter(),
-        settings.iso,
         progress,
     )?;
-    let seconds = start.elapsed().as_secs_f32();
-    voxel_built(level, settings, seconds, progress)
+    voxel_built(f, settings.resolution, settings, start, progress)
 }
 
 /// Thresholds the volume `model` (whose grid is `grid`) into S, filters it and
@@ -286,28 +293,90 @@ pub fn run_voxel_volume(
     let settings = settings.for_volume(grid);
     let threshold = grid.threshold(settings.threshold);
     let start = Instant::now();
-    let level = simplify_volume(
-        volume,
-        threshold,
+    let source = Source::Volume(volume, threshold);
+    let f = density(
+        source,
+        0,
+        1,
         settings.radius,
         settings.filter.filter(),
         progress,
     )?;
-    let seconds = start.elapsed().as_secs_f32();
-    voxel_built(level, settings, seconds, progress)
+    let resolution = volume.dims.into_iter().max().unwrap_or(0);
+    voxel_built(f, resolution, settings, start, progress)
 }
 
-/// A finished voxel build, its scene and its inspector rows.
+/// Extracts a voxel build from the filtered density `f` (one surface at the
+/// iso-density, or the layers of §3 when δ asks for more than one) and
+/// prepares its scene and inspector rows.
 fn voxel_built(
-    level: VoxelLevel,
+    f: Volume,
+    resolution: usize,
     settings: VoxelSettings,
-    seconds: f32,
+    start: Instant,
     progress: &Progress,
 ) -> Result<Result<Built, String>, Cancelled> {
+    let plan = layers::plan(
+        &layers::profile(settings.filter.filter()),
+        settings.layers_error,
+    );
+    let iso = match settings.threshold {
+        Some(_) => DENSITY_ISO,
+        None => settings.iso,
+    };
+    let (level, layered) = if plan.isodensities.len() > 1 {
+        let layers = layers::extract(&f, &plan, progress)?;
+        // The level proper is the layer nearest the 0.5 isodensity.
+        let main = layers
+            .iter()
+            .min_by(|a, b| {
+                (a.isodensity - DENSITY_ISO)
+                    .abs()
+                    .total_cmp(&(b.isodensity - DENSITY_ISO).abs())
+            })
+            .map(|l| l.mesh.clone())
+            .unwrap_or_default();
+        let layered = Layered {
+            layers,
+            origin: f.origin,
+            spacing: f.spacing,
+        };
+        (
+            voxel::level(main, resolution, settings.radius),
+            Some(layered),
+        )
+    } else {
+        (
+            voxel::level(
+                marching_cubes(&f, iso, progress)?,
+                resolution,
+                settings.radius,
+            ),
+            None,
+        )
+    };
+    let seconds = start.elapsed().as_secs_f32();
     progress.check()?;
     progress.stage("preparing the view");
-    let scene = Arc::new(Scene::from_mesh(&level.mesh));
-    let rows = voxel_rows(&level, settings, seconds);
+    let layer_count = layered.as_ref().map_or(1, |l| l.layers.len());
+    let live = layered.map(|l| {
+        let view = View::orbit(f.bounds().center(), f.bounds().diagonal(), 0.6, 0.4);
+        LiveCut::new(Box::new(l), &view, Tolerance::Pixels(1.0))
+    });
+    let scene = match &live {
+        Some(live) => Arc::clone(live.scene()),
+        None => Arc::new(Scene::from_mesh(&level.mesh)),
+    };
+    let mut rows = voxel_rows(&level, settings, seconds);
+    rows.insert(
+        rows.len() - 1,
+        Row {
+            label: "layers",
+            value: layer_count.to_string(),
+            hint: "Translucent iso-surfaces of §3 (eq. 4-6): the fewest whose fit of the \
+                   density fall-off meets the layers error δ; drawn back to front.",
+        },
+    );
     Ok(Ok(Built {
         lod: Lod::Voxel(level),
         params: BuildParams::Voxel(settings),
@@ -315,6 +384,7 @@ fn voxel_built(
         scene,
         heat: None,
         rows,
+        live,
     }))
 }
 

@@ -4,6 +4,7 @@ pub mod build;
 pub mod export;
 pub mod heatmap;
 pub mod job;
+pub mod live_cut;
 pub mod panels;
 pub mod studio;
 pub mod viewport;

@@ -148,7 +148,9 @@ pub struct StudioApp {
     threshold_volume: Option<PathBuf>,
     build: Option<Job<Result<Built, String>>>,
     /// The last finished build of the model on screen.
-    result: Option<Arc<Built>>,
+    result: Option<Built>,
+    /// Time of the last frame, for the inspector.
+    frame_ms: f32,
     /// A build asked for but not started yet.
     build_at: Option<BuildRequest>,
     /// Why the last build request failed, shown under the Build button.
@@ -204,6 +206,7 @@ impl StudioApp {
             threshold_volume: None,
             build: None,
             result: None,
+            frame_ms: 0.0,
             build_at: None,
             build_note: None,
             view: View::Simplified,
@@ -269,7 +272,7 @@ impl StudioApp {
 
     /// The last finished build of the model on screen.
     pub fn result(&self) -> Option<&Built> {
-        self.result.as_deref()
+        self.result.as_ref()
     }
 
     /// Which version of the model the viewport shows.
@@ -315,9 +318,11 @@ impl StudioApp {
             .show(ui, |ui| self.inspector(ui));
         egui::CentralPanel::no_frame().show(ui, |ui| {
             self.view_bar(ui);
+            self.update_cut();
             self.sync_view();
             self.viewport.show(ui);
         });
+        self.frame_ms = ctx.input(|i| i.unstable_dt) * 1000.0;
 
         self.error_window(&ctx);
         drop_hint(&ctx);
@@ -622,7 +627,7 @@ impl StudioApp {
         match outcome {
             Ok(built) => {
                 self.info(format!("{}: {}", job.label(), built.report()));
-                self.result = Some(Arc::new(built));
+                self.result = Some(built);
                 self.view = View::Simplified;
             }
             Err(message) => self.build_failed(format!("{}: {message}", job.label())),
@@ -646,14 +651,24 @@ impl StudioApp {
         self.build_note = Some(message);
     }
 
+    /// Re-selects a live cut for the camera and the threshold (only when the
+    /// hierarchy says they change it).
+    fn update_cut(&mut self) {
+        if let Some(live) = self.result.as_mut().and_then(|b| b.live.as_mut()) {
+            let view = self.viewport.core_view();
+            live.update(&view, self.methods.threshold.tolerance());
+        }
+    }
+
     /// Shows the scene the view toggles ask for (uploads only on a change).
     fn sync_view(&mut self) {
         let Some(current) = &self.current else {
             return;
         };
         let scene = match (&self.result, self.view) {
-            (Some(built), View::Simplified) => match &built.heat {
-                Some(heat) if self.heat => &heat.scene,
+            (Some(built), View::Simplified) => match (&built.heat, &built.live) {
+                (Some(heat), _) if self.heat => &heat.scene,
+                (_, Some(live)) => live.scene(),
                 _ => &built.scene,
             },
             _ => &current.scene,
@@ -670,13 +685,18 @@ impl StudioApp {
         if self.export.is_some() {
             return;
         }
-        let Some(built) = self.result.clone() else {
+        let Some(built) = &self.result else {
             self.error("Nothing to export yet: build a LOD first".into());
             return;
         };
-        match Job::spawn("export", "Exporting".into(), ctx, move |_| {
-            Ok(write(built.mesh()))
-        }) {
+        // The mesh on screen: a live cut's triangles, or the built mesh.
+        let mesh = match &built.live {
+            Some(live) if !live.draw_set().mesh.triangles.is_empty() => {
+                live.draw_set().mesh.clone()
+            }
+            _ => built.mesh().clone(),
+        };
+        match Job::spawn("export", "Exporting".into(), ctx, move |_| Ok(write(&mesh))) {
             Ok(job) => self.export = Some(job),
             Err(e) => self.error(format!("cannot start the export: {e}")),
         }
@@ -850,6 +870,13 @@ impl StudioApp {
                 changed |= self.methods.voxel.ui(ui, volume.as_ref());
             }
         }
+        if self.result.as_ref().is_some_and(|b| b.live.is_some()) {
+            ui.add_space(4.0);
+            ui.label("Cut").on_hover_text(
+                "The built hierarchy is cut live for the camera: no rebuild needed.",
+            );
+            self.methods.threshold.ui(ui);
+        }
         ui.add_space(4.0);
         let auto = ui
             .checkbox(&mut self.methods.auto_rebuild, "Auto rebuild")
@@ -969,6 +996,33 @@ impl StudioApp {
                             ui.end_row();
                         }
                     });
+                if let Some(live) = &built.live {
+                    ui.separator();
+                    ui.label(egui::RichText::new("Cut").strong());
+                    let st = live.stats;
+                    let pixels = self.viewport.core_view().pixels(
+                        st.error_bound,
+                        self.viewport.target,
+                        0.0,
+                    );
+                    egui::Grid::new("cut grid").num_columns(2).striped(true).show(ui, |ui| {
+                        let diagonal = current.scene.bounds().diagonal().max(f32::MIN_POSITIVE);
+                        for (label, value, hint) in [
+                            ("cut triangles", st.triangles.to_string(), "Triangles on the current cut."),
+                            ("cut points", st.points.to_string(), "Point primitives (discs) on the current cut."),
+                            ("cut splats", st.splats.to_string(), "Textured domain primitives on the current cut."),
+                            ("layer triangles", st.layer_triangles.to_string(), "Triangles of the translucent voxel layers."),
+                            ("cut bound", format!("{} ({:.3} %)", build::length(st.error_bound), 100.0 * st.error_bound / diagonal), "The cut's guaranteed object-space error bound (max over its elements)."),
+                            ("bound at target", format!("{pixels:.2} px"), "The cut's bound projected at the camera's target distance."),
+                            ("cut time", format!("{:.2} ms", st.cut_ms), "Time of the last re-selection of the cut and its scene."),
+                            ("frame time", format!("{:.1} ms", self.frame_ms), "Time between the last two frames of the studio."),
+                        ] {
+                            ui.label(label).on_hover_text(hint);
+                            ui.label(value);
+                            ui.end_row();
+                        }
+                    });
+                }
                 if let Some(heat) = &built.heat
                     && self.heat
                     && self.view == View::Simplified

@@ -15,6 +15,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use bytemuck::{Pod, Zeroable};
 use egui_wgpu::{CallbackResources, CallbackTrait, ScreenDescriptor, wgpu};
 use glam::{Mat4, Vec3};
+use lodstudio_core::cut::{DrawSet, Layer};
 use lodstudio_core::geom::{Aabb, PointSet, TriMesh, Volume};
 use lodstudio_core::io::Model;
 
@@ -25,6 +26,8 @@ const CLAY: Vec3 = Vec3::new(0.62, 0.56, 0.50);
 /// Colour of points without colours and of volume bounding boxes (linear RGB).
 const POINT_COLOR: Vec3 = Vec3::new(0.45, 0.62, 0.80);
 const BOX_COLOR: Vec3 = Vec3::new(0.80, 0.80, 0.80);
+/// Colour of translucent voxel layers (linear RGB; alpha from eq. 4).
+const LAYER_COLOR: Vec3 = Vec3::new(0.70, 0.62, 0.52);
 /// Background of the viewport (linear RGB).
 const BACKGROUND: wgpu::Color = wgpu::Color {
     r: 0.045,
@@ -62,6 +65,33 @@ struct PointInstance {
     color: [f32; 3],
 }
 
+/// A vertex of a translucent surface (voxel layers, §3): colour with alpha.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+struct BlendVertex {
+    position: [f32; 3],
+    normal: [f32; 3],
+    color: [f32; 4],
+}
+
+/// A corner of a textured splat quad (AMG domain primitive); `uv` points into
+/// the scene's texture atlas, whose alpha holds the partition-of-unity weight Ψ.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+struct SplatVertex {
+    position: [f32; 3],
+    normal: [f32; 3],
+    uv: [f32; 2],
+}
+
+/// All splat textures packed into one RGBA8 image (shelf packing).
+#[derive(Debug, Clone, Default)]
+struct Atlas {
+    width: u32,
+    height: u32,
+    rgba: Vec<[u8; 4]>,
+}
+
 /// Per-frame uniforms; the layout matches `Frame` in the shader.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]
@@ -76,7 +106,8 @@ struct FrameUniforms {
 /// Geometry ready for upload, built once per model (on a worker thread if wanted).
 #[derive(Debug, Clone)]
 pub struct Scene {
-    geometry: Geometry,
+    /// Drawn in order: opaque parts first, then translucent ones.
+    parts: Vec<Geometry>,
     bounds: Aabb,
 }
 
@@ -88,6 +119,17 @@ enum Geometry {
     },
     Points(Vec<PointInstance>),
     Lines(Vec<MeshVertex>),
+    /// Alpha-blended triangles, drawn in index order (back to front).
+    Translucent {
+        vertices: Vec<BlendVertex>,
+        indices: Vec<u32>,
+    },
+    /// Textured quads blended by their Ψ (AMG paper §4).
+    Splats {
+        vertices: Vec<SplatVertex>,
+        indices: Vec<u32>,
+        atlas: Atlas,
+    },
 }
 
 impl Scene {
@@ -144,7 +186,7 @@ impl Scene {
             }
         };
         Scene {
-            geometry,
+            parts: vec![geometry],
             bounds: mesh.bounds(),
         }
     }
@@ -166,7 +208,7 @@ impl Scene {
             })
             .collect();
         Scene {
-            geometry: Geometry::Points(instances),
+            parts: vec![Geometry::Points(instances)],
             bounds: points.bounds(),
         }
     }
@@ -193,7 +235,7 @@ impl Scene {
             })
             .collect();
         Scene {
-            geometry: Geometry::Lines(lines),
+            parts: vec![Geometry::Lines(lines)],
             bounds: b,
         }
     }
@@ -212,13 +254,195 @@ impl Scene {
         self.bounds
     }
 
-    /// How many triangles the scene draws.
+    /// How many triangles the scene draws (opaque and translucent).
     pub fn triangle_count(&self) -> usize {
-        match &self.geometry {
-            Geometry::Triangles { indices, .. } => indices.len() / 3,
-            Geometry::Points(_) | Geometry::Lines(_) => 0,
+        self.parts
+            .iter()
+            .map(|g| match g {
+                Geometry::Triangles { indices, .. } | Geometry::Translucent { indices, .. } => {
+                    indices.len() / 3
+                }
+                Geometry::Points(_) | Geometry::Lines(_) | Geometry::Splats { .. } => 0,
+            })
+            .sum()
+    }
+
+    /// How many points and splats the scene draws.
+    pub fn point_and_splat_counts(&self) -> (usize, usize) {
+        self.parts.iter().fold((0, 0), |(p, q), g| match g {
+            Geometry::Points(points) => (p + points.len(), q),
+            Geometry::Splats { indices, .. } => (p, q + indices.len() / 6),
+            _ => (p, q),
+        })
+    }
+
+    /// Everything on a cut: its triangles (coloured per triangle when
+    /// `triangle_colors` is given), its points as discs of their radius, its
+    /// splats as textured quads, and its translucent layers in `layer_order`
+    /// ((layer, triangle), back to front; all layers in order when empty).
+    pub fn from_draw_set(
+        set: &DrawSet,
+        triangle_colors: Option<&[Vec3]>,
+        layer_order: &[[u32; 2]],
+    ) -> Scene {
+        let mut parts = Vec::new();
+        let mut bounds = Aabb::EMPTY;
+        if !set.mesh.triangles.is_empty() {
+            let scene = Scene::mesh(&set.mesh, triangle_colors);
+            bounds = bounds.union(scene.bounds);
+            parts.extend(scene.parts);
+        }
+        if !set.points.is_empty() {
+            let instances = set
+                .points
+                .iter()
+                .map(|p| {
+                    bounds = bounds.union(Aabb {
+                        min: p.center - Vec3::splat(p.radius),
+                        max: p.center + Vec3::splat(p.radius),
+                    });
+                    PointInstance {
+                        position: p.center.to_array(),
+                        radius: p.radius.max(0.0),
+                        normal: p.normal.normalize_or_zero().to_array(),
+                        color: p.color.to_array(),
+                    }
+                })
+                .collect();
+            parts.push(Geometry::Points(instances));
+        }
+        if !set.layers.is_empty() {
+            let (vertices, indices) = translucent_layers(&set.layers, layer_order);
+            for v in &vertices {
+                bounds = bounds.grow(Vec3::from_array(v.position));
+            }
+            parts.push(Geometry::Translucent { vertices, indices });
+        }
+        if !set.splats.is_empty() {
+            let splats = splat_quads(set);
+            for v in &splats.0 {
+                bounds = bounds.grow(Vec3::from_array(v.position));
+            }
+            parts.push(Geometry::Splats {
+                vertices: splats.0,
+                indices: splats.1,
+                atlas: splats.2,
+            });
+        }
+        Scene { parts, bounds }
+    }
+}
+
+/// The layers' triangles as one alpha-blended list in `order` (each layer's
+/// mesh keeps its vertices; normals are area-weighted).
+fn translucent_layers(layers: &[Layer], order: &[[u32; 2]]) -> (Vec<BlendVertex>, Vec<u32>) {
+    let mut vertices = Vec::new();
+    let mut base = Vec::with_capacity(layers.len());
+    for layer in layers {
+        base.push(vertices.len() as u32);
+        let normals = layer.mesh.vertex_normals();
+        let tint = LAYER_COLOR.extend(layer.alpha.clamp(0.0, 1.0));
+        vertices.extend(
+            layer
+                .mesh
+                .positions
+                .iter()
+                .zip(&normals)
+                .map(|(p, n)| BlendVertex {
+                    position: p.to_array(),
+                    normal: n.normalize_or_zero().to_array(),
+                    color: tint.to_array(),
+                }),
+        );
+    }
+    let all: Vec<[u32; 2]>;
+    let order = if order.is_empty() {
+        all = layers
+            .iter()
+            .enumerate()
+            .flat_map(|(l, m)| (0..m.mesh.triangles.len() as u32).map(move |t| [l as u32, t]))
+            .collect();
+        &all
+    } else {
+        order
+    };
+    let indices = order
+        .iter()
+        .filter_map(|&[l, t]| {
+            let layer = layers.get(l as usize)?;
+            let tri = layer.mesh.triangles.get(t as usize)?;
+            Some(tri.map(|v| base[l as usize] + v))
+        })
+        .flatten()
+        .collect();
+    (vertices, indices)
+}
+
+/// Splat quads and the atlas holding their textures (shelf packing, one texel
+/// of gutter so bilinear filtering never reads a neighbour).
+fn splat_quads(set: &DrawSet) -> (Vec<SplatVertex>, Vec<u32>, Atlas) {
+    const WIDTH: u32 = 2048;
+    let mut places = Vec::with_capacity(set.textures.len());
+    let (mut x, mut y, mut shelf) = (0u32, 0u32, 0u32);
+    for t in &set.textures {
+        let (w, h) = (t.width.clamp(1, WIDTH - 2) + 2, t.height.max(1) + 2);
+        if x + w > WIDTH {
+            x = 0;
+            y += shelf;
+            shelf = 0;
+        }
+        places.push((x + 1, y + 1));
+        x += w;
+        shelf = shelf.max(h);
+    }
+    let height = (y + shelf).max(1);
+    let mut atlas = Atlas {
+        width: WIDTH,
+        height,
+        rgba: vec![[0; 4]; (WIDTH * height) as usize],
+    };
+    for (t, &(px, py)) in set.textures.iter().zip(&places) {
+        let w = t.width.min(WIDTH - 2);
+        for row in 0..t.height {
+            for col in 0..w {
+                if let Some(texel) = t.rgba.get((row * t.width + col) as usize) {
+                    atlas.rgba[((py + row) * WIDTH + px + col) as usize] = *texel;
+                }
+            }
         }
     }
+    let mut vertices = Vec::with_capacity(set.splats.len() * 4);
+    let mut indices = Vec::with_capacity(set.splats.len() * 6);
+    for splat in &set.splats {
+        let Some((t, &(px, py))) = set
+            .textures
+            .get(splat.texture)
+            .zip(places.get(splat.texture))
+        else {
+            continue;
+        };
+        let (u0, v0) = (px as f32 / WIDTH as f32, py as f32 / height as f32);
+        let (u1, v1) = (
+            (px + t.width.min(WIDTH - 2)) as f32 / WIDTH as f32,
+            (py + t.height) as f32 / height as f32,
+        );
+        let base = vertices.len() as u32;
+        let [a, b] = splat.axes;
+        for (corner, uv) in [
+            (splat.center - a - b, [u0, v0]),
+            (splat.center + a - b, [u1, v0]),
+            (splat.center + a + b, [u1, v1]),
+            (splat.center - a + b, [u0, v1]),
+        ] {
+            vertices.push(SplatVertex {
+                position: corner.to_array(),
+                normal: splat.normal.to_array(),
+                uv,
+            });
+        }
+        indices.extend([base, base + 1, base + 2, base, base + 2, base + 3]);
+    }
+    (vertices, indices, atlas)
 }
 
 /// Per-corner normals: each corner averages (area-weighted) the normals of the
@@ -310,6 +534,8 @@ pub struct Viewport {
     has_wgpu: bool,
     /// Set by the GPU side when the scene does not fit in its buffers.
     too_large: Arc<AtomicBool>,
+    /// Pixel size of the last shown rect (what cuts are taken for).
+    size_px: [u32; 2],
 }
 
 impl Viewport {
@@ -329,6 +555,7 @@ impl Viewport {
             aspect: 1.0,
             has_wgpu: render_state.is_some(),
             too_large: Arc::new(AtomicBool::new(false)),
+            size_px: [1024, 768],
         }
     }
 
@@ -379,6 +606,21 @@ impl Viewport {
     /// Shows a volume's bounding box.
     pub fn set_volume(&mut self, volume: &Volume) {
         self.set_scene(Scene::from_volume(volume));
+    }
+
+    /// The camera as the core's cuts see it: eye, target, field of view and
+    /// the viewport's size in pixels; the light comes from the eye.
+    pub fn core_view(&self) -> lodstudio_core::view::View {
+        let eye = self.eye();
+        lodstudio_core::view::View {
+            eye,
+            target: self.target,
+            up: Vec3::Y,
+            fov_y: FOV_Y,
+            width: self.size_px[0],
+            height: self.size_px[1],
+            light_dir: (eye - self.target).normalize_or(Vec3::Z),
+        }
     }
 
     /// Centres the scene and moves the camera back until its bounding sphere fits.
@@ -469,6 +711,7 @@ impl Viewport {
             (rect.width() * ppp).round().max(1.0) as u32,
             (rect.height() * ppp).round().max(1.0) as u32,
         ];
+        self.size_px = size_px;
         let focal_px = size_px[1] as f32 * 0.5 / (FOV_Y * 0.5).tan();
         let uniforms = FrameUniforms {
             view_proj: self.view_proj(self.aspect).to_cols_array_2d(),
@@ -638,10 +881,28 @@ impl GrowBuffer {
 /// What is uploaded and how to draw it.
 #[derive(Clone, Copy)]
 enum Drawn {
-    Nothing,
     Triangles { indices: u32 },
     Points { instances: u32 },
     Lines { vertices: u32 },
+    Translucent { indices: u32 },
+    Splats { indices: u32 },
+}
+
+/// One uploaded part of the scene.
+struct PartGpu {
+    vertices: GrowBuffer,
+    indices: GrowBuffer,
+    drawn: Option<Drawn>,
+}
+
+impl PartGpu {
+    fn new() -> Self {
+        PartGpu {
+            vertices: GrowBuffer::new("viewport vertices", wgpu::BufferUsages::VERTEX),
+            indices: GrowBuffer::new("viewport indices", wgpu::BufferUsages::INDEX),
+            drawn: None,
+        }
+    }
 }
 
 /// The offscreen image the scene is rendered into, at the viewport's pixel size.
@@ -659,13 +920,20 @@ struct ViewportResources {
     mesh_pipeline: wgpu::RenderPipeline,
     line_pipeline: wgpu::RenderPipeline,
     point_pipeline: wgpu::RenderPipeline,
+    translucent_pipeline: wgpu::RenderPipeline,
+    /// AMG §4 on the GPU: a depth pre-pass locks the nearest surface, then
+    /// every splat adds colour·Ψ where it lies on that surface, so the
+    /// overlapping neighbours of a domain blend into their partition of unity.
+    splat_depth_pipeline: wgpu::RenderPipeline,
+    splat_pipeline: wgpu::RenderPipeline,
+    atlas_layout: wgpu::BindGroupLayout,
+    atlas_sampler: wgpu::Sampler,
+    atlas_bind_group: Option<wgpu::BindGroup>,
     blit_pipeline: wgpu::RenderPipeline,
     blit_layout: wgpu::BindGroupLayout,
     uniform_buffer: wgpu::Buffer,
     frame_bind_group: wgpu::BindGroup,
-    vertices: GrowBuffer,
-    indices: GrowBuffer,
-    drawn: Drawn,
+    parts: Vec<PartGpu>,
     uploaded_version: Option<u64>,
     sample_count: u32,
     target: Option<Target>,
@@ -681,7 +949,7 @@ impl ViewportResources {
         };
         let scene_module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("viewport scene"),
-            source: wgpu::ShaderSource::Wgsl(SCENE_SHADER.into()),
+            source: wgpu::ShaderSource::Wgsl(format!("{SCENE_SHADER}{BLEND_SHADER}").into()),
         });
         let blit_module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("viewport blit"),
@@ -738,14 +1006,80 @@ impl ViewportResources {
             step_mode: wgpu::VertexStepMode::Instance,
             attributes: &POINT_ATTRS,
         })];
+        let atlas_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("viewport splat atlas"),
+            entries: &[
+                wgpu::BindGroupLayoutEntry {
+                    binding: 0,
+                    visibility: wgpu::ShaderStages::FRAGMENT,
+                    ty: wgpu::BindingType::Texture {
+                        sample_type: wgpu::TextureSampleType::Float { filterable: true },
+                        view_dimension: wgpu::TextureViewDimension::D2,
+                        multisampled: false,
+                    },
+                    count: None,
+                },
+                wgpu::BindGroupLayoutEntry {
+                    binding: 1,
+                    visibility: wgpu::ShaderStages::FRAGMENT,
+                    ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
+                    count: None,
+                },
+            ],
+        });
+        let splat_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("viewport splats"),
+            bind_group_layouts: &[Some(&frame_layout), Some(&atlas_layout)],
+            immediate_size: 0,
+        });
+        let atlas_sampler = device.create_sampler(&wgpu::SamplerDescriptor {
+            label: Some("viewport splat atlas"),
+            mag_filter: wgpu::FilterMode::Linear,
+            min_filter: wgpu::FilterMode::Linear,
+            ..Default::default()
+        });
+        const BLEND_ATTRS: [wgpu::VertexAttribute; 3] =
+            wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3, 2 => Float32x4];
+        const SPLAT_ATTRS: [wgpu::VertexAttribute; 3] =
+            wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3, 2 => Float32x2];
+        let blend_buffers = [Some(wgpu::VertexBufferLayout {
+            array_stride: std::mem::size_of::<BlendVertex>() as u64,
+            step_mode: wgpu::VertexStepMode::Vertex,
+            attributes: &BLEND_ATTRS,
+        })];
+        let splat_buffers = [Some(wgpu::VertexBufferLayout {
+            array_stride: std::mem::size_of::<SplatVertex>() as u64,
+            step_mode: wgpu::VertexStepMode::Vertex,
+            attributes: &SPLAT_ATTRS,
+        })];
+        let additive = wgpu::BlendState {
+            color: wgpu::BlendComponent {
+                src_factor: wgpu::BlendFactor::One,
+                dst_factor: wgpu::BlendFactor::One,
+                operation: wgpu::BlendOperation::Add,
+            },
+            alpha: wgpu::BlendComponent::OVER,
+        };
+        // Opaque by default; `Some(blend)` draws without writing depth.
+        struct Style<'a> {
+            layout: &'a wgpu::PipelineLayout,
+            blend: Option<wgpu::BlendState>,
+            depth_bias: i32,
+        }
+        let opaque = Style {
+            layout: &scene_layout,
+            blend: None,
+            depth_bias: 0,
+        };
         let scene_pipeline = |label: &str,
                               vs: &str,
                               fs: &str,
                               buffers: &[Option<wgpu::VertexBufferLayout<'_>>],
-                              topology: wgpu::PrimitiveTopology| {
+                              topology: wgpu::PrimitiveTopology,
+                              style: &Style| {
             device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
                 label: Some(label),
-                layout: Some(&scene_layout),
+                layout: Some(style.layout),
                 vertex: wgpu::VertexState {
                     module: &scene_module,
                     entry_point: Some(vs),
@@ -758,10 +1092,14 @@ impl ViewportResources {
                 },
                 depth_stencil: Some(wgpu::DepthStencilState {
                     format: DEPTH_FORMAT,
-                    depth_write_enabled: Some(true),
+                    depth_write_enabled: Some(style.blend.is_none()),
                     depth_compare: Some(wgpu::CompareFunction::LessEqual),
                     stencil: wgpu::StencilState::default(),
-                    bias: wgpu::DepthBiasState::default(),
+                    bias: wgpu::DepthBiasState {
+                        constant: style.depth_bias,
+                        slope_scale: if style.depth_bias != 0 { 1.0 } else { 0.0 },
+                        clamp: 0.0,
+                    },
                 }),
                 multisample: wgpu::MultisampleState {
                     count: sample_count,
@@ -772,7 +1110,11 @@ impl ViewportResources {
                     module: &scene_module,
                     entry_point: Some(fs),
                     compilation_options: wgpu::PipelineCompilationOptions::default(),
-                    targets: &[Some(COLOR_FORMAT.into())],
+                    targets: &[Some(wgpu::ColorTargetState {
+                        format: COLOR_FORMAT,
+                        blend: style.blend,
+                        write_mask: wgpu::ColorWrites::ALL,
+                    })],
                 }),
                 multiview_mask: None,
                 cache: None,
@@ -784,6 +1126,7 @@ impl ViewportResources {
             "fs_mesh",
             &mesh_buffers,
             wgpu::PrimitiveTopology::TriangleList,
+            &opaque,
         );
         let line_pipeline = scene_pipeline(
             "viewport lines",
@@ -791,6 +1134,7 @@ impl ViewportResources {
             "fs_unlit",
             &mesh_buffers,
             wgpu::PrimitiveTopology::LineList,
+            &opaque,
         );
         let point_pipeline = scene_pipeline(
             "viewport points",
@@ -798,6 +1142,45 @@ impl ViewportResources {
             "fs_points",
             &point_buffers,
             wgpu::PrimitiveTopology::TriangleList,
+            &opaque,
+        );
+        let translucent_pipeline = scene_pipeline(
+            "viewport translucent layers",
+            "vs_blend",
+            "fs_blend",
+            &blend_buffers,
+            wgpu::PrimitiveTopology::TriangleList,
+            &Style {
+                layout: &scene_layout,
+                blend: Some(wgpu::BlendState::ALPHA_BLENDING),
+                depth_bias: 0,
+            },
+        );
+        // The pre-pass writes depth slightly behind the splats (a positive
+        // bias), so splats on the same surface pass the test and blend.
+        let splat_depth_pipeline = scene_pipeline(
+            "viewport splat depth",
+            "vs_splat",
+            "fs_splat_depth",
+            &splat_buffers,
+            wgpu::PrimitiveTopology::TriangleList,
+            &Style {
+                layout: &splat_layout,
+                blend: None,
+                depth_bias: 2000,
+            },
+        );
+        let splat_pipeline = scene_pipeline(
+            "viewport splats",
+            "vs_splat",
+            "fs_splat",
+            &splat_buffers,
+            wgpu::PrimitiveTopology::TriangleList,
+            &Style {
+                layout: &splat_layout,
+                blend: Some(additive),
+                depth_bias: 0,
+            },
         );
 
         let blit_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
@@ -850,13 +1233,17 @@ impl ViewportResources {
             mesh_pipeline,
             line_pipeline,
             point_pipeline,
+            translucent_pipeline,
+            splat_depth_pipeline,
+            splat_pipeline,
+            atlas_layout,
+            atlas_sampler,
+            atlas_bind_group: None,
             blit_pipeline,
             blit_layout,
             uniform_buffer,
             frame_bind_group,
-            vertices: GrowBuffer::new("viewport vertices", wgpu::BufferUsages::VERTEX),
-            indices: GrowBuffer::new("viewport indices", wgpu::BufferUsages::INDEX),
-            drawn: Drawn::Nothing,
+            parts: Vec::new(),
             uploaded_version: None,
             sample_count,
             target: None,
@@ -921,40 +1308,69 @@ impl ViewportResources {
         });
     }
 
-    /// Uploads the scene's geometry; false (and nothing drawn) when it does not fit.
+    /// Uploads the scene's geometry; false (and that part not drawn) when a
+    /// part does not fit.
     fn upload(
         &mut self,
         device: &wgpu::Device,
         queue: &wgpu::Queue,
         scene: Option<&Scene>,
     ) -> bool {
+        let parts = scene.map_or(&[][..], |s| &s.parts[..]);
+        while self.parts.len() < parts.len() {
+            self.parts.push(PartGpu::new());
+        }
         let count = |n: usize| u32::try_from(n).ok();
-        let drawn = match scene.map(|s| &s.geometry) {
-            None => Some(Drawn::Nothing),
-            Some(Geometry::Triangles { vertices, indices }) => count(indices.len())
-                .filter(|_| {
-                    self.vertices
-                        .write(device, queue, bytemuck::cast_slice(vertices))
-                        && self
-                            .indices
-                            .write(device, queue, bytemuck::cast_slice(indices))
+        let mut fits = true;
+        for (gpu, part) in self.parts.iter_mut().zip(parts) {
+            let PartGpu {
+                vertices: vb,
+                indices: ib,
+                ..
+            } = gpu;
+            let mut indexed = |vertices: &[u8], indices: &[u32]| {
+                count(indices.len()).filter(|_| {
+                    vb.write(device, queue, vertices)
+                        && ib.write(device, queue, bytemuck::cast_slice(indices))
                 })
-                .map(|indices| Drawn::Triangles { indices }),
-            Some(Geometry::Points(points)) => count(points.len())
-                .filter(|_| {
-                    self.vertices
-                        .write(device, queue, bytemuck::cast_slice(points))
-                })
-                .map(|instances| Drawn::Points { instances }),
-            Some(Geometry::Lines(lines)) => count(lines.len())
-                .filter(|_| {
-                    self.vertices
-                        .write(device, queue, bytemuck::cast_slice(lines))
-                })
-                .map(|vertices| Drawn::Lines { vertices }),
-        };
-        self.drawn = drawn.unwrap_or(Drawn::Nothing);
-        drawn.is_some()
+            };
+            gpu.drawn = match part {
+                Geometry::Triangles { vertices, indices } => {
+                    indexed(bytemuck::cast_slice(vertices), indices)
+                        .map(|indices| Drawn::Triangles { indices })
+                }
+                Geometry::Translucent { vertices, indices } => {
+                    indexed(bytemuck::cast_slice(vertices), indices)
+                        .map(|indices| Drawn::Translucent { indices })
+                }
+                Geometry::Splats {
+                    vertices,
+                    indices,
+                    atlas,
+                } => {
+                    self.atlas_bind_group = Some(upload_atlas(
+                        device,
+                        queue,
+                        &self.atlas_layout,
+                        &self.atlas_sampler,
+                        atlas,
+                    ));
+                    indexed(bytemuck::cast_slice(vertices), indices)
+                        .map(|indices| Drawn::Splats { indices })
+                }
+                Geometry::Points(points) => count(points.len())
+                    .filter(|_| vb.write(device, queue, bytemuck::cast_slice(points)))
+                    .map(|instances| Drawn::Points { instances }),
+                Geometry::Lines(lines) => count(lines.len())
+                    .filter(|_| vb.write(device, queue, bytemuck::cast_slice(lines)))
+                    .map(|vertices| Drawn::Lines { vertices }),
+            };
+            fits &= gpu.drawn.is_some();
+        }
+        for gpu in self.parts.iter_mut().skip(parts.len()) {
+            gpu.drawn = None;
+        }
+        fits
     }
 
     /// Clears the offscreen target and draws the uploaded geometry into it.
@@ -987,32 +1403,105 @@ impl ViewportResources {
             }),
             ..Default::default()
         });
-        let Some(vertices) = &self.vertices.buffer else {
-            return;
-        };
         pass.set_bind_group(0, &self.frame_bind_group, &[]);
-        match self.drawn {
-            Drawn::Nothing => {}
-            Drawn::Triangles { indices } => {
-                if let Some(index_buffer) = &self.indices.buffer {
-                    pass.set_pipeline(&self.mesh_pipeline);
-                    pass.set_vertex_buffer(0, vertices.slice(..));
-                    pass.set_index_buffer(index_buffer.slice(..), wgpu::IndexFormat::Uint32);
-                    pass.draw_indexed(0..indices, 0, 0..1);
+        for part in &self.parts {
+            let (Some(drawn), Some(vertices)) = (part.drawn, &part.vertices.buffer) else {
+                continue;
+            };
+            pass.set_vertex_buffer(0, vertices.slice(..));
+            let index_buffer = part.indices.buffer.as_ref();
+            let indexed = |pass: &mut wgpu::RenderPass, pipeline: &wgpu::RenderPipeline, n: u32| {
+                if let Some(ib) = index_buffer {
+                    pass.set_pipeline(pipeline);
+                    pass.set_index_buffer(ib.slice(..), wgpu::IndexFormat::Uint32);
+                    pass.draw_indexed(0..n, 0, 0..1);
                 }
-            }
-            Drawn::Points { instances } => {
-                pass.set_pipeline(&self.point_pipeline);
-                pass.set_vertex_buffer(0, vertices.slice(..));
-                pass.draw(0..6, 0..instances);
-            }
-            Drawn::Lines { vertices: n } => {
-                pass.set_pipeline(&self.line_pipeline);
-                pass.set_vertex_buffer(0, vertices.slice(..));
-                pass.draw(0..n, 0..1);
+            };
+            match drawn {
+                Drawn::Triangles { indices } => indexed(&mut pass, &self.mesh_pipeline, indices),
+                Drawn::Translucent { indices } => {
+                    indexed(&mut pass, &self.translucent_pipeline, indices)
+                }
+                Drawn::Splats { indices } => {
+                    if let Some(atlas) = &self.atlas_bind_group {
+                        pass.set_bind_group(1, atlas, &[]);
+                        indexed(&mut pass, &self.splat_depth_pipeline, indices);
+                        indexed(&mut pass, &self.splat_pipeline, indices);
+                    }
+                }
+                Drawn::Points { instances } => {
+                    pass.set_pipeline(&self.point_pipeline);
+                    pass.draw(0..6, 0..instances);
+                }
+                Drawn::Lines { vertices: n } => {
+                    pass.set_pipeline(&self.line_pipeline);
+                    pass.draw(0..n, 0..1);
+                }
             }
         }
     }
+}
+
+/// Uploads the splat atlas and binds it with its sampler.
+fn upload_atlas(
+    device: &wgpu::Device,
+    queue: &wgpu::Queue,
+    layout: &wgpu::BindGroupLayout,
+    sampler: &wgpu::Sampler,
+    atlas: &Atlas,
+) -> wgpu::BindGroup {
+    let max = device.limits().max_texture_dimension_2d;
+    let size = wgpu::Extent3d {
+        width: atlas.width.clamp(1, max),
+        height: atlas.height.clamp(1, max),
+        depth_or_array_layers: 1,
+    };
+    let texture = device.create_texture(&wgpu::TextureDescriptor {
+        label: Some("viewport splat atlas"),
+        size,
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format: wgpu::TextureFormat::Rgba8UnormSrgb,
+        usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+        view_formats: &[],
+    });
+    let rows = (atlas.rgba.len() as u32 / atlas.width.max(1)).min(size.height);
+    if rows > 0 && atlas.width <= max {
+        queue.write_texture(
+            wgpu::TexelCopyTextureInfo {
+                texture: &texture,
+                mip_level: 0,
+                origin: wgpu::Origin3d::ZERO,
+                aspect: wgpu::TextureAspect::All,
+            },
+            bytemuck::cast_slice(&atlas.rgba[..(rows * atlas.width) as usize]),
+            wgpu::TexelCopyBufferLayout {
+                offset: 0,
+                bytes_per_row: Some(4 * atlas.width),
+                rows_per_image: Some(rows),
+            },
+            wgpu::Extent3d {
+                height: rows,
+                ..size
+            },
+        );
+    }
+    let view = texture.create_view(&wgpu::TextureViewDescriptor::default());
+    device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: Some("viewport splat atlas"),
+        layout,
+        entries: &[
+            wgpu::BindGroupEntry {
+                binding: 0,
+                resource: wgpu::BindingResource::TextureView(&view),
+            },
+            wgpu::BindGroupEntry {
+                binding: 1,
+                resource: wgpu::BindingResource::Sampler(sampler),
+            },
+        ],
+    })
 }
 
 /// Whether `format` can be rendered with 4x MSAA on this device.
@@ -1126,6 +1615,85 @@ fn fs_points(in: PointOut) -> @location(0) vec4<f32> {
         n_dot_v = dot(normalize(in.normal), normalize(in.to_eye));
     }
     return vec4<f32>(shade(in.color, n_dot_v), 1.0);
+}
+"#;
+
+/// Translucent layers and textured splats.
+const BLEND_SHADER: &str = r#"
+struct BlendIn {
+    @location(0) position: vec3<f32>,
+    @location(1) normal: vec3<f32>,
+    @location(2) color: vec4<f32>,
+};
+struct BlendOut {
+    @builtin(position) clip: vec4<f32>,
+    @location(0) world: vec3<f32>,
+    @location(1) normal: vec3<f32>,
+    @location(2) color: vec4<f32>,
+};
+
+@vertex
+fn vs_blend(v: BlendIn) -> BlendOut {
+    var out: BlendOut;
+    out.clip = frame.view_proj * vec4<f32>(v.position, 1.0);
+    out.world = v.position;
+    out.normal = v.normal;
+    out.color = v.color;
+    return out;
+}
+
+@fragment
+fn fs_blend(in: BlendOut) -> @location(0) vec4<f32> {
+    let v = normalize(frame.eye.xyz - in.world);
+    var n_dot_v = 1.0;
+    if (dot(in.normal, in.normal) > 1e-12) {
+        n_dot_v = dot(normalize(in.normal), v);
+    }
+    return vec4<f32>(shade(in.color.rgb, n_dot_v), in.color.a);
+}
+
+@group(1) @binding(0) var atlas: texture_2d<f32>;
+@group(1) @binding(1) var atlas_sampler: sampler;
+
+struct SplatIn {
+    @location(0) position: vec3<f32>,
+    @location(1) normal: vec3<f32>,
+    @location(2) uv: vec2<f32>,
+};
+struct SplatOut {
+    @builtin(position) clip: vec4<f32>,
+    @location(0) uv: vec2<f32>,
+    @location(1) facing: f32,
+};
+
+@vertex
+fn vs_splat(v: SplatIn) -> SplatOut {
+    var out: SplatOut;
+    out.clip = frame.view_proj * vec4<f32>(v.position, 1.0);
+    out.uv = v.uv;
+    out.facing = dot(v.normal, frame.eye.xyz - v.position);
+    return out;
+}
+
+// Back-facing primitives are skipped (§4); only the core of a domain
+// (Ψ ≥ ½) locks the depth, and clears the background there.
+@fragment
+fn fs_splat_depth(in: SplatOut) -> @location(0) vec4<f32> {
+    let t = textureSample(atlas, atlas_sampler, in.uv);
+    if (t.a < 0.5 || in.facing < 0.0) {
+        discard;
+    }
+    return vec4<f32>(0.0, 0.0, 0.0, 1.0);
+}
+
+// Colour weighted by Ψ; the weights of overlapping domains sum to one.
+@fragment
+fn fs_splat(in: SplatOut) -> @location(0) vec4<f32> {
+    let t = textureSample(atlas, atlas_sampler, in.uv);
+    if (t.a <= 0.0 || in.facing < 0.0) {
+        discard;
+    }
+    return vec4<f32>(t.rgb * t.a, t.a);
 }
 "#;
 

@@ -766,17 +766,16 @@ fn voxel_method_closes_holes_as_the_filter_widens() {
 }
 
 #[test]
-fn voxel_on_a_mesh_file_explains_instead_of_building() {
-    let mut harness = studio(None);
+fn voxel_on_a_point_set_explains_instead_of_building() {
+    let mut harness = studio(Some("builtin:octahedron-points".into()));
     wait_for_load(&mut harness);
     harness
         .get_by_label("Voxel (low-pass + marching cubes)")
         .click();
     harness.run();
     assert!(!harness.state().is_building(), "nothing to build");
-    let message = "Voxel simplification samples an implicit solid (builtin:sphereflake or \
-                   builtin:csg-part) or thresholds a volume; this model is a triangle mesh, \
-                   which it cannot sample yet.";
+    let message = "Voxel simplification samples solids (meshes, implicit built-ins, volumes); \
+                   this model is a point set (16000 points) with no inside.";
     assert!(has_label(&harness, message), "the method section says why");
 
     // Asked anyway (the Build button is disabled): the same message, no result.

@@ -57,6 +57,9 @@ pub struct DrawSet {
     pub splats: Vec<Splat>,
     pub textures: Vec<Texture>,
     pub layers: Vec<Layer>,
+    /// The layers' triangles as (layer, triangle), back to front for the view
+    /// of the cut (voxel paper §3); empty draws them layer by layer.
+    pub layer_order: Vec<[u32; 2]>,
     /// The cut's error bound in object space (max over its primitives).
     pub error_bound: f32,
 }
@@ -75,10 +78,16 @@ impl DrawSet {
 }
 
 /// A built LOD hierarchy.
-pub trait Hierarchy: Send {
+pub trait Hierarchy: Send + Sync {
     /// Short name of the method, for logs and the inspector.
     fn method(&self) -> &'static str;
     /// The primitives to draw for `view` within `tolerance`. Hierarchies that
     /// adapt incrementally keep the previous cut and start from it.
     fn select(&mut self, view: &View, tolerance: Tolerance) -> DrawSet;
+    /// Equal keys for two views promise equal cuts at `tolerance`, so a caller
+    /// re-selecting every frame can skip the work; `None` (the default) when
+    /// any change of the view may change the cut.
+    fn view_key(&self, _view: &View, _tolerance: Tolerance) -> Option<u64> {
+        None
+    }
 }

@@ -11,6 +11,7 @@ use serde::{Deserialize, Serialize};
 
 use self::simplify::EdgeCollapseSettings;
 use self::voxel::{VolumeGrid, VoxelSettings};
+use crate::live_cut::Threshold;
 
 /// The LOD methods the studio can build.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
@@ -60,6 +61,8 @@ pub struct MethodSettings {
     pub auto_rebuild: bool,
     pub edge_collapse: EdgeCollapseSettings,
     pub voxel: VoxelSettings,
+    /// The error threshold of live cuts (hierarchies).
+    pub threshold: Threshold,
 }
 
 /// What one build of one method depends on besides its input: a result built
@@ -86,6 +89,7 @@ impl Default for MethodSettings {
             auto_rebuild: true,
             edge_collapse: EdgeCollapseSettings::default(),
             voxel: VoxelSettings::default(),
+            threshold: Threshold::default(),
         }
     }
 }
@@ -97,6 +101,7 @@ impl MethodSettings {
         let mut settings: MethodSettings = serde_json::from_str(json).ok()?;
         settings.edge_collapse = settings.edge_collapse.sanitized();
         settings.voxel = settings.voxel.sanitized();
+        settings.threshold = settings.threshold.sanitized();
         Some(settings)
     }
 

@@ -13,6 +13,8 @@ const RESOLUTION_RANGE: RangeInclusive<usize> = 16..=256;
 /// Filter support radius R, in voxels of the sampling grid.
 const RADIUS_RANGE: RangeInclusive<f32> = 0.0..=16.0;
 const ISO_RANGE: RangeInclusive<f32> = 0.05..=0.95;
+/// Layers error δ (§3, eq. 6): 0.5 and above is one surface.
+const LAYERS_RANGE: RangeInclusive<f32> = 0.01..=0.5;
 
 const FILTER_HINT: &str = "The low-pass filter h of the filtered density f = h * S \
     (voxel paper §2, eq. 1): it removes the high frequencies (small features, holes, \
@@ -37,6 +39,11 @@ const THRESHOLD_HINT: &str = "Samples of the volume at or above this value (in t
 const GRID_HINT: &str = "A volume keeps its own grid: S is its samples, and the filter \
     radius counts voxels of its smallest spacing. The extracted surface is the density \
     0.5 of the filtered S.";
+const LAYERS_HINT: &str = "Multi-layered marching cubes (§3): instead of one surface, \
+    several iso-surfaces of the filtered density, increasingly translucent outwards \
+    (eq. 4), drawn back to front. The layers error δ bounds the mean density error of \
+    their piecewise-constant fit of the density fall-off (eq. 6): smaller gives more \
+    layers and smoother edges. 0.5 is a single opaque surface.";
 const ISO_HINT: &str = "The iso-density at which marching cubes extracts the surface \
     f = iso, on the normalised density scale 0 (empty) to 1 (solid). The paper uses \
     0.5; lower grows the object, higher shrinks it.";
@@ -83,6 +90,9 @@ pub struct VoxelSettings {
     /// resets it to `None` whenever a different volume opens.
     #[serde(skip)]
     pub threshold: Option<f32>,
+    /// Multi-layered surfaces (§3): the mean density error δ of eq. 6 the
+    /// layers may leave; 0.5 or more gives the single surface.
+    pub layers_error: f32,
 }
 
 /// What the voxel controls and a volume build need to know of a volume,
@@ -125,6 +135,7 @@ impl Default for VoxelSettings {
             radius: 2.0,
             iso: DENSITY_ISO,
             threshold: None,
+            layers_error: 0.5,
         }
     }
 }
@@ -150,6 +161,7 @@ impl VoxelSettings {
             radius: clamp_or(self.radius, RADIUS_RANGE, d.radius),
             iso: clamp_or(self.iso, ISO_RANGE, d.iso),
             threshold: self.threshold.filter(|t| !t.is_nan()),
+            layers_error: clamp_or(self.layers_error, LAYERS_RANGE, d.layers_error),
         }
     }
 
@@ -214,6 +226,12 @@ impl VoxelSettings {
             ui.add(egui::Slider::new(&mut self.iso, ISO_RANGE).text("iso"))
                 .on_hover_text(ISO_HINT);
         }
+        ui.add(
+            egui::Slider::new(&mut self.layers_error, LAYERS_RANGE)
+                .logarithmic(true)
+                .text("layers error δ"),
+        )
+        .on_hover_text(LAYERS_HINT);
         *self != before
     }
 }
@@ -230,8 +248,10 @@ mod tests {
             radius: f32::NAN,
             iso: 3.0,
             threshold: Some(f32::NAN),
+            layers_error: 7.0,
         }
         .sanitized();
+        assert_eq!(odd.layers_error, 0.5);
         assert_eq!(odd.threshold, None);
         assert_eq!(odd.filter.filter(), Filter::Cone);
         assert_eq!(odd.resolution, 16);

@@ -16,10 +16,10 @@
 use glam::Vec3;
 
 use super::{Filter, filter, marching_cubes};
-use crate::cut::Layer;
+use crate::cut::{DrawSet, Hierarchy, Layer};
 use crate::geom::Volume;
 use crate::progress::{Cancelled, Progress};
-use crate::view::View;
+use crate::view::{Tolerance, View};
 
 /// Samples of the profile per filter radius.
 const PROFILE_STEPS: usize = 16;
@@ -161,6 +161,38 @@ pub fn back_to_front(layers: &[Layer], origin: Vec3, spacing: Vec3, view: &View)
         items.sort_by_key(|(s, _)| *s);
     }
     items.into_iter().map(|(_, id)| id).collect()
+}
+
+/// A multi-layered level on its volume grid: the hierarchy the studio shows,
+/// re-ordered back to front for every view.
+#[derive(Debug, Clone)]
+pub struct Layered {
+    pub layers: Vec<Layer>,
+    pub origin: Vec3,
+    pub spacing: Vec3,
+}
+
+impl Hierarchy for Layered {
+    fn method(&self) -> &'static str {
+        "voxel layers"
+    }
+
+    /// The layers are one level: the tolerance does not change them, the view
+    /// orders them.
+    fn select(&mut self, view: &View, _tolerance: Tolerance) -> DrawSet {
+        DrawSet {
+            layer_order: back_to_front(&self.layers, self.origin, self.spacing, view),
+            layers: self.layers.clone(),
+            ..Default::default()
+        }
+    }
+
+    /// The order changes only with the slicing axis and its direction.
+    fn view_key(&self, view: &View, _tolerance: Tolerance) -> Option<u64> {
+        let f = view.forward();
+        let axis = f.abs().max_position();
+        Some(2 * axis as u64 + u64::from(f[axis] > 0.0))
+    }
 }
 
 #[cfg(test)]

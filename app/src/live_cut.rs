@@ -1,0 +1,198 @@
+//! A built hierarchy shown live: the studio asks for its cut every frame with
+//! the viewport's camera and the error threshold, and the cut is re-selected
+//! only when the hierarchy says the view or the threshold changes it.
+
+use std::sync::Arc;
+use std::time::Instant;
+
+use lodstudio_core::cut::{DrawSet, Hierarchy};
+use lodstudio_core::view::{Tolerance, View};
+use serde::{Deserialize, Serialize};
+
+use crate::viewport::Scene;
+
+/// The error threshold of a cut, as the slider sets it.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct Threshold {
+    /// Screen space (pixels) rather than object space (% of the diagonal).
+    pub in_pixels: bool,
+    pub percent: f32,
+    pub pixels: f32,
+}
+
+impl Default for Threshold {
+    fn default() -> Self {
+        Threshold {
+            in_pixels: true,
+            percent: 1.0,
+            pixels: 2.0,
+        }
+    }
+}
+
+impl Threshold {
+    pub fn tolerance(&self) -> Tolerance {
+        if self.in_pixels {
+            Tolerance::Pixels(self.pixels)
+        } else {
+            Tolerance::Relative(self.percent / 100.0)
+        }
+    }
+
+    /// Values out of range (an older or hand-edited settings file) replaced.
+    pub fn sanitized(self) -> Self {
+        let d = Threshold::default();
+        let clamp = |v: f32, lo: f32, hi: f32, fallback: f32| {
+            if v.is_finite() {
+                v.clamp(lo, hi)
+            } else {
+                fallback
+            }
+        };
+        Threshold {
+            in_pixels: self.in_pixels,
+            percent: clamp(self.percent, 0.0, 50.0, d.percent),
+            pixels: clamp(self.pixels, 0.0, 200.0, d.pixels),
+        }
+    }
+
+    /// The slider and its unit switch; true when the threshold changed.
+    pub fn ui(&mut self, ui: &mut egui::Ui) -> bool {
+        let before = *self;
+        ui.horizontal(|ui| {
+            ui.selectable_value(&mut self.in_pixels, true, "pixels")
+                .on_hover_text("Screen-space error: each element's bound, projected through the camera (conservatively, by its bounding sphere), stays within this many pixels.");
+            ui.selectable_value(&mut self.in_pixels, false, "% of diagonal")
+                .on_hover_text("Object-space error: each element's guaranteed bound stays within this fraction of the bounding-box diagonal.");
+        });
+        let slider = if self.in_pixels {
+            egui::Slider::new(&mut self.pixels, 0.0..=64.0)
+                .logarithmic(true)
+                .suffix(" px")
+                .text("error threshold")
+        } else {
+            egui::Slider::new(&mut self.percent, 0.0..=20.0)
+                .logarithmic(true)
+                .suffix(" %")
+                .text("error threshold")
+        };
+        ui.add(slider).on_hover_text(
+            "Drag to change the cut live: coarser elements are drawn wherever their error bound stays within the threshold.",
+        );
+        *self != before
+    }
+}
+
+/// What the last cut drew and what it cost.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct CutStats {
+    pub triangles: usize,
+    pub points: usize,
+    pub splats: usize,
+    pub layer_triangles: usize,
+    /// Object-space bound of the cut.
+    pub error_bound: f32,
+    /// Time of the last `select` and scene preparation.
+    pub cut_ms: f32,
+    /// Cuts taken since the build.
+    pub cuts: u64,
+}
+
+/// A hierarchy and its current cut.
+pub struct LiveCut {
+    hierarchy: Box<dyn Hierarchy>,
+    last: Option<(Option<u64>, View, Tolerance)>,
+    scene: Arc<Scene>,
+    draw: DrawSet,
+    pub stats: CutStats,
+}
+
+impl LiveCut {
+    pub fn new(hierarchy: Box<dyn Hierarchy>, view: &View, tolerance: Tolerance) -> LiveCut {
+        let mut live = LiveCut {
+            hierarchy,
+            last: None,
+            scene: Arc::new(Scene::from_draw_set(&DrawSet::default(), None, &[])),
+            draw: DrawSet::default(),
+            stats: CutStats::default(),
+        };
+        live.update(view, tolerance);
+        live
+    }
+
+    pub fn method(&self) -> &'static str {
+        self.hierarchy.method()
+    }
+
+    /// Re-selects the cut when the view or the tolerance may change it; true
+    /// when the scene changed.
+    pub fn update(&mut self, view: &View, tolerance: Tolerance) -> bool {
+        let key = self.hierarchy.view_key(view, tolerance);
+        if let Some((last_key, last_view, last_tolerance)) = &self.last
+            && *last_tolerance == tolerance
+            && (key.is_some() && key == *last_key || *last_view == *view)
+        {
+            return false;
+        }
+        let start = Instant::now();
+        self.draw = self.hierarchy.select(view, tolerance);
+        self.scene = Arc::new(Scene::from_draw_set(
+            &self.draw,
+            None,
+            &self.draw.layer_order,
+        ));
+        let d = &self.draw;
+        self.stats = CutStats {
+            triangles: d.mesh.triangles.len(),
+            points: d.points.len(),
+            splats: d.splats.len(),
+            layer_triangles: d.layers.iter().map(|l| l.mesh.triangles.len()).sum(),
+            error_bound: d.error_bound,
+            cut_ms: start.elapsed().as_secs_f32() * 1000.0,
+            cuts: self.stats.cuts + 1,
+        };
+        self.last = Some((key, *view, tolerance));
+        true
+    }
+
+    pub fn scene(&self) -> &Arc<Scene> {
+        &self.scene
+    }
+
+    /// The primitives of the current cut (for export and inspection).
+    pub fn draw_set(&self) -> &DrawSet {
+        &self.draw
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use lodstudio_core::voxel::layers::Layered;
+
+    #[test]
+    fn layered_cuts_are_reselected_only_when_the_slicing_direction_changes() {
+        let mesh = lodstudio_core::builtins::torus(1.0, 0.3, 16, 8);
+        let layer = |alpha| lodstudio_core::cut::Layer {
+            mesh: mesh.clone(),
+            alpha,
+            isodensity: alpha,
+        };
+        let h = Layered {
+            layers: vec![layer(1.0), layer(0.5)],
+            origin: glam::Vec3::splat(-2.0),
+            spacing: glam::Vec3::splat(0.1),
+        };
+        let tol = Threshold::default().tolerance();
+        let view = View::orbit(glam::Vec3::ZERO, 4.0, 0.1, 0.1);
+        let mut live = LiveCut::new(Box::new(h), &view, tol);
+        assert_eq!(live.stats.layer_triangles, 2 * mesh.triangles.len());
+        assert_eq!(live.scene().triangle_count(), 2 * mesh.triangles.len());
+        // A small turn keeps the slicing axis: nothing to do.
+        assert!(!live.update(&View::orbit(glam::Vec3::ZERO, 4.0, 0.15, 0.1), tol));
+        // Looking from the side flips to another axis.
+        assert!(live.update(&View::orbit(glam::Vec3::ZERO, 4.0, 1.5, 0.1), tol));
+        assert_eq!(live.stats.cuts, 2);
+    }
+}
