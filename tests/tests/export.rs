@@ -276,3 +276,70 @@ fn bad_input_exits_2_and_loses_nothing() {
         report["lods"][0]["triangles"].as_u64().unwrap()
     );
 }
+
+/// `.gltf` output: the JSON references its buffer in OUT.bin, and a loader
+/// reads LOD0 back through it.
+#[test]
+fn gltf_with_a_separate_buffer_round_trips() {
+    let out = temp("torus.gltf");
+    let _ = std::fs::remove_file(out.with_extension("bin"));
+    let report = export_json("builtin:torus", "1%,4%", &out, &[]);
+    let doc: Value = serde_json::from_slice(&std::fs::read(&out).unwrap()).unwrap();
+    assert_eq!(doc["buffers"][0]["uri"], "torus.bin");
+    let bin = std::fs::read(out.with_extension("bin")).unwrap();
+    assert_eq!(
+        doc["buffers"][0]["byteLength"].as_u64(),
+        Some(bin.len() as u64)
+    );
+    assert_eq!(
+        doc["nodes"][0]["extensions"]["MSFT_lod"]["ids"],
+        serde_json::json!([1])
+    );
+    let back = lodstudio_json(&["info", out.to_str().unwrap()]);
+    assert_eq!(back["triangles"], report["lods"][0]["triangles"]);
+}
+
+/// A folder in, one GLB per model out with a summary; a bad file is reported
+/// (exit 2) and the good ones are still written.
+#[test]
+fn folder_batch_writes_one_file_per_model_and_reports_failures() {
+    let dir = temp("batch-in");
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    for name in ["bones.off", "fandisk.obj"] {
+        std::fs::copy(shared_model(name), dir.join(name)).unwrap();
+    }
+    std::fs::write(dir.join("broken.obj"), "v 0 0 0\nf 1 2 3\n").unwrap();
+    std::fs::write(dir.join("notes.txt"), "not a model").unwrap();
+    let out = temp("batch-out");
+    let _ = std::fs::remove_dir_all(&out);
+    let (d, o) = (dir.to_str().unwrap(), out.to_str().unwrap());
+    let run = lodstudio(&[
+        "export", d, "--method", "simplify", "--lods", "2%", "-o", o, "--json",
+    ]);
+    assert_eq!(run.status.code(), Some(2));
+    let j: Value = serde_json::from_slice(&run.stdout).expect("one JSON object");
+    let models = j["models"].as_array().unwrap();
+    assert_eq!(models.len(), 2);
+    assert_eq!(j["failed"].as_array().unwrap().len(), 1);
+    assert!(
+        j["failed"][0]["file"]
+            .as_str()
+            .unwrap()
+            .ends_with("broken.obj")
+    );
+    for name in ["bones.glb", "fandisk.glb"] {
+        let back = lodstudio_json(&["info", out.join(name).to_str().unwrap()]);
+        assert!(back["triangles"].as_u64().unwrap() > 0, "{name}");
+    }
+    // Existing outputs are kept without --force; a glob picks the OFF file only.
+    let pattern = format!("{d}/*.off");
+    let again = lodstudio(&[
+        "export", &pattern, "--method", "simplify", "--lods", "2%", "-o", o,
+    ]);
+    assert_eq!(again.status.code(), Some(2), "bones.glb exists");
+    let forced = lodstudio_json(&[
+        "export", &pattern, "--method", "simplify", "--lods", "2%", "-o", o, "--force",
+    ]);
+    assert_eq!(forced["models"].as_array().unwrap().len(), 1);
+}

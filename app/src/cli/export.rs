@@ -1,6 +1,9 @@
 //! `export`: LOD chains as glTF (MSFT_lod + MSFT_screencoverage).
 
+use std::path::Path;
+
 use super::*;
+use lodstudio_core::io::gltf::{lod_screen_coverages, write_lod_chain_glb};
 use lodstudio_core::simplify;
 
 /// The LOD methods `export` can use (the others are not built yet).
@@ -13,7 +16,8 @@ enum ExportMethod {
 
 #[derive(Args, Debug)]
 pub struct ExportArgs {
-    /// A mesh file, or builtin:NAME.
+    /// A mesh file, builtin:NAME, a folder (every model file in it) or a glob
+    /// pattern such as 'models/*.obj' (one output per model, in the folder -o).
     file: PathBuf,
     /// How the LODs are built.
     #[arg(long, value_enum)]
@@ -24,7 +28,8 @@ pub struct ExportArgs {
     /// ratio). LODs are written in decreasing quality, whatever the order here.
     #[arg(long, value_name = "LIST", allow_hyphen_values = true)]
     lods: String,
-    /// Output GLB.
+    /// Output .glb, or .gltf (with its buffer in OUT.bin beside it); for a
+    /// folder or glob input, the folder that receives one MODEL.glb each.
     #[arg(short = 'o', long = "output", value_name = "OUT.glb")]
     output: PathBuf,
     /// Pixel tolerance for the MSFT_screencoverage thresholds: a LOD is shown
@@ -94,18 +99,6 @@ fn parse_lods(list: &str) -> Result<Vec<(String, LodTolerance)>, CliError> {
 }
 
 pub fn run(args: ExportArgs) -> Result<(), CliError> {
-    use lodstudio_core::io::gltf::{lod_screen_coverages, write_lod_chain_glb};
-    let is_glb = args
-        .output
-        .extension()
-        .is_some_and(|e| e.eq_ignore_ascii_case("glb"));
-    if !is_glb {
-        return Err(CliError::BadInput(format!(
-            "{}: export writes GLB; name the output *.glb",
-            args.output.display()
-        )));
-    }
-    check_output(&args.output, args.report.force)?;
     let items = parse_lods(&args.lods)?;
     for (name, v) in [
         ("--pixels", args.pixels),
@@ -118,14 +111,153 @@ pub fn run(args: ExportArgs) -> Result<(), CliError> {
             )));
         }
     }
+    if let Some(files) = batch_inputs(&args.file)? {
+        return batch(&args, &items, &files);
+    }
+    let format = output_format(&args.output).ok_or_else(|| {
+        CliError::BadInput(format!(
+            "{}: export writes glTF: name the output .glb or .gltf",
+            args.output.display()
+        ))
+    })?;
+    check_output(&args.output, args.report.force)?;
+    if format == Format::Gltf {
+        check_output(&args.output.with_extension("bin"), args.report.force)?;
+    }
+    let j = export_one(&args, &items, &args.file, &args.output)?;
+    if args.report.json {
+        println!("{j}");
+    } else {
+        print_summary(&j);
+    }
+    Ok(())
+}
+
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Format {
+    Glb,
+    Gltf,
+}
+
+fn output_format(path: &Path) -> Option<Format> {
+    match path.extension()?.to_str()?.to_ascii_lowercase().as_str() {
+        "glb" => Some(Format::Glb),
+        "gltf" => Some(Format::Gltf),
+        _ => None,
+    }
+}
+
+/// The model files a folder or glob names; `None` for one file or built-in.
+fn batch_inputs(file: &Path) -> Result<Option<Vec<PathBuf>>, CliError> {
+    let text = file.to_string_lossy();
+    let mut files: Vec<PathBuf> = if file.is_dir() {
+        let entries = std::fs::read_dir(file)
+            .map_err(|e| CliError::BadInput(format!("{}: cannot list: {e}", file.display())))?;
+        entries
+            .filter_map(|e| e.ok().map(|e| e.path()))
+            .filter(|p| p.is_file() && io::is_model_path(p))
+            .collect()
+    } else if !file.exists() && text.contains(['*', '?', '[']) {
+        let paths = glob::glob(&text)
+            .map_err(|e| CliError::BadInput(format!("{text}: bad pattern: {e}")))?;
+        paths
+            .filter_map(Result::ok)
+            .filter(|p| p.is_file())
+            .collect()
+    } else {
+        return Ok(None);
+    };
+    if files.is_empty() {
+        return Err(CliError::BadInput(format!("{text}: no model files there")));
+    }
+    files.sort();
+    Ok(Some(files))
+}
+
+/// One export per model into the folder `-o`, a progress bar on stderr, and a
+/// summary; failures are reported and the others still written.
+fn batch(
+    args: &ExportArgs,
+    items: &[(String, LodTolerance)],
+    files: &[PathBuf],
+) -> Result<(), CliError> {
+    let dir = &args.output;
+    std::fs::create_dir_all(dir)
+        .map_err(|e| CliError::BadInput(format!("{}: cannot create: {e}", dir.display())))?;
+    let start = std::time::Instant::now();
+    let bar = indicatif::ProgressBar::new(files.len() as u64).with_style(
+        indicatif::ProgressStyle::with_template("{bar:30} {pos}/{len} {elapsed} {msg}")
+            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+    );
+    let (mut done, mut failed) = (Vec::new(), Vec::new());
+    for file in files {
+        bar.set_message(
+            file.file_name()
+                .unwrap_or_default()
+                .to_string_lossy()
+                .into_owned(),
+        );
+        let stem = file.file_stem().unwrap_or_default().to_string_lossy();
+        let stem = stem.strip_suffix(".ply").unwrap_or(&stem);
+        let out = dir.join(format!("{stem}.glb"));
+        let result = check_output(&out, args.report.force)
+            .and_then(|()| export_one(args, items, file, &out));
+        match result {
+            Ok(j) => done.push(j),
+            Err(e) => failed.push(serde_json::json!({
+                "file": file.display().to_string(),
+                "error": e.message(),
+            })),
+        }
+        bar.inc(1);
+    }
+    bar.finish_and_clear();
+    let seconds = start.elapsed().as_secs_f64();
+    if args.report.json {
+        println!(
+            "{}",
+            serde_json::json!({"models": done, "failed": failed, "seconds": seconds})
+        );
+    } else {
+        for j in &done {
+            print_summary(j);
+        }
+        println!(
+            "{} of {} models exported to {} in {seconds:.1} s",
+            done.len(),
+            files.len(),
+            dir.display()
+        );
+    }
+    match failed.first() {
+        None => Ok(()),
+        Some(first) => Err(CliError::BadInput(format!(
+            "{} of {} models failed; first: {}: {}",
+            failed.len(),
+            files.len(),
+            first["file"].as_str().unwrap_or_default(),
+            first["error"].as_str().unwrap_or_default()
+        ))),
+    }
+}
+
+/// Builds the LODs of `file`, writes them to `output` and returns the JSON
+/// report (nothing is printed).
+fn export_one(
+    args: &ExportArgs,
+    items: &[(String, LodTolerance)],
+    file: &Path,
+    output: &Path,
+) -> Result<serde_json::Value, CliError> {
     let ExportMethod::Simplify = args.method;
-    let mesh = load_mesh(&args.file, &args.input)?;
+    let mesh = load_mesh(file, &args.input)?;
     let start = std::time::Instant::now();
     let diag = mesh.bounds().diagonal();
     // The bounding box's circumscribed sphere bounds the object.
     let radius = 0.5 * diag;
     let targets: Vec<(String, Target)> = items
-        .into_iter()
+        .iter()
+        .cloned()
         .map(|(label, tol)| {
             let target = match tol {
                 LodTolerance::Relative(e) => Target::RelativeError(e),
@@ -181,9 +313,8 @@ pub fn run(args: ExportArgs) -> Result<(), CliError> {
     let bounds: Vec<f32> = lods.iter().map(|(_, r)| r.error_bound()).collect();
     let coverages = lod_screen_coverages(&bounds, radius, args.pixels, args.viewport_height);
     let meshes: Vec<lodstudio_core::TriMesh> = lods.iter().map(|(_, r)| r.mesh.clone()).collect();
-    let bytes = write_lod_chain_glb(&meshes, &coverages);
-    io::write_atomic(&args.output, &bytes)
-        .map_err(|e| CliError::BadInput(format!("{}: cannot write: {e}", args.output.display())))?;
+    let glb = write_lod_chain_glb(&meshes, &coverages);
+    let bytes = write_gltf(output, glb)?;
     let seconds = start.elapsed().as_secs_f64();
     let per_lod: Vec<serde_json::Value> = lods
         .iter()
@@ -202,42 +333,69 @@ pub fn run(args: ExportArgs) -> Result<(), CliError> {
             })
         })
         .collect();
-    if args.report.json {
-        println!(
-            "{}",
-            serde_json::json!({
-                "method": "simplify",
-                "lods": per_lod,
-                "bytes": bytes.len(),
-                "input_triangles": mesh.triangles.len(),
-                "bbox_diagonal": diag,
-                "pixels": args.pixels,
-                "viewport_height": args.viewport_height,
-                "seconds": seconds,
-                "output": args.output.display().to_string(),
-            })
-        );
-    } else {
-        println!(
-            "{} -> {}: {} LODs, {} bytes, {:.2} s (MSFT_lod; thresholds for {} px on {} px)",
-            args.file.display(),
-            args.output.display(),
-            lods.len(),
-            bytes.len(),
-            seconds,
-            args.pixels,
-            args.viewport_height
-        );
-        for (i, ((label, r), c)) in lods.iter().zip(&coverages).enumerate() {
-            println!(
-                "  lod{i} {label:>8}: {:>8} triangles, bound {:.6} ({:.4}% of the diagonal), shown from coverage {c:.4}",
-                r.mesh.triangles.len(),
-                r.error_bound(),
-                100.0 * r.error_bound() / diag,
-            );
-        }
+    Ok(serde_json::json!({
+        "file": file.display().to_string(),
+        "method": "simplify",
+        "lods": per_lod,
+        "bytes": bytes,
+        "input_triangles": mesh.triangles.len(),
+        "bbox_diagonal": diag,
+        "pixels": args.pixels,
+        "viewport_height": args.viewport_height,
+        "seconds": seconds,
+        "output": output.display().to_string(),
+    }))
+}
+
+/// Writes a GLB as is, or as .gltf + .bin by its extension (atomically);
+/// returns the bytes written.
+fn write_gltf(output: &Path, glb: Vec<u8>) -> Result<usize, CliError> {
+    let fail = |p: &Path, e: std::io::Error| {
+        CliError::BadInput(format!("{}: cannot write: {e}", p.display()))
+    };
+    if output_format(output) == Some(Format::Gltf) {
+        let bin_path = output.with_extension("bin");
+        let bin_name = bin_path
+            .file_name()
+            .unwrap_or_default()
+            .to_string_lossy()
+            .into_owned();
+        let (json, bin) = io::gltf::split_glb(&glb, &bin_name).ok_or_else(|| {
+            CliError::Failure("internal: the GLB writer made no container".into())
+        })?;
+        io::write_atomic(&bin_path, &bin).map_err(|e| fail(&bin_path, e))?;
+        io::write_atomic(output, &json).map_err(|e| fail(output, e))?;
+        return Ok(json.len() + bin.len());
     }
-    Ok(())
+    io::write_atomic(output, &glb).map_err(|e| fail(output, e))?;
+    Ok(glb.len())
+}
+
+/// The human summary of one export report.
+fn print_summary(j: &serde_json::Value) {
+    let lods = j["lods"].as_array().map_or(&[][..], |l| &l[..]);
+    println!(
+        "{} -> {}: {} LODs, {} bytes, {:.2} s (MSFT_lod; thresholds for {} px on {} px)",
+        j["file"].as_str().unwrap_or_default(),
+        j["output"].as_str().unwrap_or_default(),
+        lods.len(),
+        j["bytes"],
+        j["seconds"].as_f64().unwrap_or_default(),
+        j["pixels"],
+        j["viewport_height"]
+    );
+    for (i, l) in lods.iter().enumerate() {
+        println!(
+            "  lod{i} {:>8}: {:>8} triangles, {:>7} points, {:>5} splats, bound {:.6} ({:.4}% of the diagonal), shown from coverage {:.4}",
+            l["tolerance"].as_str().unwrap_or_default(),
+            l["triangles"],
+            l["points"],
+            l["splats"],
+            l["error_bound"].as_f64().unwrap_or_default(),
+            100.0 * l["error_bound_relative"].as_f64().unwrap_or_default(),
+            l["screen_coverage"].as_f64().unwrap_or_default(),
+        );
+    }
 }
 
 #[cfg(test)]

@@ -449,6 +449,26 @@ fn glb_document(meshes: &[TriMesh]) -> (serde_json::Value, Vec<u8>) {
     (doc, bin)
 }
 
+/// The .gltf JSON and the .bin buffer of a GLB made by this module's writers,
+/// the buffer referenced as `bin_name`; `None` when `glb` is no GLB container.
+pub fn split_glb(glb: &[u8], bin_name: &str) -> Option<(Vec<u8>, Vec<u8>)> {
+    let word = |at: usize| Some(u32::from_le_bytes(glb.get(at..at + 4)?.try_into().ok()?) as usize);
+    if glb.get(0..4)? != b"glTF" {
+        return None;
+    }
+    let json_len = word(12)?;
+    let json = glb.get(20..20 + json_len)?;
+    let bin = match word(20 + json_len) {
+        Some(len) => glb.get(28 + json_len..28 + json_len + len)?.to_vec(),
+        None => Vec::new(),
+    };
+    let mut doc: serde_json::Value = serde_json::from_slice(json).ok()?;
+    if let Some(buffer) = doc.get_mut("buffers").and_then(|b| b.get_mut(0)) {
+        buffer["uri"] = serde_json::json!(bin_name);
+    }
+    Some((serde_json::to_vec_pretty(&doc).ok()?, bin))
+}
+
 /// Packs a JSON chunk (space-padded) and a binary chunk (zero-padded; left out
 /// when empty) into GLB.
 fn glb_container(mut json: Vec<u8>, bin: Vec<u8>) -> Vec<u8> {

@@ -251,16 +251,8 @@ pub fn detect(path: &Path, data: &[u8], raw_given: bool) -> Result<Format, LoadE
         return Ok(Format::Gltf);
     }
     let ext = extension(path);
-    match ext.as_str() {
-        "obj" => return Ok(Format::Obj),
-        "off" => return Ok(Format::Off),
-        "gltf" => return Ok(Format::Gltf),
-        "glb" => return Ok(Format::Glb),
-        "ply" => return Ok(Format::Ply),
-        "nrrd" | "nhdr" => return Ok(Format::Nrrd),
-        "nii" => return Ok(Format::Nifti),
-        "inr" => return Ok(Format::Inr),
-        _ => {}
+    if let Some(&(_, format)) = EXTENSIONS.iter().find(|(e, _)| *e == ext) {
+        return Ok(format);
     }
     if obj::looks_like_obj(head) {
         return Ok(Format::Obj);
@@ -273,6 +265,25 @@ pub fn detect(path: &Path, data: &[u8], raw_given: bool) -> Result<Format, LoadE
     Err(unknown(
         "not OBJ, glTF/GLB, PLY, OFF, NRRD, NIfTI-1 or INRIMAGE-4 by content or extension",
     ))
+}
+
+/// Model formats by file extension (after any `.gz`).
+const EXTENSIONS: &[(&str, Format)] = &[
+    ("obj", Format::Obj),
+    ("off", Format::Off),
+    ("gltf", Format::Gltf),
+    ("glb", Format::Glb),
+    ("ply", Format::Ply),
+    ("nrrd", Format::Nrrd),
+    ("nhdr", Format::Nrrd),
+    ("nii", Format::Nifti),
+    ("inr", Format::Inr),
+];
+
+/// Whether `path`'s extension names a model format (for folder inputs).
+pub fn is_model_path(path: &Path) -> bool {
+    let ext = extension(path);
+    EXTENSIONS.iter().any(|(e, _)| *e == ext)
 }
 
 /// Lower-case extension, skipping a trailing `.gz`.
