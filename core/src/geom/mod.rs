@@ -221,7 +221,7 @@ impl PointSet {
 }
 
 /// A scalar volume on a regular grid, x fastest, then y, then z.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Volume {
     pub dims: [usize; 3],
     /// Voxel size along x, y, z (may be anisotropic).

@@ -26,7 +26,7 @@ pub enum Source<'a> {
 }
 
 /// One level: the filtered density f = h ∗ S on its grid.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct PyramidLevel {
     pub density: Volume,
     /// Voxels along the longest side.
@@ -35,7 +35,7 @@ pub struct PyramidLevel {
     pub radius_finest: f32,
 }
 
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Pyramid {
     /// Finest first.
     pub levels: Vec<PyramidLevel>,
@@ -183,6 +183,13 @@ mod tests {
         let topo = crate::geom::Topology::of(&mid.mesh);
         assert!(topo.is_closed() && topo.is_manifold());
         assert!(mid.genus <= l0.genus && mid.genus >= l1.genus);
+
+        // Saved and reopened, it extracts the very same levels.
+        let bytes =
+            crate::io::hierarchy_file::save("voxel", &serde_json::json!({"radius": 2}), &pyr);
+        let (_, back): (_, Pyramid) = crate::io::hierarchy_file::load(&bytes, "voxel").unwrap();
+        assert_eq!(back, pyr);
+        assert_eq!(back.in_between(0.5, &p).unwrap(), mid);
     }
 
     #[test]
