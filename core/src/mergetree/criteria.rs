@@ -1,0 +1,229 @@
+//! §3, §5.1: when a node must be refined for a view. Each criterion only
+//! depends on a node's sphere, switch distance and normal cone, and only ever
+//! asks for more refinement as those grow; since nodes contain the ranges of
+//! the nodes they depend on, the set of nodes to refine is closed under the
+//! dependencies (§4.3) and the selection is the same from any start.
+
+use std::f32::consts::{FRAC_PI_2, PI};
+
+use glam::Vec3;
+
+use super::Node;
+use crate::view::{Tolerance, View};
+
+/// A cone of directions: every normal within `half_angle` of `axis` (§4.2).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct NormalCone {
+    pub axis: Vec3,
+    /// Radians; negative for the empty cone.
+    pub half_angle: f32,
+}
+
+/// Slack added to every union so containment survives rounding.
+const ANGLE_SLACK: f32 = 1e-5;
+
+fn angle(a: Vec3, b: Vec3) -> f32 {
+    a.dot(b).clamp(-1.0, 1.0).acos()
+}
+
+impl NormalCone {
+    pub const EMPTY: NormalCone = NormalCone {
+        axis: Vec3::Z,
+        half_angle: -1.0,
+    };
+
+    /// The cone of one direction (none for a zero vector).
+    pub fn of(n: Vec3) -> NormalCone {
+        match n.try_normalize() {
+            Some(axis) => NormalCone {
+                axis,
+                half_angle: 0.0,
+            },
+            None => NormalCone::EMPTY,
+        }
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.half_angle < 0.0
+    }
+
+    /// The smallest cone holding both.
+    pub fn union(self, o: NormalCone) -> NormalCone {
+        if o.is_empty() {
+            return self;
+        }
+        if self.is_empty() {
+            return o;
+        }
+        let d = angle(self.axis, o.axis);
+        if d + o.half_angle <= self.half_angle {
+            return self;
+        }
+        if d + self.half_angle <= o.half_angle {
+            return o;
+        }
+        let half = 0.5 * (d + self.half_angle + o.half_angle) + ANGLE_SLACK;
+        let s = d.sin();
+        if half >= PI || s < 1e-6 {
+            return NormalCone {
+                axis: self.axis,
+                half_angle: PI,
+            };
+        }
+        // Turn our axis towards the other's by the growth of our half angle.
+        let t = (half - self.half_angle).clamp(0.0, d);
+        let axis = (self.axis * (d - t).sin() + o.axis * t.sin()) / s;
+        NormalCone {
+            axis: axis.normalize_or(self.axis),
+            half_angle: half,
+        }
+    }
+
+    /// The range of `n · dir` over the cone (`dir` normalised).
+    fn dot_range(&self, dir: Vec3) -> (f32, f32) {
+        let g = angle(self.axis, dir);
+        (
+            (g + self.half_angle).min(PI).cos(),
+            (g - self.half_angle).max(0.0).cos(),
+        )
+    }
+}
+
+/// Which view-dependent criteria refine or coarsen beyond the screen-space
+/// projection (§3). Each multiplies the pixel threshold of a node.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Criteria {
+    /// Visibility culling: nodes wholly back-facing or outside the view
+    /// frustum are simplified harder.
+    pub backface: bool,
+    /// Silhouettes: nodes whose normals straddle the view direction are refined.
+    pub silhouette: bool,
+    /// Local illumination: nodes across which the diffuse shading of the
+    /// view's light changes most are refined.
+    pub lighting: bool,
+}
+
+impl Default for Criteria {
+    fn default() -> Self {
+        Self {
+            backface: true,
+            silhouette: true,
+            lighting: true,
+        }
+    }
+}
+
+/// Threshold factor for invisible nodes.
+pub const BACKFACE_FACTOR: f32 = 8.0;
+/// Threshold factor for silhouette nodes.
+pub const SILHOUETTE_FACTOR: f32 = 0.5;
+/// Threshold divisor 1 + this × the spread of n·L over a node.
+pub const LIGHTING_WEIGHT: f32 = 1.0;
+
+/// How a node's triangles face the eye.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Facing {
+    Front,
+    Back,
+    Straddle,
+}
+
+fn facing(node: &Node, eye: Vec3) -> Facing {
+    let d = node.center - eye;
+    let dist = d.length();
+    if dist <= node.radius || node.cone.is_empty() {
+        return Facing::Straddle;
+    }
+    // The directions from the eye into the sphere form a cone too; the node
+    // faces one way if the two cones never get within 90° of the other way.
+    let spread = (node.radius / dist).asin() + node.cone.half_angle;
+    let beta = angle(node.cone.axis, d / dist);
+    if beta + spread < FRAC_PI_2 {
+        Facing::Back
+    } else if PI - beta + spread < FRAC_PI_2 {
+        Facing::Front
+    } else {
+        Facing::Straddle
+    }
+}
+
+impl Criteria {
+    /// Whether `node` is too coarse for `view` within `tolerance`; `diagonal`
+    /// scales a relative tolerance (which ignores the view-dependent criteria).
+    pub fn must_refine(
+        &self,
+        node: &Node,
+        view: &View,
+        tolerance: Tolerance,
+        diagonal: f32,
+    ) -> bool {
+        let t = match tolerance {
+            Tolerance::Relative(f) => return node.downswitch > f * diagonal,
+            Tolerance::Pixels(t) => t,
+        };
+        let mut t = t;
+        if self.backface || self.silhouette {
+            let f = facing(node, view.eye);
+            if self.backface && (f == Facing::Back || !view.sees_sphere(node.center, node.radius)) {
+                t *= BACKFACE_FACTOR;
+            } else if self.silhouette && f == Facing::Straddle {
+                t *= SILHOUETTE_FACTOR;
+            }
+        }
+        if self.lighting && !node.cone.is_empty() {
+            let (lo, hi) = node.cone.dot_range(view.light_dir.normalize_or(Vec3::Z));
+            t /= 1.0 + LIGHTING_WEIGHT * (hi.max(0.0) - lo.max(0.0));
+        }
+        view.pixels(node.downswitch, node.center, node.radius) > t
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::rng::Rng;
+
+    fn random_unit(rng: &mut Rng) -> Vec3 {
+        loop {
+            let v = Vec3::new(rng.f32(), rng.f32(), rng.f32()) * 2.0 - 1.0;
+            if (1e-3..=1.0).contains(&v.length_squared()) {
+                return v.normalize();
+            }
+        }
+    }
+
+    #[test]
+    fn union_holds_every_normal_it_was_built_from() {
+        let mut rng = Rng::new(7);
+        for spread in [0.1f32, 0.6, 2.0] {
+            let base = random_unit(&mut rng);
+            let normals: Vec<Vec3> = (0..40)
+                .map(|_| (base + random_unit(&mut rng) * spread).normalize())
+                .collect();
+            let cone = normals
+                .iter()
+                .fold(NormalCone::EMPTY, |c, n| c.union(NormalCone::of(*n)));
+            for n in &normals {
+                assert!(angle(cone.axis, *n) <= cone.half_angle + 1e-4);
+            }
+            assert!(cone.half_angle <= PI);
+        }
+    }
+
+    #[test]
+    fn facing_of_a_flat_patch_follows_the_eye() {
+        let node = Node {
+            center: Vec3::ZERO,
+            radius: 0.1,
+            downswitch: 0.01,
+            upswitch: f32::INFINITY,
+            cone: NormalCone {
+                axis: Vec3::Z,
+                half_angle: 0.2,
+            },
+        };
+        assert_eq!(facing(&node, Vec3::Z * 5.0), Facing::Front);
+        assert_eq!(facing(&node, -Vec3::Z * 5.0), Facing::Back);
+        assert_eq!(facing(&node, Vec3::X * 5.0), Facing::Straddle);
+    }
+}
