@@ -1,15 +1,15 @@
 //! §3, §5.1: when a node must be refined for a view. Each criterion only
 //! depends on a node's sphere, switch distance and normal cone, and only ever
-//! asks for more refinement as those grow; since nodes contain the ranges of
-//! the nodes they depend on, the set of nodes to refine is closed under the
-//! dependencies (§4.3) and the selection is the same from any start.
+//! asks for more refinement as those grow; since a node's ranges hold those of
+//! the nodes below it, a node that must be refined has ancestors that must be
+//! too, so the walk down from the display vertices finds every one.
 
 use std::f32::consts::{FRAC_PI_2, PI};
 
 use glam::Vec3;
 
 use super::Node;
-use crate::view::{Tolerance, View};
+use crate::view::{Projector, Tolerance, View};
 
 /// A cone of directions: every normal within `half_angle` of `axis` (§4.2).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -157,24 +157,64 @@ impl Criteria {
         tolerance: Tolerance,
         diagonal: f32,
     ) -> bool {
-        let t = match tolerance {
-            Tolerance::Relative(f) => return node.downswitch > f * diagonal,
+        self.frame(view, tolerance, diagonal).must_refine(node)
+    }
+
+    /// The criteria with one view's constants computed once.
+    pub(crate) fn frame(&self, view: &View, tolerance: Tolerance, diagonal: f32) -> Frame {
+        Frame {
+            criteria: *self,
+            eye: view.eye,
+            projector: view.projector(),
+            planes: view.side_planes(),
+            forward: view.forward(),
+            light: view.light_dir.normalize_or(Vec3::Z),
+            tolerance,
+            diagonal,
+        }
+    }
+}
+
+/// [`Criteria`] for one view.
+pub(crate) struct Frame {
+    criteria: Criteria,
+    eye: Vec3,
+    projector: Projector,
+    planes: [Vec3; 4],
+    forward: Vec3,
+    light: Vec3,
+    tolerance: Tolerance,
+    diagonal: f32,
+}
+
+impl Frame {
+    fn sees(&self, node: &Node) -> bool {
+        let v = node.center - self.eye;
+        v.dot(self.forward) >= -node.radius && self.planes.iter().all(|n| v.dot(*n) >= -node.radius)
+    }
+
+    pub(crate) fn must_refine(&self, node: &Node) -> bool {
+        let mut t = match self.tolerance {
+            Tolerance::Relative(f) => return node.downswitch > f * self.diagonal,
             Tolerance::Pixels(t) => t,
         };
-        let mut t = t;
-        if self.backface || self.silhouette {
-            let f = facing(node, view.eye);
-            if self.backface && (f == Facing::Back || !view.sees_sphere(node.center, node.radius)) {
+        let px = self
+            .projector
+            .pixels(node.downswitch, node.center, node.radius);
+        let c = &self.criteria;
+        if c.backface || c.silhouette {
+            let f = facing(node, self.eye);
+            if c.backface && (f == Facing::Back || !self.sees(node)) {
                 t *= BACKFACE_FACTOR;
-            } else if self.silhouette && f == Facing::Straddle {
+            } else if c.silhouette && f == Facing::Straddle {
                 t *= SILHOUETTE_FACTOR;
             }
         }
-        if self.lighting && !node.cone.is_empty() {
-            let (lo, hi) = node.cone.dot_range(view.light_dir.normalize_or(Vec3::Z));
+        if c.lighting && !node.cone.is_empty() {
+            let (lo, hi) = node.cone.dot_range(self.light);
             t /= 1.0 + LIGHTING_WEIGHT * (hi.max(0.0) - lo.max(0.0));
         }
-        view.pixels(node.downswitch, node.center, node.radius) > t
+        px > t
     }
 }
 

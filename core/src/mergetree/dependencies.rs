@@ -64,14 +64,13 @@ const RADIUS_SLACK: f32 = 1e-5;
 ///
 /// A node's downswitch distance bounds how far any original vertex below it
 /// moved (the child's bound plus the child-parent distance); its sphere holds
-/// them all; its cone holds the normals of every triangle in its regions. Each
-/// then takes in the nodes it requires, so all three only grow along
-/// dependencies.
+/// them all; its cone holds the normals of every triangle in its regions. All
+/// three only grow up the tree, so a node that must be refined has ancestors
+/// that must be too, and the walk down from the display vertices finds it.
 pub(crate) fn nodes(
     mesh: &TriMesh,
     merges: &[Merge],
     cones: &[NormalCone],
-    requires: &Csr,
 ) -> (Vec<Node>, Vec<u32>) {
     let mut nodes: Vec<Node> = Vec::with_capacity(merges.len());
     let mut previous = Vec::with_capacity(merges.len());
@@ -90,17 +89,15 @@ pub(crate) fn nodes(
             upswitch: f32::INFINITY,
             cone: cones[k],
         };
-        for &j in requires.row(k).iter().chain(std::iter::once(&below)) {
+        // §4.2: the ranges of the subtree, i.e. of the parent's previous node
+        // and of the child's node.
+        for j in [current[m.parent as usize], below] {
             if j == NONE {
                 continue;
             }
             let o = &nodes[j as usize];
             let reach = o.center.distance(node.center);
-            node.downswitch = node.downswitch.max(if j == below {
-                step + o.downswitch
-            } else {
-                o.downswitch
-            });
+            node.downswitch = node.downswitch.max(reach + o.downswitch);
             node.radius = node.radius.max(reach + o.radius);
             node.cone = node.cone.union(o.cone);
         }

@@ -51,13 +51,11 @@ impl Default for MergeTreeOptions {
 pub struct Node {
     /// The parent vertex's position: where the node is displayed.
     pub center: Vec3,
-    /// A sphere about `center` holding every original vertex below the node and
-    /// the spheres of the nodes it depends on (§4.3), so criteria only grow
-    /// along dependencies.
+    /// A sphere about `center` holding every original vertex below the node.
     pub radius: f32,
     /// §5.1 downswitch distance: refine the node (split the child off) when its
     /// projection exceeds the threshold. Bounds how far any original vertex
-    /// below moved; never smaller than that of a node it depends on.
+    /// below moved; never smaller than that of a node below.
     pub downswitch: f32,
     /// §5.1 upswitch distance: the downswitch distance of the next merge of the
     /// same parent vertex (infinite at a root).
@@ -156,7 +154,7 @@ pub fn build(
     progress.stage("merge tree dependencies");
     let deps = dependencies::dependencies(&built.merges, &built.region, mesh.positions.len());
     progress.check()?;
-    let (nodes, previous) = dependencies::nodes(mesh, &built.merges, &built.cones, &deps.requires);
+    let (nodes, previous) = dependencies::nodes(mesh, &built.merges, &built.cones);
     progress.set_fraction(1.0);
     Ok(MergeTree {
         mesh: mesh.clone(),
@@ -287,9 +285,6 @@ mod tests {
                 assert!(d <= node.radius);
             }
             assert!(node.upswitch >= node.downswitch);
-            for j in tree.requires(k) {
-                assert!(tree.nodes()[*j as usize].downswitch <= node.downswitch);
-            }
         }
     }
 

@@ -1,6 +1,7 @@
 //! §5: real-time triangulation. The display vertices of a frame come from the
-//! previous frame's by walking the tree down (splits) and up (merges) from the
-//! frontier of the current cut, honouring the dependencies; the display
+//! previous frame's by walking the tree down (splits) from each display vertex
+//! and up (merges) from the merges that could happen next, honouring the
+//! dependencies recursively; the display
 //! triangles change with each split or merge by swapping the fan it was built
 //! from (§5.2, Fig. 6). A cold start begins with every vertex and triangle of
 //! the input, as the paper's frame 0 does.
@@ -74,20 +75,18 @@ pub struct UpdateStats {
 }
 
 /// The run-time state of a merge tree: the merges in place, the display
-/// triangles, and the frontier of nodes the next frame's walk starts from.
+/// vertices and triangles, and the frontier the next frame's walk up starts from.
 #[derive(Debug, Clone)]
 pub struct MergeTreeView {
     tree: Arc<MergeTree>,
     pub criteria: Criteria,
     merged: Vec<bool>,
-    /// Per merge, how many of its requirements are not in place / how many of
-    /// its dependents are.
+    /// Per merge, how many of its requirements are not in place.
     missing: Vec<u32>,
-    holding: Vec<u32>,
-    /// Merges in place that nothing in place depends on: may split next.
-    splittable: IdSet,
     /// Merges not in place whose requirements all are: may merge next.
     mergeable: IdSet,
+    /// The display vertices and triangles.
+    shown: IdSet,
     display: IdSet,
     /// Per vertex, its node now ([`NONE`]: the vertex itself, a leaf).
     node: Vec<u32>,
@@ -99,17 +98,17 @@ impl MergeTreeView {
     /// Starts with every input vertex and triangle displayed (§5.1, §5.2 frame 0).
     pub fn new(tree: Arc<MergeTree>, criteria: Criteria) -> Self {
         let m = tree.merges.len();
+        let n = tree.mesh.positions.len();
         let mut view = MergeTreeView {
             criteria,
             merged: vec![false; m],
             missing: vec![0; m],
-            holding: vec![0; m],
-            splittable: IdSet::new(m),
             mergeable: IdSet::new(m),
+            shown: IdSet::new(n),
             display: IdSet::new(tree.triangles.len()),
-            node: vec![NONE; tree.mesh.positions.len()],
+            node: vec![NONE; n],
             work: Vec::with_capacity(m),
-            remap: vec![NONE; tree.mesh.positions.len()],
+            remap: vec![NONE; n],
             tree,
         };
         view.reset();
@@ -119,10 +118,9 @@ impl MergeTreeView {
     /// Back to every input vertex and triangle: a cold start.
     pub fn reset(&mut self) {
         self.merged.fill(false);
-        self.holding.fill(0);
         self.node.fill(NONE);
-        self.splittable.clear();
         self.mergeable.clear();
+        self.shown.clear();
         self.display.clear();
         for k in 0..self.tree.merges.len() {
             self.missing[k] = self.tree.requires.row(k).len() as u32;
@@ -132,6 +130,9 @@ impl MergeTreeView {
         }
         for t in 0..self.tree.mesh.triangles.len() as u32 {
             self.display.insert(t);
+            for v in self.tree.triangles[t as usize] {
+                self.shown.insert(v);
+            }
         }
     }
 
@@ -143,15 +144,19 @@ impl MergeTreeView {
     /// once the work list has grown.
     pub fn update(&mut self, view: &View, tolerance: Tolerance) -> UpdateStats {
         let tree = Arc::clone(&self.tree);
-        let criteria = self.criteria;
-        let refine =
-            |k: u32| criteria.must_refine(&tree.nodes[k as usize], view, tolerance, tree.diagonal);
+        let frame = self.criteria.frame(view, tolerance, tree.diagonal);
+        let refine = |k: u32| frame.must_refine(&tree.nodes[k as usize]);
         let mut stats = UpdateStats::default();
-        // Down the tree: split nodes too coarse for the view, outermost first.
+        // Down the tree from every display vertex whose node is too coarse,
+        // splitting what depends on it first (§4.3).
         self.work.clear();
-        self.work.extend_from_slice(&self.splittable.items);
+        for &v in &self.shown.items {
+            if self.node[v as usize] != NONE {
+                self.work.push(self.node[v as usize]);
+            }
+        }
         while let Some(k) = self.work.pop() {
-            if !self.merged[k as usize] || self.holding[k as usize] != 0 {
+            if !self.merged[k as usize] {
                 continue;
             }
             stats.evaluated += 1;
@@ -159,7 +164,8 @@ impl MergeTreeView {
                 self.split(k, &mut stats);
             }
         }
-        // Up the tree: merge children wherever the view allows it.
+        // Up the tree: merge children wherever the view and the dependencies
+        // allow it.
         self.work.extend_from_slice(&self.mergeable.items);
         while let Some(k) = self.work.pop() {
             if self.merged[k as usize] || self.missing[k as usize] != 0 {
@@ -185,21 +191,28 @@ impl MergeTreeView {
         }
     }
 
+    /// Splits merge `k` (in place), after the merges in place that depend on
+    /// it; the nodes it uncovers join the walk.
     fn split(&mut self, k: u32, stats: &mut UpdateStats) {
         let tree = Arc::clone(&self.tree);
         let ku = k as usize;
-        self.swap(tree.added.row(ku), tree.removed.row(ku), stats);
-        self.merged[ku] = false;
-        self.node[tree.merges[ku].parent as usize] = tree.previous[ku];
-        self.splittable.remove(k);
-        self.mergeable.insert(k);
-        for &j in tree.requires.row(ku) {
-            self.holding[j as usize] -= 1;
-            if self.holding[j as usize] == 0 {
-                self.splittable.insert(j);
-                self.work.push(j);
+        for &r in tree.dependents.row(ku) {
+            if self.merged[r as usize] {
+                self.split(r, stats);
             }
         }
+        let m = tree.merges[ku];
+        self.swap(tree.added.row(ku), tree.removed.row(ku), stats);
+        self.merged[ku] = false;
+        self.shown.insert(m.child);
+        self.node[m.parent as usize] = tree.previous[ku];
+        for v in [m.parent, m.child] {
+            if self.node[v as usize] != NONE {
+                self.work.push(self.node[v as usize]);
+            }
+        }
+        // Everything k requires is in place, so k may merge again.
+        self.mergeable.insert(k);
         for &r in tree.dependents.row(ku) {
             self.missing[r as usize] += 1;
             self.mergeable.remove(r);
@@ -210,15 +223,12 @@ impl MergeTreeView {
     fn merge(&mut self, k: u32, stats: &mut UpdateStats) {
         let tree = Arc::clone(&self.tree);
         let ku = k as usize;
+        let m = tree.merges[ku];
         self.swap(tree.removed.row(ku), tree.added.row(ku), stats);
         self.merged[ku] = true;
-        self.node[tree.merges[ku].parent as usize] = k;
+        self.shown.remove(m.child);
+        self.node[m.parent as usize] = k;
         self.mergeable.remove(k);
-        self.splittable.insert(k);
-        for &j in tree.requires.row(ku) {
-            self.holding[j as usize] += 1;
-            self.splittable.remove(j);
-        }
         for &r in tree.dependents.row(ku) {
             self.missing[r as usize] -= 1;
             if self.missing[r as usize] == 0 {
