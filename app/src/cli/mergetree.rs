@@ -120,6 +120,7 @@ pub fn run(args: MergeTreeArgs) -> Result<(), CliError> {
     let (mut update_ms, mut rebuild_ms) = (Vec::new(), Vec::new());
     let (mut adaptive, mut uniform_tris) = (Vec::new(), Vec::new());
     let (mut folds, mut mismatches, mut differing_frames) = (0usize, 0usize, 0usize);
+    let (mut evaluated, mut changes) = (Vec::new(), Vec::new());
     for i in 0..args.frames {
         let view = camera(&args, center, diagonal, i);
         let t = Instant::now();
@@ -127,6 +128,8 @@ pub fn run(args: MergeTreeArgs) -> Result<(), CliError> {
         // Frame 0 starts from all vertices: a cold start, not an update.
         if i > 0 {
             update_ms.push(t.elapsed().as_secs_f64() * 1e3);
+            evaluated.push(stats.evaluated as f64);
+            changes.push((stats.splits + stats.merges) as f64);
         }
         let t = Instant::now();
         cold.reset();
@@ -163,6 +166,8 @@ pub fn run(args: MergeTreeArgs) -> Result<(), CliError> {
         "adaptive_triangles_min": adaptive.iter().copied().fold(f64::INFINITY, f64::min),
         "adaptive_triangles_max": adaptive.iter().copied().fold(0.0, f64::max),
         "update_ms_mean": mean(&update_ms),
+        "update_nodes_evaluated_mean": mean(&evaluated),
+        "update_changes_mean": mean(&changes),
         "rebuild_ms_mean": mean(&rebuild_ms),
         "folds": folds,
         "incremental_equals_cold": differing_frames == 0,

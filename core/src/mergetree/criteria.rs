@@ -4,7 +4,7 @@
 //! the nodes below it, a node that must be refined has ancestors that must be
 //! too, so the walk down from the display vertices finds every one.
 
-use std::f32::consts::{FRAC_PI_2, PI};
+use std::f32::consts::PI;
 
 use glam::Vec3;
 
@@ -17,6 +17,10 @@ pub struct NormalCone {
     pub axis: Vec3,
     /// Radians; negative for the empty cone.
     pub half_angle: f32,
+    /// Cosine and sine of `half_angle`, so that per-frame tests need no
+    /// trigonometry.
+    cos_half: f32,
+    sin_half: f32,
 }
 
 /// Slack added to every union so containment survives rounding.
@@ -26,19 +30,35 @@ fn angle(a: Vec3, b: Vec3) -> f32 {
     a.dot(b).clamp(-1.0, 1.0).acos()
 }
 
+/// A cosine (clamped) and the sine of the same angle in 0..π.
+fn cos_sin(c: f32) -> (f32, f32) {
+    let c = c.clamp(-1.0, 1.0);
+    (c, (1.0 - c * c).max(0.0).sqrt())
+}
+
 impl NormalCone {
     pub const EMPTY: NormalCone = NormalCone {
         axis: Vec3::Z,
         half_angle: -1.0,
+        cos_half: 1.0,
+        sin_half: 0.0,
     };
+
+    /// The directions within `half_angle` (radians, at most π) of `axis` (unit).
+    pub fn new(axis: Vec3, half_angle: f32) -> NormalCone {
+        let half_angle = half_angle.min(PI);
+        NormalCone {
+            axis,
+            half_angle,
+            cos_half: half_angle.cos(),
+            sin_half: half_angle.sin(),
+        }
+    }
 
     /// The cone of one direction (none for a zero vector).
     pub fn of(n: Vec3) -> NormalCone {
         match n.try_normalize() {
-            Some(axis) => NormalCone {
-                axis,
-                half_angle: 0.0,
-            },
+            Some(axis) => NormalCone::new(axis, 0.0),
             None => NormalCone::EMPTY,
         }
     }
@@ -65,27 +85,23 @@ impl NormalCone {
         let half = 0.5 * (d + self.half_angle + o.half_angle) + ANGLE_SLACK;
         let s = d.sin();
         if half >= PI || s < 1e-6 {
-            return NormalCone {
-                axis: self.axis,
-                half_angle: PI,
-            };
+            return NormalCone::new(self.axis, PI);
         }
         // Turn our axis towards the other's by the growth of our half angle.
         let t = (half - self.half_angle).clamp(0.0, d);
         let axis = (self.axis * (d - t).sin() + o.axis * t.sin()) / s;
-        NormalCone {
-            axis: axis.normalize_or(self.axis),
-            half_angle: half,
-        }
+        NormalCone::new(axis.normalize_or(self.axis), half)
     }
 
-    /// The range of `n · dir` over the cone (`dir` normalised).
+    /// The range of `n · dir` over the cone (`dir` normalised): the cosines of
+    /// the angle to the axis plus and minus the half angle, clamped to 0..π.
     fn dot_range(&self, dir: Vec3) -> (f32, f32) {
-        let g = angle(self.axis, dir);
-        (
-            (g + self.half_angle).min(PI).cos(),
-            (g - self.half_angle).max(0.0).cos(),
-        )
+        let (c, s) = cos_sin(self.axis.dot(dir));
+        let (ch, sh) = (self.cos_half, self.sin_half);
+        // γ + θ ≥ π ⇔ cos γ ≤ −cos θ; γ ≤ θ ⇔ cos γ ≥ cos θ.
+        let lo = if c <= -ch { -1.0 } else { c * ch - s * sh };
+        let hi = if c >= ch { 1.0 } else { c * ch + s * sh };
+        (lo, hi)
     }
 }
 
@@ -131,16 +147,26 @@ enum Facing {
 fn facing(node: &Node, eye: Vec3) -> Facing {
     let d = node.center - eye;
     let dist = d.length();
-    if dist <= node.radius || node.cone.is_empty() {
+    let cone = &node.cone;
+    if dist <= node.radius || cone.is_empty() {
         return Facing::Straddle;
     }
-    // The directions from the eye into the sphere form a cone too; the node
-    // faces one way if the two cones never get within 90° of the other way.
-    let spread = (node.radius / dist).asin() + node.cone.half_angle;
-    let beta = angle(node.cone.axis, d / dist);
-    if beta + spread < FRAC_PI_2 {
+    // The directions from the eye into the sphere form a cone of half angle α
+    // about d; the node faces one way if the angle β between d and the normal
+    // cone's axis stays more than α + θ away from 90°.
+    let (sa, ca) = (
+        node.radius / dist,
+        (1.0 - (node.radius / dist).powi(2)).max(0.0).sqrt(),
+    );
+    let cos_spread = ca * cone.cos_half - sa * cone.sin_half;
+    if cos_spread <= 0.0 {
+        return Facing::Straddle;
+    }
+    let sin_spread = sa * cone.cos_half + ca * cone.sin_half;
+    let cos_beta = cone.axis.dot(d) / dist;
+    if cos_beta > sin_spread {
         Facing::Back
-    } else if PI - beta + spread < FRAC_PI_2 {
+    } else if cos_beta < -sin_spread {
         Facing::Front
     } else {
         Facing::Straddle
@@ -243,8 +269,11 @@ mod tests {
             let cone = normals
                 .iter()
                 .fold(NormalCone::EMPTY, |c, n| c.union(NormalCone::of(*n)));
+            let dir = random_unit(&mut rng);
+            let (lo, hi) = cone.dot_range(dir);
             for n in &normals {
                 assert!(angle(cone.axis, *n) <= cone.half_angle + 1e-4);
+                assert!((lo - 1e-4..=hi + 1e-4).contains(&n.dot(dir)));
             }
             assert!(cone.half_angle <= PI);
         }
@@ -257,10 +286,7 @@ mod tests {
             radius: 0.1,
             downswitch: 0.01,
             upswitch: f32::INFINITY,
-            cone: NormalCone {
-                axis: Vec3::Z,
-                half_angle: 0.2,
-            },
+            cone: NormalCone::new(Vec3::Z, 0.2),
         };
         assert_eq!(facing(&node, Vec3::Z * 5.0), Facing::Front);
         assert_eq!(facing(&node, -Vec3::Z * 5.0), Facing::Back);
