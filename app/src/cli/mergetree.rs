@@ -26,7 +26,7 @@ pub struct MergeTreeArgs {
     #[arg(long, value_name = "N", default_value_t = 8)]
     min_vertices: usize,
     /// Sliver guard: minimum quality 4√3·area/Σl² of triangles a merge makes (eq. 3, §6); 0 disables.
-    #[arg(long, value_name = "Q", default_value_t = 0.0)]
+    #[arg(long, value_name = "Q", default_value_t = mergetree::DEFAULT_MIN_QUALITY)]
     min_quality: f32,
     /// Do not simplify back-facing and off-screen regions harder.
     #[arg(long)]
