@@ -11,7 +11,8 @@
 //!
 //! Timed per frame: "update" = `MergeTreeView::update` from the previous
 //! frame's cut; "scratch" = `reset` + `update` (every vertex and triangle back,
-//! then the same walk). Both produce the same cut (checked). Single-threaded.
+//! then the same walk). Both produce the same cut (checked). Single-threaded;
+//! medians over the frames, since a shared machine preempts some of them.
 
 use std::path::PathBuf;
 use std::sync::Arc;
@@ -42,10 +43,16 @@ fn load(file: &str) -> TriMesh {
 struct Replay {
     adaptive: f64,
     uniform: f64,
+    /// Medians over the frames (robust to a busy machine's preemptions).
     update_ms: f64,
     scratch_ms: f64,
     evaluated: f64,
     changes: f64,
+}
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    v.get(v.len() / 2).copied().unwrap_or(0.0)
 }
 
 /// An orbit at 2 diagonals (1024×768, 60° field of view, light from the eye).
@@ -64,6 +71,7 @@ fn replay(tree: &Arc<MergeTree>, criteria: Criteria, pixels: f32, frames: usize)
         changes: 0.0,
     };
     let tolerance = Tolerance::Pixels(pixels);
+    let (mut updates, mut scratches) = (Vec::new(), Vec::new());
     for i in 0..=frames {
         let a = i as f32 / frames as f32 * std::f32::consts::TAU;
         let view = View::orbit(center, 2.0 * diagonal, a, 0.3);
@@ -83,8 +91,8 @@ fn replay(tree: &Arc<MergeTree>, criteria: Criteria, pixels: f32, frames: usize)
         if i == 0 {
             continue; // frame 0 is itself a start from all vertices
         }
-        r.update_ms += update;
-        r.scratch_ms += scratch;
+        updates.push(update);
+        scratches.push(scratch);
         r.evaluated += stats.evaluated as f64;
         r.changes += (stats.splits + stats.merges) as f64;
         r.adaptive += warm.display_triangles().len() as f64;
@@ -94,8 +102,8 @@ fn replay(tree: &Arc<MergeTree>, criteria: Criteria, pixels: f32, frames: usize)
     Replay {
         adaptive: r.adaptive / f,
         uniform: r.uniform / f,
-        update_ms: r.update_ms / f,
-        scratch_ms: r.scratch_ms / f,
+        update_ms: median(updates),
+        scratch_ms: median(scratches),
         evaluated: r.evaluated / f,
         changes: r.changes / f,
     }

@@ -62,6 +62,13 @@ fn mean(v: &[f64]) -> f64 {
     v.iter().sum::<f64>() / v.len().max(1) as f64
 }
 
+/// The median, robust to the frames a busy machine preempts.
+fn median(v: &[f64]) -> f64 {
+    let mut s = v.to_vec();
+    s.sort_by(f64::total_cmp);
+    s.get(s.len() / 2).copied().unwrap_or(0.0)
+}
+
 pub fn run(args: MergeTreeArgs) -> Result<(), CliError> {
     if let Some(out) = &args.output {
         check_output(out, args.report.force)?;
@@ -169,6 +176,8 @@ pub fn run(args: MergeTreeArgs) -> Result<(), CliError> {
         "update_nodes_evaluated_mean": mean(&evaluated),
         "update_changes_mean": mean(&changes),
         "rebuild_ms_mean": mean(&rebuild_ms),
+        "update_ms_median": median(&update_ms),
+        "rebuild_ms_median": median(&rebuild_ms),
         "folds": folds,
         "incremental_equals_cold": differing_frames == 0,
         "dependencies": tree.dependency_count(),
