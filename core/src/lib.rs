@@ -11,6 +11,7 @@ pub mod distance;
 pub mod geom;
 pub mod implicit;
 pub mod io;
+pub mod mergetree;
 pub mod progress;
 pub mod rng;
 pub mod simplify;

@@ -69,33 +69,58 @@ impl View {
     /// sphere (`center`, `radius`): projected at the sphere's nearest depth, and
     /// enlarged by the worst off-axis stretch at the viewport's corner.
     pub fn pixels(&self, length: f32, center: Vec3, radius: f32) -> f32 {
-        let depth = ((center - self.eye).dot(self.forward()) - radius).max(NEAR);
+        self.projector().pixels(length, center, radius)
+    }
+
+    /// [`View::pixels`] with its per-view constants computed once, for callers
+    /// projecting many lengths per frame.
+    pub fn projector(&self) -> Projector {
         let half_h = (0.5 * self.fov_y).tan();
         let corner = (1.0 + half_h * half_h * (1.0 + self.aspect() * self.aspect())).sqrt();
-        length * self.focal_pixels() * corner / depth
+        Projector {
+            eye: self.eye,
+            forward: self.forward(),
+            scale: self.focal_pixels() * corner,
+        }
     }
 
     /// Whether the sphere can be seen at all (inside the view frustum, any depth
     /// in front of the eye).
     pub fn sees_sphere(&self, center: Vec3, radius: f32) -> bool {
         let v = center - self.eye;
+        v.dot(self.forward()) >= -radius && self.side_planes().iter().all(|n| v.dot(*n) >= -radius)
+    }
+
+    /// Inward unit normals of the frustum's four side planes through the eye
+    /// (callers testing many spheres per frame compute them once).
+    pub fn side_planes(&self) -> [Vec3; 4] {
         let f = self.forward();
-        let depth = v.dot(f);
-        if depth < -radius {
-            return false;
-        }
         let right = f.cross(self.up).normalize_or(Vec3::X);
         let up = right.cross(f);
         let ty = (0.5 * self.fov_y).tan();
         let tx = ty * self.aspect();
-        // Each side plane through the eye; the sphere is out if wholly beyond one.
-        let planes = [
+        [
             (f * ty - up).normalize(),
             (f * ty + up).normalize(),
             (f * tx - right).normalize(),
             (f * tx + right).normalize(),
-        ];
-        planes.iter().all(|n| v.dot(*n) >= -radius)
+        ]
+    }
+}
+
+/// The per-view constants of [`View::pixels`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Projector {
+    eye: Vec3,
+    forward: Vec3,
+    scale: f32,
+}
+
+impl Projector {
+    /// See [`View::pixels`].
+    pub fn pixels(&self, length: f32, center: Vec3, radius: f32) -> f32 {
+        let depth = ((center - self.eye).dot(self.forward) - radius).max(NEAR);
+        length * self.scale / depth
     }
 }
 

@@ -5,9 +5,13 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 use std::sync::OnceLock;
 
-/// `../shared/models` beside the checkout (fixed by the project layout).
+/// `../shared/models` beside the checkout (fixed by the project layout), or
+/// `$LODSTUDIO_SHARED_MODELS` for checkouts elsewhere (git worktrees).
 pub fn shared_models() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shared/models")
+    match std::env::var_os("LODSTUDIO_SHARED_MODELS") {
+        Some(dir) => PathBuf::from(dir),
+        None => Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shared/models"),
+    }
 }
 
 pub fn shared_model(name: &str) -> PathBuf {

@@ -13,6 +13,7 @@ use lodstudio_core::{Progress, builtins};
 mod export;
 mod info;
 mod measure;
+mod mergetree;
 mod simplify;
 mod voxel;
 
@@ -43,6 +44,9 @@ enum Command {
     /// Export an LOD chain as one GLB: the MSFT_lod node extension with
     /// MSFT_screencoverage thresholds from each LOD's guaranteed error bound.
     Export(export::ExportArgs),
+    /// View-dependent merge tree: build it, replay a camera orbit (or zoom) and
+    /// time the incremental update against a cold start (merge-tree paper Table 1).
+    Mergetree(mergetree::MergeTreeArgs),
 }
 
 /// How results are reported and written.
@@ -152,6 +156,7 @@ pub fn run() -> Result<(), CliError> {
         Some(Command::Measure(args)) => measure::run(args),
         Some(Command::Voxel(args)) => voxel::run(args),
         Some(Command::Export(args)) => export::run(args),
+        Some(Command::Mergetree(args)) => mergetree::run(args),
     }
 }
 

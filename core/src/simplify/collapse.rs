@@ -118,13 +118,131 @@ pub struct EdgeCollapser {
     cost: Box<CostFn>,
 }
 
-fn quality(p: [Vec3; 3]) -> f32 {
+/// Merge-tree paper eq. 3: 4√3·area/(l0²+l1²+l2²), 0 for a degenerate
+/// triangle and 1 for an equilateral one.
+pub(crate) fn quality(p: [Vec3; 3]) -> f32 {
     let l2 =
         p[0].distance_squared(p[1]) + p[1].distance_squared(p[2]) + p[2].distance_squared(p[0]);
     if l2 <= 0.0 {
         return 0.0;
     }
     4.0 * 3f32.sqrt() * 0.5 * (p[1] - p[0]).cross(p[2] - p[0]).length() / l2
+}
+
+/// The fold and sliver guards for one triangle moving from `old` to `new`: it
+/// neither degenerates, nor turns past `min_normal_cos`, nor becomes a sliver
+/// below `min_quality` (unless it already was one).
+pub(crate) fn triangle_change_allowed(
+    old: [Vec3; 3],
+    new: [Vec3; 3],
+    opts: &CollapseOptions,
+) -> bool {
+    let n0 = (old[1] - old[0]).cross(old[2] - old[0]);
+    let n1 = (new[1] - new[0]).cross(new[2] - new[0]);
+    let (l0, l1) = (n0.length(), n1.length());
+    if l1 <= f32::MIN_POSITIVE || n0.dot(n1) < opts.min_normal_cos * l0 * l1 {
+        return false;
+    }
+    if opts.min_quality > 0.0 {
+        let q1 = quality(new);
+        if q1 < opts.min_quality && q1 < quality(old) {
+            return false;
+        }
+    }
+    true
+}
+
+/// The placement-independent rules for collapsing edge (a, b), with `shared`
+/// triangles on it, over per-vertex triangle lists `vtris`: the link condition (the common
+/// neighbours of a and b are exactly the vertices opposite the edge), no
+/// tetrahedron folding into duplicate triangles, and at least one triangle
+/// left around the new vertex (else a whole tiny component would vanish).
+pub(crate) fn link_condition(
+    vtris: &[Vec<u32>],
+    tris: &[[u32; 3]],
+    mark: &mut Vec<u32>,
+    stamp: &mut u32,
+    [a, b]: [u32; 2],
+    shared: usize,
+) -> bool {
+    if shared == 0 || vtris[a as usize].len() + vtris[b as usize].len() <= 2 * shared {
+        return false;
+    }
+    if mark.len() < vtris.len() {
+        mark.resize(vtris.len(), 0);
+    }
+    // Stamps s (neighbour of a) and s + 1 (already counted as common).
+    *stamp = stamp.wrapping_add(2);
+    if *stamp < 2 {
+        mark.fill(0);
+        *stamp = 2;
+    }
+    let s = *stamp;
+    for t in &vtris[a as usize] {
+        for w in tris[*t as usize] {
+            if w != a {
+                mark[w as usize] = s;
+            }
+        }
+    }
+    let mut common = 0;
+    let mut opposite = [u32::MAX; 2];
+    for t in &vtris[b as usize] {
+        let tri = tris[*t as usize];
+        for w in tri {
+            if w != b && mark[w as usize] == s {
+                mark[w as usize] = s + 1;
+                common += 1;
+            }
+        }
+        if tri.contains(&a) && shared <= 2 {
+            let o = tri
+                .iter()
+                .copied()
+                .find(|w| *w != a && *w != b)
+                .unwrap_or(u32::MAX);
+            opposite[usize::from(opposite[0] != u32::MAX)] = o;
+        }
+    }
+    if common != shared {
+        return false;
+    }
+    // Tetrahedron: (a, o0, o1) and (b, o0, o1) would become one triangle twice.
+    let [o0, o1] = opposite;
+    let has_face = |v: u32| {
+        vtris[v as usize]
+            .iter()
+            .any(|t| tris[*t as usize].contains(&o0) && tris[*t as usize].contains(&o1))
+    };
+    !(shared == 2 && o1 != u32::MAX && has_face(a) && has_face(b))
+}
+
+/// Whether corner `c` faces a border or part-seam edge (or a non-manifold one,
+/// which the corner table leaves unpaired).
+pub(crate) fn constrained_corner(adj: &Adjacency, tri_part: &[u32], c: usize) -> bool {
+    let o = adj.opposite[c];
+    o == crate::geom::adjacency::NONE || tri_part[o as usize / 3] != tri_part[c / 3]
+}
+
+/// Vertices on constrained edges: borders, part seams, non-manifold and
+/// mis-oriented edges. They move only along such edges, if at all.
+pub(crate) fn constrained_vertices(mesh: &TriMesh, adj: &Adjacency, tri_part: &[u32]) -> Vec<bool> {
+    let triangles = &mesh.triangles;
+    let mut constrained = vec![false; mesh.positions.len()];
+    for c in 0..adj.opposite.len() {
+        if constrained_corner(adj, tri_part, c) {
+            let tri = triangles[c / 3];
+            constrained[tri[(c + 1) % 3] as usize] = true;
+            constrained[tri[(c + 2) % 3] as usize] = true;
+        }
+    }
+    for (i, e) in adj.edges.iter().enumerate() {
+        if adj.edge_valence[i] != 2 {
+            constrained[e[0] as usize] = true;
+            constrained[e[1] as usize] = true;
+        }
+    }
+    constrained
 }
 
 impl EdgeCollapser {
@@ -156,19 +274,16 @@ impl EdgeCollapser {
                 }
             }
         }
-        // Constrained edges: borders, part seams, non-manifold and mis-oriented edges.
+        // Border and seam edges get planes that keep them in place.
         let adj = Adjacency::new(&mesh.triangles);
-        let mut constrained = vec![false; nv];
-        for (c, &o) in adj.opposite.iter().enumerate() {
-            let t = c / 3;
-            let seam = o != crate::geom::adjacency::NONE && tri_part[o as usize / 3] != tri_part[t];
-            if o != crate::geom::adjacency::NONE && !seam {
+        let constrained = constrained_vertices(mesh, &adj, &tri_part);
+        for c in 0..adj.opposite.len() {
+            if !constrained_corner(&adj, &tri_part, c) {
                 continue;
             }
+            let t = c / 3;
             let tri = mesh.triangles[t];
             let (u, w) = (tri[(c + 1) % 3], tri[(c + 2) % 3]);
-            constrained[u as usize] = true;
-            constrained[w as usize] = true;
             // A plane through the edge, perpendicular to the face, keeps it in place.
             let [a, b, cc] = mesh.triangle(t);
             let face_n = (b - a).cross(cc - a).normalize_or_zero();
@@ -179,12 +294,6 @@ impl EdgeCollapser {
                 let q = Quadric::plane(pu, n, BORDER_WEIGHT * e.length_squared() as f64);
                 quadric[u as usize].add(&q);
                 quadric[w as usize].add(&q);
-            }
-        }
-        for (i, e) in adj.edges.iter().enumerate() {
-            if adj.edge_valence[i] != 2 {
-                constrained[e[0] as usize] = true;
-                constrained[e[1] as usize] = true;
             }
         }
         let mut s = EdgeCollapser {
@@ -322,64 +431,10 @@ impl EdgeCollapser {
         ))
     }
 
-    /// The placement-independent rules: the link condition (the common
-    /// neighbours of a and b are exactly the vertices opposite the edge), no
-    /// tetrahedron folding into duplicate triangles, and at least one triangle
-    /// left around the new vertex (else a whole tiny component would vanish).
     fn topology_allows(&self, a: u32, b: u32, shared: usize) -> bool {
-        if shared == 0 || self.vtris[a as usize].len() + self.vtris[b as usize].len() <= 2 * shared
-        {
-            return false;
-        }
         let mut guard = self.mark.borrow_mut();
         let (mark, stamp) = &mut *guard;
-        if mark.len() < self.pos.len() {
-            mark.resize(self.pos.len(), 0);
-        }
-        // Stamps s (neighbour of a) and s + 1 (already counted as common).
-        *stamp = stamp.wrapping_add(2);
-        if *stamp < 2 {
-            mark.fill(0);
-            *stamp = 2;
-        }
-        let s = *stamp;
-        for t in &self.vtris[a as usize] {
-            for w in self.tris[*t as usize] {
-                if w != a {
-                    mark[w as usize] = s;
-                }
-            }
-        }
-        let mut common = 0;
-        let mut opposite = [u32::MAX; 2];
-        for t in &self.vtris[b as usize] {
-            let tri = self.tris[*t as usize];
-            for w in tri {
-                if w != b && mark[w as usize] == s {
-                    mark[w as usize] = s + 1;
-                    common += 1;
-                }
-            }
-            if tri.contains(&a) && shared <= 2 {
-                let o = tri
-                    .iter()
-                    .copied()
-                    .find(|w| *w != a && *w != b)
-                    .unwrap_or(u32::MAX);
-                opposite[usize::from(opposite[0] != u32::MAX)] = o;
-            }
-        }
-        if common != shared {
-            return false;
-        }
-        // Tetrahedron: (a, o0, o1) and (b, o0, o1) would become one triangle twice.
-        let [o0, o1] = opposite;
-        let has_face = |v: u32| {
-            self.vtris[v as usize].iter().any(|t| {
-                self.tris[*t as usize].contains(&o0) && self.tris[*t as usize].contains(&o1)
-            })
-        };
-        !(shared == 2 && o1 != u32::MAX && has_face(a) && has_face(b))
+        link_condition(&self.vtris, &self.tris, mark, stamp, [a, b], shared)
     }
 
     /// No triangle flips or folds past the fold guard, and the sliver guard holds.
@@ -398,17 +453,8 @@ impl EdgeCollapser {
                         self.pos[w as usize]
                     }
                 });
-                let n0 = (old[1] - old[0]).cross(old[2] - old[0]);
-                let n1 = (new[1] - new[0]).cross(new[2] - new[0]);
-                let (l0, l1) = (n0.length(), n1.length());
-                if l1 <= f32::MIN_POSITIVE || n0.dot(n1) < self.opts.min_normal_cos * l0 * l1 {
+                if !triangle_change_allowed(old, new, &self.opts) {
                     return false;
-                }
-                if self.opts.min_quality > 0.0 {
-                    let q1 = quality(new);
-                    if q1 < self.opts.min_quality && q1 < quality(old) {
-                        return false;
-                    }
                 }
             }
         }
