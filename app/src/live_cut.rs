@@ -103,6 +103,7 @@ pub struct CutStats {
 pub struct LiveCut {
     hierarchy: Box<dyn Hierarchy>,
     last: Option<(Option<u64>, View, Tolerance)>,
+    runtime: serde_json::Value,
     scene: Arc<Scene>,
     draw: DrawSet,
     pub stats: CutStats,
@@ -113,6 +114,7 @@ impl LiveCut {
         let mut live = LiveCut {
             hierarchy,
             last: None,
+            runtime: serde_json::Value::Null,
             scene: Arc::new(Scene::from_draw_set(&DrawSet::default(), None, &[])),
             draw: DrawSet::default(),
             stats: CutStats::default(),
@@ -123,6 +125,16 @@ impl LiveCut {
 
     pub fn method(&self) -> &'static str {
         self.hierarchy.method()
+    }
+
+    /// Hands the hierarchy new run-time parameters (when they differ), and
+    /// forces the next [`LiveCut::update`] to re-select.
+    pub fn set_runtime(&mut self, params: serde_json::Value) {
+        if params != self.runtime {
+            self.hierarchy.set_runtime(&params);
+            self.runtime = params;
+            self.last = None;
+        }
     }
 
     /// Re-selects the cut when the view or the tolerance may change it; true

@@ -236,6 +236,11 @@ impl StudioApp {
     }
 
     /// The 3D view (its camera is public).
+    /// The camera, for scripted sessions and tests.
+    pub fn viewport_mut(&mut self) -> &mut Viewport {
+        &mut self.viewport
+    }
+
     pub fn viewport(&self) -> &Viewport {
         &self.viewport
     }
@@ -569,6 +574,11 @@ impl StudioApp {
                 let loaded = Arc::clone(&current.loaded);
                 Box::new(move |progress| build::run(&loaded.model, options, progress))
             }
+            BuildParams::MergeTree(_) => {
+                let loaded = Arc::clone(&current.loaded);
+                let settings = self.methods.merge_tree;
+                Box::new(move |progress| build::mergetree::run(&loaded.model, settings, progress))
+            }
             BuildParams::Voxel(settings) => {
                 match build::voxel_source(&current.path, &current.loaded.model) {
                     Ok(build::VoxelSource::Implicit(name)) => {
@@ -655,7 +665,16 @@ impl StudioApp {
     /// hierarchy says they change it).
     fn update_cut(&mut self) {
         if let Some(live) = self.result.as_mut().and_then(|b| b.live.as_mut()) {
-            let view = self.viewport.core_view();
+            let mut view = self.viewport.core_view();
+            let mt = &self.methods.merge_tree;
+            if let Some(light) = mt.light() {
+                view.light_dir = light;
+            }
+            live.set_runtime(serde_json::json!({
+                "backface": mt.backface,
+                "silhouette": mt.silhouette,
+                "lighting": mt.lighting,
+            }));
             live.update(&view, self.methods.threshold.tolerance());
         }
     }
@@ -869,6 +888,10 @@ impl StudioApp {
                 let volume = self.current.as_ref().and_then(|c| c.volume);
                 changed |= self.methods.voxel.ui(ui, volume.as_ref());
             }
+            Method::MergeTree => {
+                // Criteria changes re-cut the live tree; only build options rebuild.
+                changed |= self.methods.merge_tree.ui(ui).0;
+            }
         }
         if self.result.as_ref().is_some_and(|b| b.live.is_some()) {
             ui.add_space(4.0);
@@ -996,6 +1019,30 @@ impl StudioApp {
                             ui.end_row();
                         }
                     });
+                for plot in &built.plots {
+                    ui.separator();
+                    ui.label(plot.title);
+                    let mut chart = egui_plot::Plot::new(plot.title)
+                        .height(140.0)
+                        .x_axis_label(plot.x_label)
+                        .y_axis_label(if plot.log_y {
+                            format!("log10 {}", plot.y_label)
+                        } else {
+                            plot.y_label.to_string()
+                        })
+                        .allow_scroll(false)
+                        .legend(egui_plot::Legend::default());
+                    chart = chart.allow_drag(false);
+                    chart.show(ui, |p| {
+                        for (name, points) in &plot.series {
+                            let pts: Vec<[f64; 2]> = points
+                                .iter()
+                                .map(|&[x, y]| [x, if plot.log_y { y.max(1e-12).log10() } else { y }])
+                                .collect();
+                            p.line(egui_plot::Line::new(name.as_str(), egui_plot::PlotPoints::from(pts)));
+                        }
+                    });
+                }
                 if let Some(live) = &built.live {
                     ui.separator();
                     ui.label(egui::RichText::new("Cut").strong());

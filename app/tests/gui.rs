@@ -928,3 +928,59 @@ fn voxel_method_builds_a_volume_at_its_threshold() {
     assert_eq!(harness.state().methods().voxel.threshold, None);
     assert!(has_label(&harness, "grid 4 x 4 x 4 (the volume's own)"));
 }
+
+/// The triangles of the live cut on screen.
+fn cut_stats(harness: &Harness<'_, StudioApp>) -> lodstudio::live_cut::CutStats {
+    harness
+        .state()
+        .result()
+        .and_then(|b| b.live.as_ref())
+        .expect("a live cut")
+        .stats
+}
+
+#[test]
+fn merge_tree_refines_live_with_the_threshold_and_the_camera() {
+    let mut harness = studio(None);
+    wait_for_load(&mut harness);
+    harness.get_by_label("Merge tree (view-dependent)").click();
+    harness.run();
+    if !harness.state().is_building() {
+        harness.get_by_label("Build").click();
+        harness.step();
+    }
+    wait_for_build(&mut harness);
+    assert!(
+        has_label(&harness, "vertices per tree level"),
+        "the level plot"
+    );
+    assert!(has_label(&harness, "tree levels"));
+    let fine = cut_stats(&harness);
+    assert!(fine.triangles > 0);
+    assert_eq!(drawn_triangles(&harness), Some(fine.triangles));
+
+    // A coarser threshold in pixels cuts fewer triangles, at once.
+    harness
+        .get_by_role_and_label(egui::Role::Slider, "error threshold")
+        .set_value_accesskit(24.0);
+    harness.run();
+    assert!(!harness.state().is_building(), "no rebuild for a threshold");
+    let coarse = cut_stats(&harness);
+    assert!(coarse.triangles < fine.triangles, "{coarse:?} vs {fine:?}");
+
+    // Moving the camera away coarsens further; every move re-cuts.
+    let distance = harness.state().viewport().distance;
+    harness.state_mut().viewport_mut().distance = distance * 6.0;
+    harness.run();
+    let far = cut_stats(&harness);
+    assert!(far.cuts > coarse.cuts);
+    assert!(far.triangles < coarse.triangles, "{far:?} vs {coarse:?}");
+    assert_eq!(drawn_triangles(&harness), Some(far.triangles));
+    assert!(has_label(&harness, "cut triangles"));
+
+    // Criteria switch at run time: no rebuild.
+    harness.get_by_label("back faces coarser").click();
+    harness.run();
+    assert!(!harness.state().is_building());
+    assert!(cut_stats(&harness).cuts > far.cuts);
+}

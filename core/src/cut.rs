@@ -90,4 +90,7 @@ pub trait Hierarchy: Send + Sync {
     fn view_key(&self, _view: &View, _tolerance: Tolerance) -> Option<u64> {
         None
     }
+    /// Run-time parameters that change the cut without a rebuild (the merge
+    /// tree's criteria, say), as JSON; unknown keys are ignored.
+    fn set_runtime(&mut self, _params: &serde_json::Value) {}
 }

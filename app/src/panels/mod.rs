@@ -3,12 +3,16 @@
 //! between sessions except the voxel threshold, which is in the units of one
 //! volume's values (see [`voxel::VoxelSettings::threshold`]).
 
+pub mod mergetree;
 pub mod simplify;
 pub mod voxel;
 
 use lodstudio_core::simplify::SimplifyOptions;
 use serde::{Deserialize, Serialize};
 
+use lodstudio_core::mergetree::MergeTreeOptions;
+
+use self::mergetree::MergeTreeSettings;
 use self::simplify::EdgeCollapseSettings;
 use self::voxel::{VolumeGrid, VoxelSettings};
 use crate::live_cut::Threshold;
@@ -21,16 +25,19 @@ pub enum Method {
     EdgeCollapse,
     /// Low-pass filtering of a sampled volume and marching cubes (voxel paper §2).
     Voxel,
+    /// View-dependent refinement of a merge tree (merge-tree paper).
+    MergeTree,
 }
 
 impl Method {
     /// Every method, in the order the list shows them.
-    pub const ALL: &[Method] = &[Method::EdgeCollapse, Method::Voxel];
+    pub const ALL: &[Method] = &[Method::EdgeCollapse, Method::MergeTree, Method::Voxel];
 
     pub fn name(self) -> &'static str {
         match self {
             Method::EdgeCollapse => "Edge collapse",
             Method::Voxel => "Voxel (low-pass + marching cubes)",
+            Method::MergeTree => "Merge tree (view-dependent)",
         }
     }
 
@@ -48,6 +55,13 @@ impl Method {
                  cubes: wider filters remove small features, holes and tunnels, so the genus \
                  falls (voxel-based object simplification paper, §2)."
             }
+            Method::MergeTree => {
+                "Builds a merge tree of vertex merges level by level with their \
+                 dependencies, then refines or coarsens it every frame from the previous \
+                 frame's vertices so each region's error stays within the threshold in \
+                 pixels, coarser on back faces, finer on silhouettes and where the \
+                 lighting changes (view-dependent merge trees paper)."
+            }
         }
     }
 }
@@ -61,6 +75,7 @@ pub struct MethodSettings {
     pub auto_rebuild: bool,
     pub edge_collapse: EdgeCollapseSettings,
     pub voxel: VoxelSettings,
+    pub merge_tree: MergeTreeSettings,
     /// The error threshold of live cuts (hierarchies).
     pub threshold: Threshold,
 }
@@ -71,6 +86,8 @@ pub struct MethodSettings {
 pub enum BuildParams {
     EdgeCollapse(SimplifyOptions),
     Voxel(VoxelSettings),
+    /// The tree's build options (its criteria apply at run time).
+    MergeTree(MergeTreeOptions),
 }
 
 impl BuildParams {
@@ -78,6 +95,7 @@ impl BuildParams {
         match self {
             BuildParams::EdgeCollapse(_) => Method::EdgeCollapse,
             BuildParams::Voxel(_) => Method::Voxel,
+            BuildParams::MergeTree(_) => Method::MergeTree,
         }
     }
 }
@@ -89,6 +107,7 @@ impl Default for MethodSettings {
             auto_rebuild: true,
             edge_collapse: EdgeCollapseSettings::default(),
             voxel: VoxelSettings::default(),
+            merge_tree: MergeTreeSettings::default(),
             threshold: Threshold::default(),
         }
     }
@@ -102,6 +121,7 @@ impl MethodSettings {
         settings.edge_collapse = settings.edge_collapse.sanitized();
         settings.voxel = settings.voxel.sanitized();
         settings.threshold = settings.threshold.sanitized();
+        settings.merge_tree = settings.merge_tree.sanitized();
         Some(settings)
     }
 
@@ -114,6 +134,7 @@ impl MethodSettings {
                 Some(grid) => self.voxel.for_volume(grid),
                 None => self.voxel.for_implicit(),
             }),
+            Method::MergeTree => BuildParams::MergeTree(self.merge_tree.sanitized().options()),
         }
     }
 

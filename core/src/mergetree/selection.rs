@@ -329,4 +329,15 @@ impl Hierarchy for MergeTreeView {
         self.update(view, tolerance);
         self.draw_set()
     }
+
+    /// The criteria switches `backface`, `silhouette` and `lighting` (§3).
+    fn set_runtime(&mut self, params: &serde_json::Value) {
+        let flag =
+            |key: &str, current: bool| params.get(key).and_then(|v| v.as_bool()).unwrap_or(current);
+        self.criteria = Criteria {
+            backface: flag("backface", self.criteria.backface),
+            silhouette: flag("silhouette", self.criteria.silhouette),
+            lighting: flag("lighting", self.criteria.lighting),
+        };
+    }
 }

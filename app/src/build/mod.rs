@@ -1,6 +1,8 @@
 //! One LOD build of the open model, done on a worker thread: the simplified
 //! mesh (with its certificate or topology), the scenes the viewport shows for
-//! it, and the inspector rows that report it.
+//! it, and the inspector rows that report it. One module per hierarchy method.
+
+pub mod mergetree;
 
 use std::path::Path;
 use std::sync::Arc;
@@ -23,6 +25,16 @@ use crate::panels::voxel::{VolumeGrid, VoxelSettings};
 use crate::panels::{BuildParams, Method};
 use crate::viewport::Scene;
 
+/// What a cut without a live hierarchy shows (never built that way).
+static EMPTY: TriMesh = TriMesh {
+    positions: Vec::new(),
+    triangles: Vec::new(),
+    normals: None,
+    colors: None,
+    uvs: None,
+    parts: None,
+};
+
 /// One inspector row, with what it means when hovered.
 pub struct Row {
     pub label: &'static str,
@@ -41,6 +53,18 @@ pub enum Lod {
     },
     /// Voxel simplification: the iso-surface and its topology.
     Voxel(VoxelLevel),
+    /// A hierarchy cut live ([`Built::live`]): what is shown is its cut.
+    Cut,
+}
+
+/// A curve or bar series for the inspector's plots.
+pub struct Plot {
+    pub title: &'static str,
+    pub x_label: &'static str,
+    pub y_label: &'static str,
+    pub log_y: bool,
+    /// Named series of (x, y) points.
+    pub series: Vec<(String, Vec<[f64; 2]>)>,
 }
 
 /// The simplified mesh coloured by each triangle's certified bound.
@@ -62,6 +86,7 @@ pub struct Built {
     /// Only for methods with per-triangle bounds (edge collapse).
     pub heat: Option<Heat>,
     pub rows: Vec<Row>,
+    pub plots: Vec<Plot>,
     /// Hierarchies cut live for the camera and the threshold (and layered
     /// voxel levels, ordered back to front for the camera).
     pub live: Option<LiveCut>,
@@ -72,11 +97,13 @@ impl Built {
         self.params.method()
     }
 
-    /// The mesh the build made.
+    /// The mesh the build made (a live cut's current triangles).
     pub fn mesh(&self) -> &TriMesh {
-        match &self.lod {
-            Lod::Collapsed { simplified, .. } => &simplified.mesh,
-            Lod::Voxel(level) => &level.mesh,
+        match (&self.lod, &self.live) {
+            (Lod::Collapsed { simplified, .. }, _) => &simplified.mesh,
+            (Lod::Voxel(level), _) => &level.mesh,
+            (Lod::Cut, Some(live)) => &live.draw_set().mesh,
+            (Lod::Cut, None) => &EMPTY,
         }
     }
 
@@ -84,7 +111,7 @@ impl Built {
     pub fn simplified(&self) -> Option<&Simplified> {
         match &self.lod {
             Lod::Collapsed { simplified, .. } => Some(simplified),
-            Lod::Voxel(_) => None,
+            Lod::Voxel(_) | Lod::Cut => None,
         }
     }
 
@@ -92,7 +119,7 @@ impl Built {
     pub fn voxel(&self) -> Option<&VoxelLevel> {
         match &self.lod {
             Lod::Voxel(level) => Some(level),
-            Lod::Collapsed { .. } => None,
+            Lod::Collapsed { .. } | Lod::Cut => None,
         }
     }
 
@@ -122,6 +149,14 @@ impl Built {
                 level.radius,
                 self.seconds
             ),
+            Lod::Cut => {
+                let rows: Vec<String> = self
+                    .rows
+                    .iter()
+                    .map(|r| format!("{} {}", r.label, r.value))
+                    .collect();
+                rows.join(", ")
+            }
         }
     }
 }
@@ -132,7 +167,7 @@ impl Built {
 /// A one-line message for the user saying why not.
 pub fn check(method: Method, path: &Path, model: &Model) -> Result<(), String> {
     match method {
-        Method::EdgeCollapse => mesh_of(model).map(|_| ()),
+        Method::EdgeCollapse | Method::MergeTree => mesh_of(model).map(|_| ()),
         Method::Voxel => voxel_source(path, model).map(|_| ()),
     }
 }
@@ -244,6 +279,7 @@ pub fn run(
         scene,
         heat: Some(heat),
         rows,
+        plots: Vec::new(),
         live: None,
     }))
 }
@@ -384,6 +420,7 @@ fn voxel_built(
         scene,
         heat: None,
         rows,
+        plots: Vec::new(),
         live,
     }))
 }
