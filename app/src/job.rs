@@ -77,6 +77,11 @@ impl<T> Job<T> {
         }
     }
 
+    /// The shared progress handle (stage, fraction, intermediate states).
+    pub fn progress(&self) -> &Progress {
+        &self.progress
+    }
+
     pub fn label(&self) -> &str {
         &self.label
     }

@@ -151,6 +151,8 @@ pub struct StudioApp {
     result: Option<Built>,
     /// Time of the last frame, for the inspector.
     frame_ms: f32,
+    /// What the running build has made so far (shown while it runs).
+    preview: Option<Arc<Scene>>,
     /// A build asked for but not started yet.
     build_at: Option<BuildRequest>,
     /// Why the last build request failed, shown under the Build button.
@@ -207,6 +209,7 @@ impl StudioApp {
             build: None,
             result: None,
             frame_ms: 0.0,
+            preview: None,
             build_at: None,
             build_note: None,
             view: View::Simplified,
@@ -307,6 +310,7 @@ impl StudioApp {
         }
         self.poll_job(&ctx);
         self.poll_build();
+        self.poll_preview();
         self.poll_export();
         self.start_build_when_due(&ctx);
 
@@ -617,7 +621,11 @@ impl StudioApp {
         }
         self.build_note = None;
         match Job::spawn("lod builder", label, ctx, work) {
-            Ok(job) => self.build = Some(job),
+            Ok(job) => {
+                job.progress().watch();
+                self.preview = None;
+                self.build = Some(job);
+            }
             Err(e) => self.build_failed(format!("cannot start the build: {e}")),
         }
     }
@@ -661,6 +669,18 @@ impl StudioApp {
         self.build_note = Some(message);
     }
 
+    /// The latest intermediate state of the running build, as a scene.
+    fn poll_preview(&mut self) {
+        match &self.build {
+            Some(job) => {
+                if let Some(state) = job.progress().take_preview() {
+                    self.preview = Some(Arc::new(Scene::from_draw_set(&state, None, &state.layer_order)));
+                }
+            }
+            None => self.preview = None,
+        }
+    }
+
     /// Re-selects a live cut for the camera and the threshold (only when the
     /// hierarchy says they change it).
     fn update_cut(&mut self) {
@@ -684,6 +704,11 @@ impl StudioApp {
         let Some(current) = &self.current else {
             return;
         };
+        if let Some(preview) = &self.preview {
+            // Watching the build: its intermediate state.
+            self.viewport.swap_scene(preview);
+            return;
+        }
         let scene = match (&self.result, self.view) {
             (Some(built), View::Simplified) => match (&built.heat, &built.live) {
                 (Some(heat), _) if self.heat => &heat.scene,

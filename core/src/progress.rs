@@ -1,10 +1,16 @@
 //! Shared progress / cancel handle for long work (loading, building hierarchies).
 //!
 //! Workers publish a stage name and a fraction; the GUI polls them every frame and
-//! may raise the cancel flag, which workers check between chunks of work.
+//! may raise the cancel flag, which workers check between chunks of work. When
+//! someone watches ([`Progress::watch`]), workers also publish what they have
+//! built so far (a [`DrawSet`]) a few times a second, so the studio can show the
+//! hierarchy as it grows; nobody watching costs one atomic load.
 
 use std::sync::Mutex;
 use std::sync::atomic::{AtomicBool, AtomicU32, Ordering};
+use std::time::{Duration, Instant};
+
+use crate::cut::DrawSet;
 
 /// Returned by work that stopped because [`Progress::cancel`] was called.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, thiserror::Error)]
@@ -17,7 +23,13 @@ pub struct Progress {
     stage: Mutex<String>,
     fraction: AtomicU32,
     cancel: AtomicBool,
+    watched: AtomicBool,
+    /// The latest intermediate state and when it was published.
+    preview: Mutex<(Option<DrawSet>, Option<Instant>)>,
 }
+
+/// The shortest time between two published intermediate states.
+const PREVIEW_INTERVAL: Duration = Duration::from_millis(250);
 
 impl Progress {
     pub fn new() -> Self {
@@ -56,6 +68,33 @@ impl Progress {
 
     pub fn is_cancelled(&self) -> bool {
         self.cancel.load(Ordering::Relaxed)
+    }
+
+    /// Asks workers to publish intermediate states.
+    pub fn watch(&self) {
+        self.watched.store(true, Ordering::Relaxed);
+    }
+
+    /// Whether a worker should publish now: someone watches and the last state
+    /// is older than a quarter second.
+    pub fn wants_preview(&self) -> bool {
+        self.watched.load(Ordering::Relaxed)
+            && self
+                .preview
+                .lock()
+                .is_ok_and(|p| p.1.is_none_or(|t| t.elapsed() >= PREVIEW_INTERVAL))
+    }
+
+    /// Publishes what is built so far (replacing any state not yet taken).
+    pub fn publish(&self, state: DrawSet) {
+        if let Ok(mut p) = self.preview.lock() {
+            *p = (Some(state), Some(Instant::now()));
+        }
+    }
+
+    /// The latest state published since the last call.
+    pub fn take_preview(&self) -> Option<DrawSet> {
+        self.preview.lock().ok().and_then(|mut p| p.0.take())
     }
 
     /// `Err(Cancelled)` once cancel was requested; call between chunks of work.

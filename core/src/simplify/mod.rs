@@ -89,10 +89,16 @@ pub fn simplify(
         let mut cancelled = false;
         s.run(target, |s, _| {
             collapses += 1;
-            if collapses.is_multiple_of(4096) {
+            if collapses.is_multiple_of(512) {
                 let done = (n - s.triangle_count()) as f32 / (n - target.min(n)).max(1) as f32;
                 progress.set_fraction(done);
                 cancelled = progress.is_cancelled();
+                if progress.wants_preview() {
+                    progress.publish(crate::cut::DrawSet {
+                        mesh: s.mesh().0,
+                        ..Default::default()
+                    });
+                }
             }
             !cancelled
         });
@@ -162,6 +168,28 @@ mod tests {
     use super::*;
     use crate::builtins::torus;
     use crate::distance::{SamplingOptions, hausdorff_mesh_mesh};
+
+    /// A watched build publishes what it has collapsed so far; an unwatched one
+    /// publishes nothing.
+    #[test]
+    fn watched_builds_publish_intermediate_meshes() {
+        let mesh = torus(1.0, 0.3, 64, 32);
+        let opts = SimplifyOptions {
+            target: Target::Ratio(0.1),
+            collapse: CollapseOptions::default(),
+            per_triangle_bounds: false,
+        };
+        let quiet = Progress::new();
+        simplify(&mesh, &opts, &quiet).unwrap();
+        assert!(quiet.take_preview().is_none());
+        let watched = Progress::new();
+        watched.watch();
+        let done = simplify(&mesh, &opts, &watched).unwrap();
+        let state = watched.take_preview().expect("an intermediate mesh");
+        let n = state.mesh.triangles.len();
+        assert!(done.mesh.triangles.len() < n && n < mesh.triangles.len(), "{n}");
+        assert!(watched.take_preview().is_none(), "taken once");
+    }
 
     /// Cancelling while the bound is being certified stops the build.
     #[test]
