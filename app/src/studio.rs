@@ -674,7 +674,11 @@ impl StudioApp {
         match &self.build {
             Some(job) => {
                 if let Some(state) = job.progress().take_preview() {
-                    self.preview = Some(Arc::new(Scene::from_draw_set(&state, None, &state.layer_order)));
+                    self.preview = Some(Arc::new(Scene::from_draw_set(
+                        &state,
+                        None,
+                        &state.layer_order,
+                    )));
                 }
             }
             None => self.preview = None,
@@ -694,6 +698,7 @@ impl StudioApp {
                 "backface": mt.backface,
                 "silhouette": mt.silhouette,
                 "lighting": mt.lighting,
+                "position": self.methods.voxel.position,
             }));
             live.update(&view, self.methods.threshold.tolerance());
         }

@@ -984,3 +984,51 @@ fn merge_tree_refines_live_with_the_threshold_and_the_camera() {
     assert!(!harness.state().is_building());
     assert!(cut_stats(&harness).cuts > far.cuts);
 }
+
+/// §3 and §5 in the studio: translucent layers drawn back to front, and the
+/// whole pyramid browsed at a continuous position without rebuilding.
+#[test]
+fn voxel_layers_and_the_pyramid_are_shown_live() {
+    let mut harness = studio(Some("builtin:csg-part".into()));
+    wait_for_load(&mut harness);
+    let mut methods = *harness.state().methods();
+    methods.method = Method::Voxel;
+    methods.voxel.resolution = 32;
+    methods.voxel.radius = 1.0;
+    methods.voxel.layers_error = 0.05;
+    harness.state_mut().set_methods(methods);
+    harness.step();
+    wait_for_build(&mut harness);
+    let layers: usize = result_row(&harness, "layers").parse().unwrap();
+    assert!(layers >= 3, "{layers} layers");
+    let stats = cut_stats(&harness);
+    assert!(stats.layer_triangles > 0 && stats.triangles == 0);
+    assert_eq!(drawn_triangles(&harness), Some(stats.layer_triangles));
+    let (covered, _) = viewport_pixels(&mut harness, "studio_voxel_layers");
+    assert!(
+        covered > 0.02,
+        "translucent layers drawn: {:.1}%",
+        covered * 100.0
+    );
+    // Turning the camera to another slicing axis re-orders them.
+    harness.state_mut().viewport_mut().yaw += std::f32::consts::FRAC_PI_2;
+    harness.run();
+    assert!(cut_stats(&harness).cuts > stats.cuts);
+
+    methods.voxel.layers_error = 0.5;
+    methods.voxel.pyramid = true;
+    harness.state_mut().set_methods(methods);
+    harness.step();
+    wait_for_build(&mut harness);
+    assert!(has_label(&harness, "genus per pyramid level"));
+    let finest = cut_stats(&harness).triangles;
+    assert!(finest > 0);
+    harness
+        .get_by_role_and_label(egui::Role::Slider, "pyramid position")
+        .set_value_accesskit(1.5);
+    harness.run();
+    assert!(!harness.state().is_building(), "browsing needs no rebuild");
+    let between = cut_stats(&harness).triangles;
+    assert!(between < finest, "{between} < {finest}");
+    assert_eq!(drawn_triangles(&harness), Some(between));
+}

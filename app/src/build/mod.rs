@@ -17,6 +17,7 @@ use lodstudio_core::progress::{Cancelled, Progress};
 use lodstudio_core::simplify::{Simplified, SimplifyError, SimplifyOptions, simplify};
 use lodstudio_core::view::{Tolerance, View};
 use lodstudio_core::voxel::layers::{self, Layered};
+use lodstudio_core::voxel::pyramid::{Pyramid, PyramidCut};
 use lodstudio_core::voxel::{self, DENSITY_ISO, Source, VoxelLevel, density, marching_cubes};
 
 use crate::heatmap;
@@ -298,6 +299,9 @@ pub fn run_voxel(
     let settings = settings.for_implicit();
     let start = Instant::now();
     let source = Source::Solid(solid);
+    if settings.pyramid {
+        return voxel_pyramid(source, settings.resolution, settings, start, progress);
+    }
     let f = density(
         source,
         settings.resolution,
@@ -330,6 +334,9 @@ pub fn run_voxel_volume(
     let threshold = grid.threshold(settings.threshold);
     let start = Instant::now();
     let source = Source::Volume(volume, threshold);
+    if settings.pyramid {
+        return voxel_pyramid(source, 0, settings, start, progress);
+    }
     let f = density(
         source,
         0,
@@ -422,6 +429,91 @@ fn voxel_built(
         rows,
         plots: Vec::new(),
         live,
+    }))
+}
+
+/// Builds the whole pyramid (§2, Tables 1–3) for browsing at any position
+/// (§5), with its levels' topology in the inspector.
+fn voxel_pyramid(
+    source: Source,
+    resolution: usize,
+    settings: VoxelSettings,
+    start: Instant,
+    progress: &Progress,
+) -> Result<Result<Built, String>, Cancelled> {
+    let pyramid = Pyramid::build(
+        source,
+        resolution,
+        settings.radius,
+        settings.filter.filter(),
+        progress,
+    )?;
+    progress.stage("extracting the levels");
+    let mut levels = Vec::with_capacity(pyramid.levels.len());
+    for i in 0..pyramid.levels.len() {
+        levels.push(pyramid.level(i, progress)?);
+        progress.set_fraction((i + 1) as f32 / pyramid.levels.len() as f32);
+    }
+    let seconds = start.elapsed().as_secs_f32();
+    let series = |f: fn(&VoxelLevel) -> f64| -> Vec<[f64; 2]> {
+        levels
+            .iter()
+            .enumerate()
+            .map(|(i, l)| [i as f64, f(l)])
+            .collect()
+    };
+    let plots = vec![
+        Plot {
+            title: "genus per pyramid level",
+            x_label: "level (0 = finest)",
+            y_label: "genus",
+            log_y: false,
+            series: vec![
+                ("genus".to_string(), series(|l| l.genus as f64)),
+                ("components".to_string(), series(|l| l.components as f64)),
+            ],
+        },
+        Plot {
+            title: "triangles per pyramid level",
+            x_label: "level (0 = finest)",
+            y_label: "triangles",
+            log_y: true,
+            series: vec![(
+                "triangles".to_string(),
+                series(|l| l.mesh.triangles.len() as f64),
+            )],
+        },
+    ];
+    let mut rows = voxel_rows(&levels[0], settings, seconds);
+    rows.insert(
+        rows.len() - 1,
+        Row {
+            label: "pyramid",
+            value: levels
+                .iter()
+                .map(|l| format!("{}:{}", l.resolution, l.genus))
+                .collect::<Vec<_>>()
+                .join(" "),
+            hint: "Resolution:genus of each level, finest first (Tables 1-3).",
+        },
+    );
+    let finest = levels.swap_remove(0);
+    let bounds = finest.mesh.bounds();
+    let view = View::orbit(bounds.center(), bounds.diagonal(), 0.6, 0.4);
+    let live = LiveCut::new(
+        Box::new(PyramidCut::new(pyramid, settings.position)),
+        &view,
+        Tolerance::Pixels(1.0),
+    );
+    Ok(Ok(Built {
+        lod: Lod::Voxel(finest),
+        params: BuildParams::Voxel(settings),
+        seconds,
+        scene: Arc::clone(live.scene()),
+        heat: None,
+        rows,
+        plots,
+        live: Some(live),
     }))
 }
 

@@ -13,6 +13,8 @@ const RESOLUTION_RANGE: RangeInclusive<usize> = 16..=256;
 /// Filter support radius R, in voxels of the sampling grid.
 const RADIUS_RANGE: RangeInclusive<f32> = 0.0..=16.0;
 const ISO_RANGE: RangeInclusive<f32> = 0.05..=0.95;
+/// Pyramid positions the slider offers (levels beyond the pyramid clamp).
+const POSITION_RANGE: RangeInclusive<f32> = 0.0..=6.0;
 /// Layers error δ (§3, eq. 6): 0.5 and above is one surface.
 const LAYERS_RANGE: RangeInclusive<f32> = 0.01..=0.5;
 
@@ -44,6 +46,12 @@ const LAYERS_HINT: &str = "Multi-layered marching cubes (§3): instead of one su
     (eq. 4), drawn back to front. The layers error δ bounds the mean density error of \
     their piecewise-constant fit of the density fall-off (eq. 6): smaller gives more \
     layers and smoother edges. 0.5 is a single opaque surface.";
+const PYRAMID_HINT: &str = "Build the whole multi-resolution pyramid of §2 (Tables 1-3): \
+    each level halves the resolution and doubles the filter radius, and the genus falls \
+    level by level. Then browse it with the pyramid position.";
+const POSITION_HINT: &str = "Continuous position in the pyramid (0 = finest level, 1 = \
+    the next, ...): between two levels the two filtered buffers are interpolated into an \
+    in-between resolution and extracted on the fly (§5). No rebuild.";
 const ISO_HINT: &str = "The iso-density at which marching cubes extracts the surface \
     f = iso, on the normalised density scale 0 (empty) to 1 (solid). The paper uses \
     0.5; lower grows the object, higher shrinks it.";
@@ -93,6 +101,10 @@ pub struct VoxelSettings {
     /// Multi-layered surfaces (§3): the mean density error δ of eq. 6 the
     /// layers may leave; 0.5 or more gives the single surface.
     pub layers_error: f32,
+    /// Build the whole pyramid (Tables 1–3) and browse it continuously.
+    pub pyramid: bool,
+    /// Run time: the continuous pyramid position shown (0 = finest, §5).
+    pub position: f32,
 }
 
 /// What the voxel controls and a volume build need to know of a volume,
@@ -136,6 +148,8 @@ impl Default for VoxelSettings {
             iso: DENSITY_ISO,
             threshold: None,
             layers_error: 0.5,
+            pyramid: false,
+            position: 0.0,
         }
     }
 }
@@ -162,6 +176,8 @@ impl VoxelSettings {
             iso: clamp_or(self.iso, ISO_RANGE, d.iso),
             threshold: self.threshold.filter(|t| !t.is_nan()),
             layers_error: clamp_or(self.layers_error, LAYERS_RANGE, d.layers_error),
+            pyramid: self.pyramid,
+            position: clamp_or(self.position, POSITION_RANGE, d.position),
         }
     }
 
@@ -169,6 +185,7 @@ impl VoxelSettings {
     pub fn for_implicit(self) -> Self {
         VoxelSettings {
             threshold: None,
+            position: 0.0,
             ..self.sanitized()
         }
     }
@@ -182,6 +199,7 @@ impl VoxelSettings {
             resolution: d.resolution,
             iso: d.iso,
             threshold: Some(grid.threshold(self.threshold)),
+            position: 0.0,
             ..self.sanitized()
         }
     }
@@ -232,7 +250,20 @@ impl VoxelSettings {
                 .text("layers error δ"),
         )
         .on_hover_text(LAYERS_HINT);
-        *self != before
+        ui.checkbox(&mut self.pyramid, "whole pyramid")
+            .on_hover_text(PYRAMID_HINT);
+        if self.pyramid {
+            ui.add(egui::Slider::new(&mut self.position, POSITION_RANGE).text("pyramid position"))
+                .on_hover_text(POSITION_HINT);
+        }
+        // The position is cut live: it never makes a build stale.
+        VoxelSettings {
+            position: 0.0,
+            ..*self
+        } != VoxelSettings {
+            position: 0.0,
+            ..before
+        }
     }
 }
 

@@ -187,7 +187,10 @@ mod tests {
         let done = simplify(&mesh, &opts, &watched).unwrap();
         let state = watched.take_preview().expect("an intermediate mesh");
         let n = state.mesh.triangles.len();
-        assert!(done.mesh.triangles.len() < n && n < mesh.triangles.len(), "{n}");
+        assert!(
+            done.mesh.triangles.len() < n && n < mesh.triangles.len(),
+            "{n}"
+        );
         assert!(watched.take_preview().is_none(), "taken once");
     }
 

@@ -12,9 +12,11 @@ use glam::Vec3;
 use rayon::prelude::*;
 
 use super::{DENSITY_ISO, Filter, VoxelLevel, level, marching_cubes};
+use crate::cut::{DrawSet, Hierarchy};
 use crate::geom::Volume;
 use crate::implicit::Implicit;
 use crate::progress::{Cancelled, Progress};
+use crate::view::{Tolerance, View};
 
 /// What the pyramid samples.
 #[derive(Clone, Copy)]
@@ -66,6 +68,13 @@ impl Pyramid {
             progress.check()?;
             let resolution = finest / factor;
             let density = super::density(source, resolution, factor, radius, filter, progress)?;
+            if progress.wants_preview() {
+                // Watching the build: each new level as it is filtered.
+                progress.publish(crate::cut::DrawSet {
+                    mesh: marching_cubes(&density, DENSITY_ISO, progress)?,
+                    ..Default::default()
+                });
+            }
             levels.push(PyramidLevel {
                 density,
                 resolution,
@@ -130,6 +139,61 @@ impl Pyramid {
     }
 }
 
+/// A pyramid shown at a continuous position (§5): the studio's filter slider
+/// moves `position` at run time and the cut is the in-between level there.
+#[derive(Debug, Clone)]
+pub struct PyramidCut {
+    pub pyramid: Pyramid,
+    pub position: f32,
+    /// The level last extracted and its position (re-extracted on a move).
+    cached: Option<(f32, crate::geom::TriMesh)>,
+}
+
+impl PyramidCut {
+    pub fn new(pyramid: Pyramid, position: f32) -> Self {
+        PyramidCut {
+            pyramid,
+            position,
+            cached: None,
+        }
+    }
+}
+
+impl Hierarchy for PyramidCut {
+    fn method(&self) -> &'static str {
+        "voxel pyramid"
+    }
+
+    fn select(&mut self, _view: &View, _tolerance: Tolerance) -> DrawSet {
+        let t = self.position;
+        if self.cached.as_ref().is_none_or(|(at, _)| *at != t) {
+            // Extraction is never cancelled here; an empty mesh stands in if it were.
+            let level = self.pyramid.in_between(t, &Progress::new());
+            self.cached = Some((t, level.map(|l| l.mesh).unwrap_or_default()));
+        }
+        DrawSet {
+            mesh: self
+                .cached
+                .as_ref()
+                .map(|(_, m)| m.clone())
+                .unwrap_or_default(),
+            ..Default::default()
+        }
+    }
+
+    /// The cut depends on the position only.
+    fn view_key(&self, _view: &View, _tolerance: Tolerance) -> Option<u64> {
+        Some(0)
+    }
+
+    /// `position`: the continuous pyramid level (0 = finest).
+    fn set_runtime(&mut self, params: &serde_json::Value) {
+        if let Some(t) = params.get("position").and_then(|v| v.as_f64()) {
+            self.position = t as f32;
+        }
+    }
+}
+
 /// Trilinear interpolation of `v` at world point `p`; 0 outside the grid.
 pub fn trilinear(v: &Volume, p: Vec3) -> f32 {
     let g = (p - v.origin) / v.spacing;
@@ -190,6 +254,14 @@ mod tests {
         let (_, back): (_, Pyramid) = crate::io::hierarchy_file::load(&bytes, "voxel").unwrap();
         assert_eq!(back, pyr);
         assert_eq!(back.in_between(0.5, &p).unwrap(), mid);
+
+        // As a hierarchy, the position moves at run time.
+        let mut cut = PyramidCut::new(back, 0.0);
+        let view = View::orbit(Vec3::ZERO, 5.0, 0.0, 0.0);
+        let tol = Tolerance::Relative(0.01);
+        assert_eq!(cut.select(&view, tol).mesh, l0.mesh);
+        cut.set_runtime(&serde_json::json!({"position": 0.5}));
+        assert_eq!(cut.select(&view, tol).mesh, mid.mesh);
     }
 
     #[test]
