@@ -280,8 +280,11 @@ mod tests {
             iso: 3.0,
             threshold: Some(f32::NAN),
             layers_error: 7.0,
+            pyramid: true,
+            position: f32::INFINITY,
         }
         .sanitized();
+        assert_eq!((odd.pyramid, odd.position), (true, 6.0));
         assert_eq!(odd.layers_error, 0.5);
         assert_eq!(odd.threshold, None);
         assert_eq!(odd.filter.filter(), Filter::Cone);
