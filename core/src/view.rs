@@ -69,25 +69,38 @@ impl View {
     /// sphere (`center`, `radius`): projected at the sphere's nearest depth, and
     /// enlarged by the worst off-axis stretch at the viewport's corner.
     pub fn pixels(&self, length: f32, center: Vec3, radius: f32) -> f32 {
-        let depth = ((center - self.eye).dot(self.forward()) - radius).max(NEAR);
-        let half_h = (0.5 * self.fov_y).tan();
-        let corner = (1.0 + half_h * half_h * (1.0 + self.aspect() * self.aspect())).sqrt();
-        length * self.focal_pixels() * corner / depth
+        self.pixels_f64(length as f64, center, radius as f64) as f32
+    }
+
+    /// [`View::pixels`] in double precision: monotone in the sphere (a
+    /// containing sphere never projects smaller) even where f32 round-off
+    /// would break ties, as incremental cuts need (hybrid paper §6).
+    pub fn pixels_f64(&self, length: f64, center: Vec3, radius: f64) -> f64 {
+        let depth = ((center.as_dvec3() - self.eye.as_dvec3()).dot(self.forward().as_dvec3())
+            - radius)
+            .max(NEAR as f64);
+        let half_h = (0.5 * self.fov_y as f64).tan();
+        let aspect = self.aspect() as f64;
+        let corner = (1.0 + half_h * half_h * (1.0 + aspect * aspect)).sqrt();
+        length * self.focal_pixels() as f64 * corner / depth
     }
 
     /// Whether the sphere can be seen at all (inside the view frustum, any depth
     /// in front of the eye).
+    /// Computed in double precision, so that a containing sphere is never
+    /// culled while one inside it is seen.
     pub fn sees_sphere(&self, center: Vec3, radius: f32) -> bool {
-        let v = center - self.eye;
-        let f = self.forward();
+        let radius = radius as f64;
+        let v = center.as_dvec3() - self.eye.as_dvec3();
+        let f = self.forward().as_dvec3();
         let depth = v.dot(f);
         if depth < -radius {
             return false;
         }
-        let right = f.cross(self.up).normalize_or(Vec3::X);
+        let right = f.cross(self.up.as_dvec3()).normalize_or(glam::DVec3::X);
         let up = right.cross(f);
-        let ty = (0.5 * self.fov_y).tan();
-        let tx = ty * self.aspect();
+        let ty = (0.5 * self.fov_y as f64).tan();
+        let tx = ty * self.aspect() as f64;
         // Each side plane through the eye; the sphere is out if wholly beyond one.
         let planes = [
             (f * ty - up).normalize(),
