@@ -11,6 +11,8 @@ use lodstudio_core::stats::ModelSummary;
 use lodstudio_core::{Progress, builtins};
 
 mod export;
+mod flythrough;
+mod hybrid;
 mod info;
 mod measure;
 mod simplify;
@@ -43,6 +45,11 @@ enum Command {
     /// Export an LOD chain as one GLB: the MSFT_lod node extension with
     /// MSFT_screencoverage thresholds from each LOD's guaranteed error bound.
     Export(export::ExportArgs),
+    /// Hybrid simplification: a multi-resolution graph of triangles and points
+    /// (edge collapse, point replacement, point merging), its curve and a cut.
+    Hybrid(hybrid::HybridArgs),
+    /// Primitive counts of triangle-only and hybrid cuts along a fly-through.
+    Flythrough(flythrough::FlythroughArgs),
 }
 
 /// How results are reported and written.
@@ -152,6 +159,8 @@ pub fn run() -> Result<(), CliError> {
         Some(Command::Measure(args)) => measure::run(args),
         Some(Command::Voxel(args)) => voxel::run(args),
         Some(Command::Export(args)) => export::run(args),
+        Some(Command::Hybrid(args)) => hybrid::run(args),
+        Some(Command::Flythrough(args)) => flythrough::run(args),
     }
 }
 
