@@ -3,7 +3,8 @@
 //! frame the primitives (triangles + points/κ) of screen-space cuts.
 //! Instances are translated copies, so each one's cut is taken for the camera
 //! moved into its own frame; every instance keeps its cut between frames
-//! (incremental adaptation).
+//! (incremental adaptation). An instance outside the view frustum is not
+//! drawn at all (scene-level culling), so it counts no primitives.
 
 use std::sync::Arc;
 
@@ -33,7 +34,8 @@ pub fn layout(b: &Aabb, instances: usize) -> Vec<Vec3> {
 
 /// A camera path of `frames` views: it starts four scene widths in front of
 /// the scene and flies straight along +Z at half the model's height, between
-/// two columns of instances, through the scene and out the far side.
+/// two columns of instances, into the scene up to just past its middle
+/// (where the viewer is surrounded by it).
 pub fn camera_path(b: &Aabb, offsets: &[Vec3], frames: usize) -> Vec<View> {
     let scene = offsets.iter().fold(Aabb::EMPTY, |s, o| {
         s.union(Aabb {
@@ -51,7 +53,10 @@ pub fn camera_path(b: &Aabb, offsets: &[Vec3], frames: usize) -> Vec<View> {
     // Between two columns near the middle of the scene.
     let x = b.center().x + ((side.saturating_sub(1)) / 2) as f32 * spacing + 0.5 * spacing;
     let y = b.min.y + 0.5 * b.extent().y;
-    let (z0, z1) = (scene.min.z - 4.0 * width, scene.max.z + 0.5 * width);
+    let (z0, z1) = (
+        scene.min.z - 4.0 * width,
+        scene.center().z + 0.1 * scene.extent().z,
+    );
     (0..frames)
         .map(|i| {
             let t = i as f32 / frames.saturating_sub(1).max(1) as f32;
@@ -93,7 +98,11 @@ pub fn frame_counts(
                 points: 0,
                 primitives: 0.0,
             };
+            let sphere = mrg.nodes[mrg.source() as usize].sphere;
             for (cut, o) in cuts.iter_mut().zip(offsets) {
+                if !view.sees_sphere(sphere.center + *o, sphere.radius) {
+                    continue;
+                }
                 let local = View {
                     eye: view.eye - *o,
                     target: view.target - *o,
