@@ -9,6 +9,7 @@ pub mod builtins;
 pub mod cut;
 pub mod distance;
 pub mod geom;
+pub mod hybrid;
 pub mod implicit;
 pub mod io;
 pub mod mergetree;

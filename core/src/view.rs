@@ -69,36 +69,59 @@ impl View {
     /// sphere (`center`, `radius`): projected at the sphere's nearest depth, and
     /// enlarged by the worst off-axis stretch at the viewport's corner.
     pub fn pixels(&self, length: f32, center: Vec3, radius: f32) -> f32 {
-        self.projector().pixels(length, center, radius)
+        self.pixels_f64(length as f64, center, radius as f64) as f32
     }
 
-    /// [`View::pixels`] with its per-view constants computed once, for callers
-    /// projecting many lengths per frame.
+    /// [`View::pixels`] in double precision: monotone in the sphere (a
+    /// containing sphere never projects smaller) even where f32 round-off
+    /// would break ties, as incremental cuts need (hybrid paper §6).
+    pub fn pixels_f64(&self, length: f64, center: Vec3, radius: f64) -> f64 {
+        let depth = ((center.as_dvec3() - self.eye.as_dvec3()).dot(self.forward().as_dvec3())
+            - radius)
+            .max(NEAR as f64);
+        length * self.focal_pixels() as f64 * self.corner_stretch() / depth
+    }
+
+    /// The worst off-axis stretch of a length, at the viewport's corner.
+    fn corner_stretch(&self) -> f64 {
+        let half_h = (0.5 * self.fov_y as f64).tan();
+        let aspect = self.aspect() as f64;
+        (1.0 + half_h * half_h * (1.0 + aspect * aspect)).sqrt()
+    }
+
+    /// [`View::pixels`] with its per-view constants computed once, in single
+    /// precision, for callers projecting many lengths per frame (merge trees).
     pub fn projector(&self) -> Projector {
-        let half_h = (0.5 * self.fov_y).tan();
-        let corner = (1.0 + half_h * half_h * (1.0 + self.aspect() * self.aspect())).sqrt();
         Projector {
             eye: self.eye,
             forward: self.forward(),
-            scale: self.focal_pixels() * corner,
+            scale: self.focal_pixels() * self.corner_stretch() as f32,
         }
     }
 
     /// Whether the sphere can be seen at all (inside the view frustum, any depth
     /// in front of the eye).
+    /// Computed in double precision, so that a containing sphere is never
+    /// culled while one inside it is seen.
     pub fn sees_sphere(&self, center: Vec3, radius: f32) -> bool {
-        let v = center - self.eye;
-        v.dot(self.forward()) >= -radius && self.side_planes().iter().all(|n| v.dot(*n) >= -radius)
+        let radius = radius as f64;
+        let v = center.as_dvec3() - self.eye.as_dvec3();
+        v.dot(self.forward().as_dvec3()) >= -radius
+            && self.side_planes_f64().iter().all(|n| v.dot(*n) >= -radius)
     }
 
     /// Inward unit normals of the frustum's four side planes through the eye
     /// (callers testing many spheres per frame compute them once).
     pub fn side_planes(&self) -> [Vec3; 4] {
-        let f = self.forward();
-        let right = f.cross(self.up).normalize_or(Vec3::X);
+        self.side_planes_f64().map(|n| n.as_vec3())
+    }
+
+    fn side_planes_f64(&self) -> [glam::DVec3; 4] {
+        let f = self.forward().as_dvec3();
+        let right = f.cross(self.up.as_dvec3()).normalize_or(glam::DVec3::X);
         let up = right.cross(f);
-        let ty = (0.5 * self.fov_y).tan();
-        let tx = ty * self.aspect();
+        let ty = (0.5 * self.fov_y as f64).tan();
+        let tx = ty * self.aspect() as f64;
         [
             (f * ty - up).normalize(),
             (f * ty + up).normalize(),

@@ -11,6 +11,8 @@ use lodstudio_core::stats::ModelSummary;
 use lodstudio_core::{Progress, builtins};
 
 mod export;
+mod flythrough;
+mod hybrid;
 mod info;
 mod measure;
 mod mergetree;
@@ -47,6 +49,11 @@ enum Command {
     /// View-dependent merge tree: build it, replay a camera orbit (or zoom) and
     /// time the incremental update against a cold start (merge-tree paper Table 1).
     Mergetree(mergetree::MergeTreeArgs),
+    /// Hybrid simplification: a multi-resolution graph of triangles and points
+    /// (edge collapse, point replacement, point merging), its curve and a cut.
+    Hybrid(hybrid::HybridArgs),
+    /// Primitive counts of triangle-only and hybrid cuts along a fly-through.
+    Flythrough(flythrough::FlythroughArgs),
 }
 
 /// How results are reported and written.
@@ -157,6 +164,8 @@ pub fn run() -> Result<(), CliError> {
         Some(Command::Voxel(args)) => voxel::run(args),
         Some(Command::Export(args)) => export::run(args),
         Some(Command::Mergetree(args)) => mergetree::run(args),
+        Some(Command::Hybrid(args)) => hybrid::run(args),
+        Some(Command::Flythrough(args)) => flythrough::run(args),
     }
 }
 

@@ -36,7 +36,7 @@ pub struct SimplifyArgs {
     input: InputArgs,
 }
 
-fn parse_error_target(e: &str) -> Result<Target, CliError> {
+pub(super) fn parse_error_target(e: &str) -> Result<Target, CliError> {
     let bad = || {
         CliError::BadInput(format!(
             "--error: expected a distance or a percentage, got {e:?}"

@@ -232,6 +232,87 @@ pub fn write_glb(mesh: &TriMesh) -> Vec<u8> {
     glb_container(doc.to_string().into_bytes(), bin)
 }
 
+/// Writes a mesh and a point set (a hybrid cut) as one binary glTF: the mesh
+/// as [`write_glb`] does, and the points as a second node whose primitive has
+/// mode POINTS, `COLOR_0` and the custom attribute `_RADIUS` (object space).
+pub fn write_glb_with_points(mesh: &TriMesh, points: &crate::geom::PointSet) -> Vec<u8> {
+    use serde_json::json;
+    let (mut doc, mut bin) = glb_document(std::slice::from_ref(mesh));
+    let n = points.positions.len();
+    if n > 0 {
+        let mut push = |doc: &mut serde_json::Value, bytes: Vec<u8>, mut acc: serde_json::Value| {
+            while !bin.len().is_multiple_of(4) {
+                bin.push(0);
+            }
+            let view = json!({"buffer": 0, "byteOffset": bin.len(), "byteLength": bytes.len(), "target": 34962});
+            bin.extend_from_slice(&bytes);
+            for key in ["bufferViews", "accessors"] {
+                if doc.get(key).is_none() {
+                    doc[key] = json!([]);
+                }
+            }
+            let views = doc["bufferViews"].as_array_mut().expect("array");
+            views.push(view);
+            acc["bufferView"] = json!(views.len() - 1);
+            let accessors = doc["accessors"].as_array_mut().expect("array");
+            accessors.push(acc);
+            accessors.len() - 1
+        };
+        let floats =
+            |v: &mut dyn Iterator<Item = f32>| v.flat_map(|x| x.to_le_bytes()).collect::<Vec<u8>>();
+        let b = points.bounds();
+        let pos = push(
+            &mut doc,
+            floats(&mut points.positions.iter().flat_map(|p| p.to_array())),
+            json!({"componentType": 5126, "count": n, "type": "VEC3", "min": b.min.to_array(), "max": b.max.to_array()}),
+        );
+        let white = vec![Vec3::ONE; n];
+        let colors = points
+            .colors
+            .as_ref()
+            .filter(|c| c.len() == n)
+            .unwrap_or(&white);
+        let col = push(
+            &mut doc,
+            floats(
+                &mut colors
+                    .iter()
+                    .flat_map(|c| c.clamp(Vec3::ZERO, Vec3::ONE).to_array()),
+            ),
+            json!({"componentType": 5126, "count": n, "type": "VEC3"}),
+        );
+        let zero = vec![0.0; n];
+        let radii = points
+            .radii
+            .as_ref()
+            .filter(|r| r.len() == n)
+            .unwrap_or(&zero);
+        let rad = push(
+            &mut doc,
+            floats(&mut radii.iter().copied()),
+            json!({"componentType": 5126, "count": n, "type": "SCALAR"}),
+        );
+        if doc.get("meshes").is_none() {
+            doc["meshes"] = json!([]);
+        }
+        let meshes = doc["meshes"].as_array_mut().expect("array");
+        meshes.push(json!({"primitives": [{"attributes": {"POSITION": pos, "COLOR_0": col, "_RADIUS": rad}, "mode": 0}]}));
+        let mesh_id = meshes.len() - 1;
+        let nodes = doc["nodes"].as_array_mut().expect("array");
+        nodes.push(json!({"mesh": mesh_id, "name": "points"}));
+        let node_id = nodes.len() - 1;
+        doc["scenes"][0]["nodes"]
+            .as_array_mut()
+            .expect("array")
+            .push(json!(node_id));
+        while !bin.len().is_multiple_of(4) {
+            bin.push(0);
+        }
+        doc["buffers"] = json!([{"byteLength": bin.len()}]);
+    }
+    glb_container(doc.to_string().into_bytes(), bin)
+}
+
 /// Writes an LOD chain as a binary glTF with the `MSFT_lod` node extension.
 ///
 /// `lods` are in decreasing quality (LOD0 first). Node `i` holds `lods[i]`; the
@@ -506,6 +587,28 @@ mod tests {
         assert_eq!(back.positions, m.positions);
         assert!(back.normals.is_some() && back.uvs.is_some());
         assert_eq!(back.colors.as_ref().unwrap()[3], Vec3::new(0.2, 0.5, 0.9));
+    }
+
+    #[test]
+    fn glb_with_points_holds_a_points_primitive_with_radius() {
+        let mesh = crate::builtins::torus(1.0, 0.3, 8, 4);
+        let points = crate::geom::PointSet {
+            positions: vec![Vec3::ZERO, Vec3::X],
+            normals: None,
+            colors: Some(vec![Vec3::new(1.0, 0.0, 0.0); 2]),
+            radii: Some(vec![0.1, 0.2]),
+        };
+        let glb = write_glb_with_points(&mesh, &points);
+        let doc = glb_json(&glb);
+        assert_eq!(doc["scenes"][0]["nodes"], serde_json::json!([0, 1]));
+        let prim = &doc["meshes"][1]["primitives"][0];
+        assert_eq!(prim["mode"], 0);
+        let radius = prim["attributes"]["_RADIUS"].as_u64().unwrap() as usize;
+        assert_eq!(doc["accessors"][radius]["count"], 2);
+        assert_eq!(read(&glb, None).unwrap().triangles, mesh.triangles);
+        // Points alone still make a valid file.
+        let only = glb_json(&write_glb_with_points(&crate::TriMesh::default(), &points));
+        assert_eq!(only["meshes"].as_array().unwrap().len(), 1);
     }
 
     /// The JSON chunk of a GLB.

@@ -57,6 +57,12 @@ pub struct Candidate {
 /// Orders candidate collapses: smaller goes first.
 pub type CostFn = dyn Fn(&Candidate) -> f64 + Send + Sync;
 
+/// A cost that may also look at the working mesh (the star a candidate
+/// replaces, via [`EdgeCollapser::star`] and [`EdgeCollapser::star_after`]);
+/// a non-finite cost takes the candidate out of the queue (the hybrid method
+/// does so when a point replacement takes precedence, §5).
+pub type StarCostFn = dyn Fn(&Candidate, &EdgeCollapser) -> f64 + Send + Sync;
+
 /// One performed collapse.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Collapse {
@@ -115,7 +121,7 @@ pub struct EdgeCollapser {
     mark: std::cell::RefCell<(Vec<u32>, u32)>,
     alive_triangles: usize,
     opts: CollapseOptions,
-    cost: Box<CostFn>,
+    cost: Box<StarCostFn>,
 }
 
 /// Merge-tree paper eq. 3: 4√3·area/(l0²+l1²+l2²), 0 for a degenerate
@@ -253,6 +259,11 @@ impl EdgeCollapser {
 
     /// Starts with a caller-supplied ordering (the hybrid method scales it by τ).
     pub fn with_cost(mesh: &TriMesh, opts: CollapseOptions, cost: Box<CostFn>) -> Self {
+        Self::with_star_cost(mesh, opts, Box::new(move |c, _| cost(c)))
+    }
+
+    /// Starts with an ordering that sees the working mesh too.
+    pub fn with_star_cost(mesh: &TriMesh, opts: CollapseOptions, cost: Box<StarCostFn>) -> Self {
         let nv = mesh.positions.len();
         let nt = mesh.triangles.len();
         let mut vtris = vec![Vec::new(); nv];
@@ -338,6 +349,49 @@ impl EdgeCollapser {
         self.tris[t as usize].map(|v| self.pos[v as usize])
     }
 
+    /// Vertices ever created (dead ones included; ids never change).
+    pub fn vertex_count(&self) -> usize {
+        self.pos.len()
+    }
+
+    /// Triangles ever created (dead ones included; ids never change).
+    pub fn triangle_total(&self) -> usize {
+        self.tris.len()
+    }
+
+    pub fn color(&self, v: u32) -> Option<Vec3> {
+        self.colors.as_ref().map(|c| c[v as usize])
+    }
+
+    /// The triangles a collapse of `edge` removes: every triangle around either end.
+    pub fn star(&self, edge: [u32; 2]) -> Vec<u32> {
+        let [a, b] = edge;
+        let mut s: Vec<u32> = self.vtris[a as usize].clone();
+        s.extend(self.vtris[b as usize].iter().copied());
+        s.sort_unstable();
+        s.dedup();
+        s
+    }
+
+    /// The triangles `cand` would create, as positions.
+    pub fn star_after(&self, cand: &Candidate) -> Vec<[Vec3; 3]> {
+        let [a, b] = cand.edge;
+        self.star(cand.edge)
+            .into_iter()
+            .map(|t| self.tris[t as usize])
+            .filter(|tri| !(tri.contains(&a) && tri.contains(&b)))
+            .map(|tri| {
+                tri.map(|w| {
+                    if w == a || w == b {
+                        cand.position
+                    } else {
+                        self.pos[w as usize]
+                    }
+                })
+            })
+            .collect()
+    }
+
     /// Ids of the triangles alive now.
     pub fn alive_triangles(&self) -> impl Iterator<Item = u32> + '_ {
         (0..self.tris.len() as u32).filter(|t| self.tri_alive[*t as usize])
@@ -345,7 +399,7 @@ impl EdgeCollapser {
 
     fn push(&mut self, a: u32, b: u32) {
         if let Some((cand, _)) = self.best_candidate(a, b, false) {
-            let cost = (self.cost)(&cand);
+            let cost = (self.cost)(&cand, self);
             if cost.is_finite() {
                 self.heap.push(Reverse(Entry { cost, a, b }));
             }
@@ -485,7 +539,7 @@ impl EdgeCollapser {
                 Some((cand, _)) => {
                     // The queued cost was for the best placement, legal or not: if
                     // only a worse one is legal, the edge waits its real turn.
-                    let cost = (self.cost)(&cand);
+                    let cost = (self.cost)(&cand, self);
                     if cost > e.cost * (1.0 + 1e-9) + f64::MIN_POSITIVE {
                         if cost.is_finite() {
                             self.heap.push(Reverse(Entry { cost, ..e }));
@@ -541,10 +595,7 @@ impl EdgeCollapser {
         self.v_alive[a as usize] = false;
         self.v_alive[b as usize] = false;
 
-        let mut removed: Vec<u32> = self.vtris[a as usize].clone();
-        removed.extend(self.vtris[b as usize].iter().copied());
-        removed.sort_unstable();
-        removed.dedup();
+        let removed = self.star([a, b]);
         let mut added = Vec::with_capacity(removed.len());
         let mut star = Vec::with_capacity(removed.len());
         for &t in &removed {

@@ -12,7 +12,7 @@ pub mod collapse;
 pub mod quadric;
 
 pub use bound::{BoundOptions, Certificate, certify, certify_with_progress};
-pub use collapse::{Candidate, Collapse, CollapseOptions, CostFn, EdgeCollapser};
+pub use collapse::{Candidate, Collapse, CollapseOptions, CostFn, EdgeCollapser, StarCostFn};
 
 use crate::geom::TriMesh;
 use crate::progress::{Cancelled, Progress};

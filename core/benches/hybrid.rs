@@ -1,0 +1,143 @@
+//! Benchmark of issue 4 (hybrid simplification): the MRG build against the
+//! plain edge collapse on the same model at n, 2n and 4n triangles, and cut
+//! extraction from scratch against incremental adaptation for a moving camera.
+//!
+//! Run with `cargo bench -p lodstudio-core --bench hybrid`; it prints Markdown
+//! tables on stdout. `LODSTUDIO_BENCH_MODEL=PATH` replaces the default model
+//! (the Stanford bunny in the shared models).
+//!
+//! Timed, single run each: "collapse" = `EdgeCollapser::new` + `run(0)` (every
+//! legal collapse, as the MRG's triangle phase does; single-threaded);
+//! "simplify 1%" = `simplify::simplify` to 1% with its certificate (rayon);
+//! "MRG" = `hybrid::build` with κ = 3, τ = 1 (the queue with point
+//! replacement, per-primitive guaranteed bounds (rayon), point replacement and
+//! merging). The n and 2n inputs are the model simplified beforehand (untimed).
+//! Cuts: 120 frames of a camera orbiting at 2.5 diagonals, 0.5° per frame,
+//! 1 px tolerance; "fresh" = `select_fresh`, "incremental" = `adapt` (both
+//! only the node set), "draw set" = building the primitives of the cut.
+
+use std::path::Path;
+use std::sync::Arc;
+use std::time::Instant;
+
+use lodstudio_core::hybrid::{self, HybridCut, HybridOptions};
+use lodstudio_core::simplify::{self, CollapseOptions, EdgeCollapser, SimplifyOptions, Target};
+use lodstudio_core::view::{Tolerance, View};
+use lodstudio_core::{Model, Progress, TriMesh, io};
+
+fn load(path: &str) -> TriMesh {
+    let loaded = io::load(Path::new(path), &Default::default(), &Progress::new())
+        .unwrap_or_else(|e| panic!("cannot load {path}: {e}"));
+    match loaded.model {
+        Model::Mesh(m) => m,
+        _ => panic!("{path} is not a triangle mesh"),
+    }
+}
+
+fn seconds(f: impl FnOnce()) -> f64 {
+    let t = Instant::now();
+    f();
+    t.elapsed().as_secs_f64()
+}
+
+fn main() {
+    let path = std::env::var("LODSTUDIO_BENCH_MODEL").unwrap_or_else(|_| {
+        concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../../shared/models/stanford-bunny.obj"
+        )
+        .into()
+    });
+    let full = load(&path);
+    let n4 = full.triangles.len();
+    let progress = Progress::new();
+    let reduce = |target: usize| {
+        let opts = SimplifyOptions {
+            target: Target::Triangles(target),
+            collapse: CollapseOptions::default(),
+            per_triangle_bounds: false,
+        };
+        simplify::simplify(&full, &opts, &progress).unwrap().mesh
+    };
+    let inputs = [reduce(n4 / 4), reduce(n4 / 2), full.clone()];
+    println!("## MRG build vs. plain edge collapse ({path})\n");
+    println!(
+        "| input triangles | collapse (s) | simplify 1% + certificate (s) | MRG κ=3 τ=1 (s) | MRG / collapse | MRG / simplify | MRG nodes | points |"
+    );
+    println!("|---:|---:|---:|---:|---:|---:|---:|---:|");
+    let mut last = None;
+    for mesh in &inputs {
+        let collapse = seconds(|| {
+            let mut c = EdgeCollapser::new(mesh, CollapseOptions::default());
+            c.run(0, |_, _| true);
+            std::hint::black_box(c.mesh());
+        });
+        let simplify = seconds(|| {
+            let opts = SimplifyOptions {
+                target: Target::Ratio(0.01),
+                collapse: CollapseOptions::default(),
+                per_triangle_bounds: false,
+            };
+            std::hint::black_box(simplify::simplify(mesh, &opts, &progress).unwrap());
+        });
+        let mut mrg = None;
+        let build = seconds(|| {
+            mrg = Some(hybrid::build(mesh, &HybridOptions::default(), &progress).unwrap())
+        });
+        let mrg = mrg.unwrap();
+        println!(
+            "| {} | {collapse:.2} | {simplify:.2} | {build:.2} | {:.1}× | {:.1}× | {} | {} |",
+            mesh.triangles.len(),
+            build / collapse,
+            build / simplify,
+            mrg.nodes.len(),
+            mrg.points.len()
+        );
+        last = Some(mrg);
+    }
+    let mrg = Arc::new(last.unwrap());
+    let center = full.bounds().center();
+    let views: Vec<View> = (0..120)
+        .map(|i| {
+            View::orbit(
+                center,
+                2.5 * mrg.diagonal,
+                (i as f32 * 0.5).to_radians(),
+                0.3,
+            )
+        })
+        .collect();
+    let tol = Tolerance::Pixels(1.0);
+    let mut fresh = HybridCut::new(Arc::clone(&mrg));
+    let mut moving = HybridCut::new(Arc::clone(&mrg));
+    moving.adapt(&views[0], tol);
+    let (mut t_fresh, mut t_incr, mut t_draw, mut prims) = (0.0, 0.0, 0.0, 0usize);
+    for v in &views[1..] {
+        t_fresh += seconds(|| fresh.select_fresh(v, tol));
+        t_incr += seconds(|| moving.adapt(v, tol));
+        assert_eq!(
+            fresh.above(),
+            moving.above(),
+            "incremental differs from fresh"
+        );
+        t_draw += seconds(|| prims += std::hint::black_box(moving.draw_set()).primitive_count());
+    }
+    let frames = (views.len() - 1) as f64;
+    println!(
+        "\n## Cut extraction, moving camera ({} nodes, 1 px, {} frames)\n",
+        mrg.nodes.len(),
+        frames
+    );
+    println!(
+        "| fresh (ms/frame) | incremental (ms/frame) | speed-up | draw set (ms/frame) | primitives/frame |"
+    );
+    println!("|---:|---:|---:|---:|---:|");
+    println!(
+        "| {:.3} | {:.3} | {:.1}× | {:.3} | {:.0} |",
+        1e3 * t_fresh / frames,
+        1e3 * t_incr / frames,
+        t_fresh / t_incr,
+        1e3 * t_draw / frames,
+        prims as f64 / frames
+    );
+}

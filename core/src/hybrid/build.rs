@@ -1,0 +1,580 @@
+//! Hybrid simplification (§5): edge collapses, point replacement and point
+//! simplification, recorded bottom-up as a multi-resolution graph.
+//!
+//! Queue (§5.1): every operation's optimisation value is cost / benefit, the
+//! cost being the increase in error and the benefit the decrease in
+//! primitives (triangles + points/κ). An edge collapse costs its deviation
+//! from the star it replaces (estimated for the queue as the largest distance
+//! of the new star's vertex, edge midpoints and centroids to the old star and
+//! of the old endpoints to the new star) and gains the triangles it removes;
+//! its value is scaled by the transition factor τ. A point replacement of a
+//! triangle costs its point radius and gains 1 − s/κ (§5.3). After a collapse's
+//! value is computed, the replacement of each of its triangles is evaluated;
+//! if one takes precedence, the collapse leaves the queue (§5). When the queue
+//! is empty every remaining triangle is point-replaced (κ > 1), and the points
+//! are merged through an octree (§5.4).
+//!
+//! Guaranteed node bounds. The cheap triangle-inequality bound (ε of a new
+//! star = H(new star, old star) + max ε of the removed triangles) adds up along
+//! every chain of collapses: on an icosphere it passed 70% of the diagonal
+//! before the triangles ran out. Instead each primitive gets both directions
+//! of the two-sided Hausdorff distance directly against the original O:
+//! - simplified → original: for a triangle, the branch and bound of
+//!   `simplify::bound` against O's BVH; for a ball of radius r around c,
+//!   r + d(c, O) (exact distance);
+//! - original → simplified: every original triangle is attributed to one
+//!   triangle of each model it passes through (at a collapse, the originals
+//!   of the removed triangles go to the nearest new triangle); a triangle's
+//!   bound covers its originals (largest vertex distance, exact by convexity).
+//!   A replaced triangle is covered by its balls, and merged balls contain
+//!   their children, so originals stay within that distance of the points.
+//!
+//! A node's error is the largest over what it produces and its children
+//! (errors never decrease upwards). For a cut, every point of a drawn
+//! primitive is within its bound of O, and every original point follows its
+//! attribution up to the first triangle on the cut, or to a triangle replaced
+//! below the cut whose balls (or their merged parents) are on it: so the
+//! two-sided Hausdorff distance of any cut is at most its largest node error.
+
+use std::sync::Mutex;
+
+use glam::Vec3;
+use rayon::prelude::*;
+
+use super::mrg::{DRAIN, Mrg, NodeKind, Point, Sphere};
+use super::{point_replacement, point_simplification};
+use crate::distance::{MeshDistance, closest_point_on_triangle};
+use crate::geom::TriMesh;
+use crate::progress::{Cancelled, Progress};
+use crate::simplify::bound::{BoundOptions, max_distance_bound};
+use crate::simplify::{CollapseOptions, EdgeCollapser};
+
+/// Parameters of the hybrid build (§5.1, §5.3).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct HybridOptions {
+    /// Performance ratio κ of points to triangles; κ ≤ 1 never replaces.
+    pub kappa: f32,
+    /// Transition factor τ scaling the triangle operations' values (≥ 1 introduces points sooner).
+    pub tau: f32,
+    pub collapse: CollapseOptions,
+}
+
+impl Default for HybridOptions {
+    fn default() -> Self {
+        Self {
+            kappa: 3.0,
+            tau: 1.0,
+            collapse: CollapseOptions::default(),
+        }
+    }
+}
+
+impl HybridOptions {
+    /// Triangle-only simplification with the same collapses and bounds.
+    pub fn triangles_only(self) -> Self {
+        Self { kappa: 1.0, ..self }
+    }
+
+    pub fn validate(&self) -> Result<(), String> {
+        if !(self.kappa.is_finite() && self.kappa >= 0.0 && self.kappa <= 64.0) {
+            return Err(format!("kappa must be in 0..=64, got {}", self.kappa));
+        }
+        if !(self.tau.is_finite() && self.tau > 0.0) {
+            return Err(format!("tau must be finite and > 0, got {}", self.tau));
+        }
+        Ok(())
+    }
+}
+
+/// What the build has made so far (for a live view of the build).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Snapshot {
+    pub stage: &'static str,
+    /// Triangles of the current (coarsest so far) model.
+    pub triangles: usize,
+    pub points: usize,
+    pub nodes: usize,
+}
+
+/// Builds the MRG of `mesh` (repaired, as `io::load` returns it).
+pub fn build(mesh: &TriMesh, opts: &HybridOptions, progress: &Progress) -> Result<Mrg, Cancelled> {
+    build_observed(mesh, opts, progress, |_| {})
+}
+
+/// [`build`], calling `observe` with the current counts every so often.
+pub fn build_observed(
+    mesh: &TriMesh,
+    opts: &HybridOptions,
+    progress: &Progress,
+    mut observe: impl FnMut(&Snapshot),
+) -> Result<Mrg, Cancelled> {
+    let kappa = if opts.kappa.is_finite() {
+        opts.kappa
+    } else {
+        1.0
+    };
+    let tau = if opts.tau.is_finite() && opts.tau > 0.0 {
+        opts.tau
+    } else {
+        1.0
+    } as f64;
+    let n = mesh.triangles.len();
+    let mut mrg = Mrg {
+        input_triangles: n,
+        diagonal: mesh.bounds().diagonal(),
+        kappa,
+        ..Mrg::default()
+    };
+    mrg.add_node(NodeKind::Drain, 0.0, Sphere::default());
+
+    // §5.1–5.2: edge collapses in cost/benefit order.
+    progress.stage("hybrid: collapsing edges");
+    let cache = Mutex::new(Vec::<f64>::new());
+    let cost = move |cand: &crate::simplify::Candidate, col: &EdgeCollapser| {
+        let star = col.star(cand.edge);
+        let old: Vec<[Vec3; 3]> = star.iter().map(|t| col.triangle_positions(*t)).collect();
+        let new = col.star_after(cand);
+        let value =
+            tau * deviation(&old, &new, cand.position) / cand.triangles_removed.max(1) as f64;
+        if kappa > 1.0 {
+            let mut cache = cache.lock().unwrap_or_else(|e| e.into_inner());
+            if cache.len() < col.triangle_total() {
+                cache.resize(col.triangle_total(), f64::NAN);
+            }
+            for (t, p) in star.iter().zip(&old) {
+                let v = &mut cache[*t as usize];
+                if v.is_nan() {
+                    *v = point_replacement::value(p, kappa);
+                }
+                if *v < value {
+                    return f64::INFINITY;
+                }
+            }
+        }
+        value
+    };
+    let mut col = EdgeCollapser::with_star_cost(mesh, opts.collapse, Box::new(cost));
+    let mut tri_producer: Vec<u32> = vec![DRAIN; n];
+    let mut collapses: Vec<(u32, Vec<u32>, Vec<u32>)> = Vec::new();
+    while let Some(c) = col.step() {
+        let balls = c
+            .added
+            .iter()
+            .flat_map(|t| col.triangle_positions(*t))
+            .map(|center| Sphere {
+                center,
+                radius: 0.0,
+            })
+            .collect();
+        let mut kids: Vec<u32> = c
+            .removed
+            .iter()
+            .map(|t| tri_producer[*t as usize])
+            .collect();
+        kids.sort_unstable();
+        kids.dedup();
+        let sphere = spheres_of(&mrg, balls, &mut kids.into_iter());
+        let node = mrg.add_node(NodeKind::TriangleSimplification, 0.0, sphere);
+        tri_producer.resize(col.triangle_total(), DRAIN);
+        sync(&mut mrg, &col);
+        mrg.consume(node, &c.removed, &[], &tri_producer, &[]);
+        for t in &c.added {
+            tri_producer[*t as usize] = node;
+        }
+        collapses.push((node, c.removed, c.added));
+        if collapses.len().is_multiple_of(1024) {
+            progress.set_fraction((n - col.triangle_count()) as f32 / n.max(1) as f32);
+            progress.check()?;
+            observe(&Snapshot {
+                stage: "collapsing edges",
+                triangles: col.triangle_count(),
+                points: 0,
+                nodes: mrg.nodes.len(),
+            });
+        }
+    }
+    progress.check()?;
+    sync(&mut mrg, &col);
+    mrg.colors = (col.vertex_count() > 0)
+        .then(|| col.color(0))
+        .flatten()
+        .map(|_| {
+            (0..col.vertex_count() as u32)
+                .filter_map(|v| col.color(v))
+                .collect()
+        });
+
+    // Guaranteed bounds (module doc): attribution of the original triangles,
+    // then both directions per created triangle (in parallel), then node
+    // errors upwards in build order.
+    progress.stage("hybrid: bounding errors");
+    let original = MeshDistance::new(mesh);
+    let forward = attribute(mesh, &mrg, &collapses);
+    progress.check()?;
+    // Looser than the simplifier's certificate (there are ~3 bounds per
+    // collapse): still a true upper bound, within 25% of the lower one or 8 splits.
+    let bound_opts = BoundOptions {
+        rel_tol: 0.25,
+        max_splits: 8,
+        ..BoundOptions::for_diagonal(mrg.diagonal)
+    };
+    let nearest: Vec<(f32, u32)> = mrg
+        .positions
+        .par_iter()
+        .map(|p| original.nearest(*p))
+        .collect();
+    let tri_error: Vec<f32> = (0..mrg.triangles.len())
+        .into_par_iter()
+        .map(|t| {
+            if t < n {
+                return 0.0;
+            }
+            let p = mrg.triangle_positions(t as u32);
+            let at = mrg.triangles[t].map(|v| nearest[v as usize]);
+            // No need to go below the other direction's value.
+            let (reverse, _) = max_distance_bound(p, at, &original, &bound_opts, forward[t]);
+            // f32 round-off of the coordinates (flat collapses bound to 0).
+            let scale = p.iter().map(|v| v.abs().max_element()).fold(0.0, f32::max);
+            reverse.max(forward[t]) + 8.0 * f32::EPSILON * scale
+        })
+        .collect();
+    progress.check()?;
+    for (node, _, added) in &collapses {
+        let own = added
+            .iter()
+            .map(|t| tri_error[*t as usize])
+            .fold(0.0, f32::max);
+        let below = mrg
+            .child_nodes(*node)
+            .map(|c| mrg.nodes[c as usize].error)
+            .fold(0.0, f32::max);
+        mrg.nodes[*node as usize].error = own.max(below);
+    }
+
+    // §5.3: every remaining triangle is point-replaced.
+    let remaining: Vec<u32> = col.alive_triangles().collect();
+    drop(col);
+    let mut point_producer: Vec<u32> = Vec::new();
+    let mut point_errors: Vec<f32> = Vec::new();
+    let mut top_triangles = Vec::new();
+    if kappa > 1.0 {
+        progress.stage("hybrid: replacing triangles by points");
+        let replacements: Vec<_> = remaining
+            .par_iter()
+            .map(|t| point_replacement::best(&mrg.triangle_positions(*t), kappa))
+            .collect();
+        for (k, (t, rep)) in remaining.iter().zip(replacements).enumerate() {
+            let Some(rep) = rep else {
+                top_triangles.push(*t);
+                continue;
+            };
+            let producer = tri_producer[*t as usize];
+            let p = mrg.triangle_positions(*t);
+            let normal = (p[1] - p[0]).cross(p[2] - p[0]).normalize_or_zero();
+            let colors = mrg
+                .colors
+                .as_ref()
+                .map(|c| mrg.triangles[*t as usize].map(|v| c[v as usize]));
+            let first = mrg.points.len() as u32;
+            let mut error = mrg.nodes[producer as usize].error;
+            for s in &rep.samples {
+                let center_error = original.distance(s.center);
+                error = error.max((s.radius + center_error) * (1.0 + 1e-5));
+                let color = colors.map_or(Vec3::splat(0.8), |c| {
+                    c[0] * s.weights[0] + c[1] * s.weights[1] + c[2] * s.weights[2]
+                });
+                mrg.points.push(Point {
+                    center: s.center,
+                    radius: s.radius,
+                    color,
+                    normal,
+                    area: s.area,
+                    center_error,
+                });
+            }
+            let ids: Vec<u32> = (first..mrg.points.len() as u32).collect();
+            let balls = mrg.balls(&[], &ids);
+            let sphere = spheres_of(&mrg, balls, &mut std::iter::once(producer));
+            let node = mrg.add_node(NodeKind::PointReplacement, error, sphere);
+            mrg.consume(node, &[*t], &[], &tri_producer, &[]);
+            point_producer.resize(mrg.points.len(), node);
+            point_errors.resize(mrg.points.len(), error);
+            if k % 4096 == 0 {
+                progress.set_fraction(k as f32 / remaining.len() as f32);
+                progress.check()?;
+                observe(&Snapshot {
+                    stage: "replacing triangles by points",
+                    triangles: remaining.len() - k,
+                    points: mrg.points.len(),
+                    nodes: mrg.nodes.len(),
+                });
+            }
+        }
+    } else {
+        top_triangles = remaining;
+    }
+
+    // §5.4: octree merges of the points.
+    progress.stage("hybrid: merging points");
+    let samples = mrg.points.len();
+    let merges =
+        point_simplification::simplify(&mrg.points, &point_errors, &|c| original.distance(c));
+    for m in merges {
+        let mut balls = vec![Sphere {
+            center: m.parent.center,
+            radius: m.parent.radius,
+        }];
+        balls.extend(
+            m.children
+                .iter()
+                .map(|c| mrg.nodes[point_producer[*c as usize] as usize].sphere),
+        );
+        let node = mrg.add_node(
+            NodeKind::PointSimplification,
+            m.error,
+            Sphere::enclose(&balls),
+        );
+        mrg.consume(node, &[], &m.children, &tri_producer, &point_producer);
+        mrg.points.push(m.parent);
+        point_producer.push(node);
+    }
+    progress.check()?;
+
+    // The source consumes whatever is left: the root point and/or triangles.
+    let mut top_points = Vec::new();
+    if mrg.points.len() > samples || samples == 1 {
+        top_points.push(mrg.points.len() as u32 - 1);
+    }
+    let mut kids: Vec<u32> = top_triangles
+        .iter()
+        .map(|t| tri_producer[*t as usize])
+        .collect();
+    kids.extend(top_points.iter().map(|p| point_producer[*p as usize]));
+    kids.sort_unstable();
+    kids.dedup();
+    let balls = mrg.balls(&top_triangles, &top_points);
+    let sphere = spheres_of(&mrg, balls, &mut kids.into_iter());
+    let source = mrg.add_node(NodeKind::Source, f32::INFINITY, sphere);
+    if !top_triangles.is_empty() || !top_points.is_empty() {
+        mrg.consume(
+            source,
+            &top_triangles,
+            &top_points,
+            &tri_producer,
+            &point_producer,
+        );
+    }
+    observe(&Snapshot {
+        stage: "done",
+        triangles: top_triangles.len(),
+        points: top_points.len(),
+        nodes: mrg.nodes.len(),
+    });
+    debug_assert!(n == 0 || mrg.check().is_ok(), "{:?}", mrg.check());
+    Ok(mrg)
+}
+
+/// Copies the vertices and triangles the collapser has made since the last call.
+fn sync(mrg: &mut Mrg, col: &EdgeCollapser) {
+    let (v0, t0) = (mrg.positions.len() as u32, mrg.triangles.len() as u32);
+    mrg.positions
+        .extend((v0..col.vertex_count() as u32).map(|v| col.position(v)));
+    mrg.triangles
+        .extend((t0..col.triangle_total() as u32).map(|t| col.triangle(t)));
+}
+
+/// A node's sphere: its own primitives' balls and its non-drain children's spheres.
+fn spheres_of(mrg: &Mrg, own: Vec<Sphere>, children: &mut dyn Iterator<Item = u32>) -> Sphere {
+    let mut balls = own;
+    balls.extend(
+        children
+            .filter(|c| *c != DRAIN)
+            .map(|c| mrg.nodes[c as usize].sphere),
+    );
+    Sphere::enclose(&balls)
+}
+
+/// Queue estimate of H(new star, old star): a lower bound from the new
+/// vertex, the midpoints of its edges and the centroids of the new triangles
+/// against the old star, and the old endpoints against the new star.
+fn deviation(old: &[[Vec3; 3]], new: &[[Vec3; 3]], p: Vec3) -> f64 {
+    let dist = |q: Vec3, set: &[[Vec3; 3]]| {
+        set.iter()
+            .map(|t| closest_point_on_triangle(q, t[0], t[1], t[2]).distance_squared(q))
+            .fold(f32::INFINITY, f32::min)
+    };
+    let mut worst = dist(p, old);
+    for t in new {
+        let far: Vec<Vec3> = t.iter().copied().filter(|v| *v != p).collect();
+        for v in &far {
+            worst = worst.max(dist((*v + p) * 0.5, old));
+        }
+        worst = worst.max(dist((t[0] + t[1] + t[2]) / 3.0, old));
+    }
+    // The collapsed edge's endpoints are the old vertices that moved.
+    let moved: Vec<Vec3> = old
+        .iter()
+        .flatten()
+        .copied()
+        .filter(|v| !new.iter().flatten().any(|w| w == v))
+        .collect();
+    for v in moved {
+        worst = worst.max(dist(v, new));
+    }
+    (worst as f64).sqrt()
+}
+
+/// Attributes every original triangle to one triangle of each model it
+/// passes through: at each collapse, the originals of the removed triangles go
+/// to the new triangle nearest to them (the largest distance of their vertices,
+/// exact for a whole triangle since the distance to a triangle is convex).
+/// Returns, per triangle, the largest such distance of its originals (the
+/// original-to-simplified direction of its bound).
+fn attribute(mesh: &TriMesh, mrg: &Mrg, collapses: &[(u32, Vec<u32>, Vec<u32>)]) -> Vec<f32> {
+    let mut owned: Vec<Vec<u32>> = (0..mrg.triangles.len() as u32)
+        .map(|t| {
+            if (t as usize) < mesh.triangles.len() {
+                vec![t]
+            } else {
+                Vec::new()
+            }
+        })
+        .collect();
+    let mut forward = vec![0.0f32; mrg.triangles.len()];
+    for (_, removed, added) in collapses {
+        let region: Vec<u32> = removed
+            .iter()
+            .flat_map(|t| std::mem::take(&mut owned[*t as usize]))
+            .collect();
+        let new: Vec<[Vec3; 3]> = added.iter().map(|t| mrg.triangle_positions(*t)).collect();
+        let choice: Vec<(usize, f32)> = region
+            .par_iter()
+            .with_min_len(256)
+            .map(|o| {
+                let v = mesh.triangle(*o as usize);
+                new.iter()
+                    .map(|p| {
+                        v.iter()
+                            .map(|q| closest_point_on_triangle(*q, p[0], p[1], p[2]).distance(*q))
+                            .fold(0.0, f32::max)
+                    })
+                    .enumerate()
+                    .min_by(|a, b| a.1.total_cmp(&b.1))
+                    .unwrap_or((0, 0.0))
+            })
+            .collect();
+        for (o, (k, d)) in region.into_iter().zip(choice) {
+            let t = added[k] as usize;
+            owned[t].push(o);
+            forward[t] = forward[t].max(d);
+        }
+    }
+    forward
+}
+
+#[cfg(test)]
+pub(crate) mod tests {
+    use super::*;
+    use crate::builtins::{icosphere, torus};
+
+    /// A sphere and a torus as two parts, with colours.
+    pub(crate) fn two_parts() -> TriMesh {
+        let mut mesh = icosphere(Vec3::new(3.0, 0.0, 0.0), 1.0, 3);
+        mesh.append(&torus(1.0, 0.3, 32, 12));
+        mesh.colors = Some(
+            mesh.positions
+                .iter()
+                .map(|p| (p.normalize() + 1.0) * 0.5)
+                .collect(),
+        );
+        mesh
+    }
+
+    #[test]
+    fn build_makes_a_valid_graph_with_all_three_operations() {
+        let mesh = two_parts();
+        let mut seen = Vec::new();
+        let mrg = build_observed(&mesh, &HybridOptions::default(), &Progress::new(), |s| {
+            seen.push(*s)
+        })
+        .unwrap();
+        assert_eq!(mrg.check(), Ok(()));
+        assert!(mrg.count(NodeKind::TriangleSimplification) > 100);
+        assert!(mrg.count(NodeKind::PointReplacement) > 0);
+        assert!(mrg.count(NodeKind::PointSimplification) > 0);
+        // One root point at the top: everything ends as points.
+        let top = &mrg.nodes[mrg.source() as usize];
+        assert_eq!(top.children.len(), 1);
+        assert_eq!(mrg.arcs[top.children[0] as usize].points.len(), 1);
+        assert_eq!(seen.last().map(|s| s.points), Some(1));
+        // Point replacement never makes more than ⌊κ⌋ points from a triangle.
+        for n in mrg
+            .nodes
+            .iter()
+            .filter(|n| n.kind == NodeKind::PointReplacement)
+        {
+            let pts: usize = n
+                .parents
+                .iter()
+                .map(|a| mrg.arcs[*a as usize].points.len())
+                .sum();
+            assert!((1..=3).contains(&pts));
+        }
+        // Colours are interpolated into the points.
+        assert!(mrg.points.iter().any(|p| p.color != Vec3::splat(0.8)));
+    }
+
+    /// Fig. 9 trend: κ ≤ 1 never replaces; a larger κ allows more, finer
+    /// samples, so points appear on cuts at smaller errors, and with τ = 5 point
+    /// replacement takes precedence over more collapses.
+    #[test]
+    fn kappa_at_most_one_makes_no_points_and_larger_kappa_switches_sooner() {
+        let mesh = two_parts();
+        let run = |kappa, tau| {
+            let opts = HybridOptions {
+                kappa,
+                tau,
+                ..Default::default()
+            };
+            let mrg = build(&mesh, &opts, &Progress::new()).unwrap();
+            assert_eq!(mrg.check(), Ok(()));
+            let first_points = mrg
+                .nodes
+                .iter()
+                .filter(|n| n.kind == NodeKind::PointReplacement)
+                .map(|n| n.error)
+                .fold(f32::INFINITY, f32::min);
+            (
+                mrg.count(NodeKind::PointReplacement),
+                first_points,
+                mrg.points.len(),
+            )
+        };
+        let (pr, _, points) = run(1.0, 1.0);
+        assert_eq!((pr, points), (0, 0));
+        let (_, e2, _) = run(2.0, 1.0);
+        let (_, e3, _) = run(3.0, 1.0);
+        let (_, e8, _) = run(8.0, 1.0);
+        assert!(
+            e2 >= e3 && e3 >= e8 && e2 > e8,
+            "first point errors {e2} {e3} {e8}"
+        );
+        let (p2, _, _) = run(2.0, 5.0);
+        let (p8, _, _) = run(8.0, 5.0);
+        assert!(p2 < p8, "replaced triangles {p2} {p8}");
+    }
+
+    #[test]
+    fn cancel_stops_the_build() {
+        let progress = Progress::new();
+        progress.cancel();
+        assert!(
+            build(
+                &icosphere(Vec3::ZERO, 1.0, 4),
+                &HybridOptions::default(),
+                &progress
+            )
+            .is_err()
+        );
+    }
+}
