@@ -10,7 +10,7 @@ use lodstudio_core::io::{self, Model};
 use lodstudio_core::mergetree::{self, Criteria, MergeTree, MergeTreeOptions, MergeTreeView, NONE};
 use lodstudio_core::view::{Tolerance, View};
 use lodstudio_core::{Progress, TriMesh};
-use lodstudio_tests::{lodstudio, lodstudio_json, shared_model};
+use lodstudio_tests::{lodstudio, lodstudio_json, malformed_dir, shared_model};
 
 fn load(name: &str) -> TriMesh {
     match io::load(&shared_model(name), &Default::default(), &Progress::new())
@@ -258,14 +258,24 @@ fn cli_reports_table_one_and_writes_the_last_frame() {
 fn cli_rejects_bad_arguments_with_exit_2() {
     let horse = shared_model("horse.ply");
     let h = horse.to_str().unwrap();
-    for args in [
+    let malformed: Vec<String> = std::fs::read_dir(malformed_dir())
+        .unwrap()
+        .map(|e| e.unwrap().path().to_str().unwrap().to_string())
+        .collect();
+    assert!(!malformed.is_empty());
+    let mut cases: Vec<Vec<&str>> = malformed
+        .iter()
+        .map(|m| vec!["mergetree", m.as_str(), "--frames", "1"])
+        .collect();
+    cases.extend([
         vec!["mergetree", h, "--pixels", "0"],
         vec!["mergetree", h, "--pixels", "NaN"],
         vec!["mergetree", h, "--frames", "0"],
         vec!["mergetree", h, "--min-quality", "2"],
         vec!["mergetree", "/nonexistent/model.obj"],
         vec!["mergetree", "builtin:octahedron-points"],
-    ] {
+    ]);
+    for args in cases {
         let out = lodstudio(&args);
         assert_eq!(out.status.code(), Some(2), "{args:?}");
         let err = String::from_utf8_lossy(&out.stderr);

@@ -200,13 +200,15 @@ pub fn run(args: MergeTreeArgs) -> Result<(), CliError> {
             build_seconds
         );
         println!(
-            "{} frames at {} px: adaptive {:.0} triangles (uniform of equal error {:.0}); update {:.3} ms, from scratch {:.3} ms; {} folds",
+            "{} frames at {} px: adaptive {:.0} triangles (uniform of equal error {:.0}); update {:.3} ms (median {:.3}), from scratch {:.3} ms (median {:.3}); {} folds",
             args.frames,
             args.pixels,
             mean(&adaptive),
             mean(&uniform_tris),
             mean(&update_ms),
+            median(&update_ms),
             mean(&rebuild_ms),
+            median(&rebuild_ms),
             folds
         );
     }
