@@ -578,6 +578,10 @@ impl StudioApp {
                 let loaded = Arc::clone(&current.loaded);
                 Box::new(move |progress| build::run(&loaded.model, options, progress))
             }
+            BuildParams::Hybrid(settings) => {
+                let loaded = Arc::clone(&current.loaded);
+                Box::new(move |progress| build::hybrid::run(&loaded.model, settings, progress))
+            }
             BuildParams::MergeTree(_) => {
                 let loaded = Arc::clone(&current.loaded);
                 let settings = self.methods.merge_tree;
@@ -917,6 +921,9 @@ impl StudioApp {
             Method::Voxel => {
                 let volume = self.current.as_ref().and_then(|c| c.volume);
                 changed |= self.methods.voxel.ui(ui, volume.as_ref());
+            }
+            Method::Hybrid => {
+                changed |= self.methods.hybrid.ui(ui);
             }
             Method::MergeTree => {
                 // Criteria changes re-cut the live tree; only build options rebuild.

@@ -1032,3 +1032,45 @@ fn voxel_layers_and_the_pyramid_are_shown_live() {
     assert!(between < finest, "{between} < {finest}");
     assert_eq!(drawn_triangles(&harness), Some(between));
 }
+
+#[test]
+fn hybrid_cut_mixes_triangles_and_points_live() {
+    let mut harness = studio(None);
+    wait_for_load(&mut harness);
+    let mut methods = *harness.state().methods();
+    methods.method = Method::Hybrid;
+    methods.hybrid.kappa = 4.0;
+    methods.hybrid.tau = 5.0;
+    methods.threshold.in_pixels = false;
+    methods.threshold.percent = 0.5;
+    harness.state_mut().set_methods(methods);
+    harness.step();
+    wait_for_build(&mut harness);
+    for label in [
+        "κ (kappa)",
+        "τ (tau)",
+        "primitives vs error",
+        "MRG nodes",
+        "point replacements",
+    ] {
+        assert!(has_label(&harness, label), "{label:?}");
+    }
+    let fine = cut_stats(&harness);
+    assert!(fine.triangles > 0);
+    assert!(fine.error_bound <= 0.005 * 1.0001 * harness.state().summary().unwrap().bbox_diagonal);
+    // A coarser object-space threshold: fewer primitives, points among them.
+    harness
+        .get_by_role_and_label(egui::Role::Slider, "error threshold")
+        .set_value_accesskit(8.0);
+    harness.run();
+    assert!(!harness.state().is_building());
+    let coarse = cut_stats(&harness);
+    assert!(coarse.points > 0, "{coarse:?}");
+    assert!(coarse.triangles + coarse.points < fine.triangles + fine.points);
+    let (covered, _) = viewport_pixels(&mut harness, "studio_hybrid");
+    assert!(covered > 0.02, "{:.1}%", covered * 100.0);
+    // Object-space cuts ignore the camera: orbiting re-cuts nothing.
+    harness.state_mut().viewport_mut().yaw += 1.0;
+    harness.run();
+    assert_eq!(cut_stats(&harness).cuts, coarse.cuts);
+}

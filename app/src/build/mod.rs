@@ -2,6 +2,7 @@
 //! mesh (with its certificate or topology), the scenes the viewport shows for
 //! it, and the inspector rows that report it. One module per hierarchy method.
 
+pub mod hybrid;
 pub mod mergetree;
 
 use std::path::Path;
@@ -168,7 +169,7 @@ impl Built {
 /// A one-line message for the user saying why not.
 pub fn check(method: Method, path: &Path, model: &Model) -> Result<(), String> {
     match method {
-        Method::EdgeCollapse | Method::MergeTree => mesh_of(model).map(|_| ()),
+        Method::EdgeCollapse | Method::MergeTree | Method::Hybrid => mesh_of(model).map(|_| ()),
         Method::Voxel => voxel_source(path, model).map(|_| ()),
     }
 }

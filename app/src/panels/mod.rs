@@ -3,6 +3,7 @@
 //! between sessions except the voxel threshold, which is in the units of one
 //! volume's values (see [`voxel::VoxelSettings::threshold`]).
 
+pub mod hybrid;
 pub mod mergetree;
 pub mod simplify;
 pub mod voxel;
@@ -12,6 +13,7 @@ use serde::{Deserialize, Serialize};
 
 use lodstudio_core::mergetree::MergeTreeOptions;
 
+use self::hybrid::HybridSettings;
 use self::mergetree::MergeTreeSettings;
 use self::simplify::EdgeCollapseSettings;
 use self::voxel::{VolumeGrid, VoxelSettings};
@@ -27,17 +29,25 @@ pub enum Method {
     Voxel,
     /// View-dependent refinement of a merge tree (merge-tree paper).
     MergeTree,
+    /// A multi-resolution graph of triangles and points (hybrid paper).
+    Hybrid,
 }
 
 impl Method {
     /// Every method, in the order the list shows them.
-    pub const ALL: &[Method] = &[Method::EdgeCollapse, Method::MergeTree, Method::Voxel];
+    pub const ALL: &[Method] = &[
+        Method::EdgeCollapse,
+        Method::Hybrid,
+        Method::MergeTree,
+        Method::Voxel,
+    ];
 
     pub fn name(self) -> &'static str {
         match self {
             Method::EdgeCollapse => "Edge collapse",
             Method::Voxel => "Voxel (low-pass + marching cubes)",
             Method::MergeTree => "Merge tree (view-dependent)",
+            Method::Hybrid => "Hybrid (triangles + points)",
         }
     }
 
@@ -54,6 +64,13 @@ impl Method {
                  (Gaussian or hyper-cone) and extracts the iso-density surface by marching \
                  cubes: wider filters remove small features, holes and tunnels, so the genus \
                  falls (voxel-based object simplification paper, §2)."
+            }
+            Method::Hybrid => {
+                "Simplifies by edge collapse and by replacing triangles with points and \
+                 merging points, whichever removes more primitives for its error, into a \
+                 multi-resolution graph; every cut of it has a guaranteed error bound, and \
+                 the cut follows the camera and the threshold live (hybrid \
+                 simplification paper)."
             }
             Method::MergeTree => {
                 "Builds a merge tree of vertex merges level by level with their \
@@ -76,6 +93,7 @@ pub struct MethodSettings {
     pub edge_collapse: EdgeCollapseSettings,
     pub voxel: VoxelSettings,
     pub merge_tree: MergeTreeSettings,
+    pub hybrid: HybridSettings,
     /// The error threshold of live cuts (hierarchies).
     pub threshold: Threshold,
 }
@@ -88,6 +106,7 @@ pub enum BuildParams {
     Voxel(VoxelSettings),
     /// The tree's build options (its criteria apply at run time).
     MergeTree(MergeTreeOptions),
+    Hybrid(HybridSettings),
 }
 
 impl BuildParams {
@@ -96,6 +115,7 @@ impl BuildParams {
             BuildParams::EdgeCollapse(_) => Method::EdgeCollapse,
             BuildParams::Voxel(_) => Method::Voxel,
             BuildParams::MergeTree(_) => Method::MergeTree,
+            BuildParams::Hybrid(_) => Method::Hybrid,
         }
     }
 }
@@ -108,6 +128,7 @@ impl Default for MethodSettings {
             edge_collapse: EdgeCollapseSettings::default(),
             voxel: VoxelSettings::default(),
             merge_tree: MergeTreeSettings::default(),
+            hybrid: HybridSettings::default(),
             threshold: Threshold::default(),
         }
     }
@@ -122,6 +143,7 @@ impl MethodSettings {
         settings.voxel = settings.voxel.sanitized();
         settings.threshold = settings.threshold.sanitized();
         settings.merge_tree = settings.merge_tree.sanitized();
+        settings.hybrid = settings.hybrid.sanitized();
         Some(settings)
     }
 
@@ -135,6 +157,7 @@ impl MethodSettings {
                 None => self.voxel.for_implicit(),
             }),
             Method::MergeTree => BuildParams::MergeTree(self.merge_tree.sanitized().options()),
+            Method::Hybrid => BuildParams::Hybrid(self.hybrid.sanitized()),
         }
     }
 

@@ -270,6 +270,11 @@ impl Hierarchy for HybridCut {
         self.adapt(view, tolerance);
         self.draw_set()
     }
+
+    /// Object-space cuts do not depend on the view.
+    fn view_key(&self, _view: &View, tolerance: Tolerance) -> Option<u64> {
+        matches!(tolerance, Tolerance::Relative(_)).then_some(0)
+    }
 }
 
 #[cfg(test)]
