@@ -12,7 +12,7 @@ pub use repair::{RepairOptions, RepairReport, Weld};
 pub use topology::{ComponentTopology, Topology};
 
 /// Axis-aligned bounding box.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Aabb {
     pub min: Vec3,
     pub max: Vec3,
@@ -73,7 +73,7 @@ impl Aabb {
 
 /// A triangle mesh with optional per-vertex attributes and a per-triangle part id
 /// (OBJ objects, glTF mesh instances, builtin sub-shapes).
-#[derive(Debug, Clone, Default, PartialEq)]
+#[derive(Debug, Clone, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct TriMesh {
     pub positions: Vec<Vec3>,
     pub triangles: Vec<[u32; 3]>,
@@ -205,7 +205,7 @@ fn merge_attr<T: Copy>(
 }
 
 /// A point set with optional per-point attributes.
-#[derive(Debug, Clone, Default, PartialEq)]
+#[derive(Debug, Clone, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct PointSet {
     pub positions: Vec<Vec3>,
     pub normals: Option<Vec<Vec3>>,

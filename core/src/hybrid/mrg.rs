@@ -14,7 +14,7 @@
 use glam::Vec3;
 
 /// A ball.
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Default, serde::Serialize, serde::Deserialize)]
 pub struct Sphere {
     pub center: Vec3,
     pub radius: f32,
@@ -62,7 +62,7 @@ impl Sphere {
 }
 
 /// The three operations of §3, plus the graph's ends.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
 pub enum NodeKind {
     Drain,
     /// TS: an edge collapse.
@@ -74,7 +74,7 @@ pub enum NodeKind {
     Source,
 }
 
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Node {
     pub kind: NodeKind,
     /// Guaranteed error bound of the primitives it produces (object space).
@@ -89,7 +89,7 @@ pub struct Node {
 
 /// Primitives produced by `producer` (the arc's end node, below) and consumed
 /// by `consumer` (its start node, above).
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Arc {
     pub producer: u32,
     pub consumer: u32,
@@ -99,7 +99,7 @@ pub struct Arc {
 }
 
 /// A point primitive (§5.3): a ball over part of a triangle, or a merge of such.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Point {
     pub center: Vec3,
     pub radius: f32,
@@ -112,7 +112,7 @@ pub struct Point {
 }
 
 /// The graph with its primitive tables.
-#[derive(Debug, Clone, PartialEq, Default)]
+#[derive(Debug, Clone, PartialEq, Default, serde::Serialize, serde::Deserialize)]
 pub struct Mrg {
     /// Every vertex ever made (the collapser's ids).
     pub positions: Vec<Vec3>,

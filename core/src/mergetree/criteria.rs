@@ -12,7 +12,7 @@ use super::Node;
 use crate::view::{Projector, Tolerance, View};
 
 /// A cone of directions: every normal within `half_angle` of `axis` (§4.2).
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct NormalCone {
     pub axis: Vec3,
     /// Radians; negative for the empty cone.

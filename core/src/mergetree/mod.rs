@@ -56,7 +56,7 @@ impl Default for MergeTreeOptions {
 
 /// A node of the merge tree: a parent vertex after it absorbed a child (one
 /// [`Merge`]), with the ranges of everything below it (§4.2).
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Node {
     /// The parent vertex's position: where the node is displayed.
     pub center: Vec3,
@@ -75,7 +75,7 @@ pub struct Node {
 
 /// Rows of `u32` packed in one vector (per-merge triangle fans and
 /// dependencies).
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub(crate) struct Csr {
     start: Vec<u32>,
     items: Vec<u32>,
@@ -125,7 +125,7 @@ impl Csr {
 }
 
 /// The merge tree of a mesh, with its dependencies (built once, offline).
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 pub struct MergeTree {
     /// The input mesh (display vertices keep their original positions and
     /// attributes).

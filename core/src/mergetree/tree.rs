@@ -22,7 +22,7 @@ use crate::simplify::collapse::{
 
 /// One parent-child relationship (Fig. 2): `child` merges into `parent`, which
 /// stays where it is, at tree level `level`.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub struct Merge {
     pub child: u32,
     pub parent: u32,
