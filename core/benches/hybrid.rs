@@ -13,7 +13,7 @@
 //! replacement, per-primitive guaranteed bounds (rayon), point replacement and
 //! merging). The n and 2n inputs are the model simplified beforehand (untimed).
 //! Cuts: 120 frames of a camera orbiting at 2.5 diagonals, 0.5° per frame,
-//! 1 px tolerance; "fresh" = `select_fresh`, "incremental" = `adapt` (both
+//! 1, 3 and 10 px tolerance; "fresh" = `select_fresh`, "incremental" = `adapt` (both
 //! only the node set), "draw set" = building the primitives of the cut.
 
 use std::path::Path;
@@ -107,37 +107,40 @@ fn main() {
             )
         })
         .collect();
-    let tol = Tolerance::Pixels(1.0);
-    let mut fresh = HybridCut::new(Arc::clone(&mrg));
-    let mut moving = HybridCut::new(Arc::clone(&mrg));
-    moving.adapt(&views[0], tol);
-    let (mut t_fresh, mut t_incr, mut t_draw, mut prims) = (0.0, 0.0, 0.0, 0usize);
-    for v in &views[1..] {
-        t_fresh += seconds(|| fresh.select_fresh(v, tol));
-        t_incr += seconds(|| moving.adapt(v, tol));
-        assert_eq!(
-            fresh.above(),
-            moving.above(),
-            "incremental differs from fresh"
-        );
-        t_draw += seconds(|| prims += std::hint::black_box(moving.draw_set()).primitive_count());
-    }
-    let frames = (views.len() - 1) as f64;
     println!(
-        "\n## Cut extraction, moving camera ({} nodes, 1 px, {} frames)\n",
+        "\n## Cut extraction, moving camera ({} nodes, {} frames)\n",
         mrg.nodes.len(),
-        frames
+        views.len() - 1
     );
     println!(
-        "| fresh (ms/frame) | incremental (ms/frame) | speed-up | draw set (ms/frame) | primitives/frame |"
+        "| tolerance (px) | fresh (ms/frame) | incremental (ms/frame) | speed-up | draw set (ms/frame) | primitives/frame |"
     );
-    println!("|---:|---:|---:|---:|---:|");
-    println!(
-        "| {:.3} | {:.3} | {:.1}× | {:.3} | {:.0} |",
-        1e3 * t_fresh / frames,
-        1e3 * t_incr / frames,
-        t_fresh / t_incr,
-        1e3 * t_draw / frames,
-        prims as f64 / frames
-    );
+    println!("|---:|---:|---:|---:|---:|---:|");
+    for px in [1.0, 3.0, 10.0] {
+        let tol = Tolerance::Pixels(px);
+        let mut fresh = HybridCut::new(Arc::clone(&mrg));
+        let mut moving = HybridCut::new(Arc::clone(&mrg));
+        moving.adapt(&views[0], tol);
+        let (mut t_fresh, mut t_incr, mut t_draw, mut prims) = (0.0, 0.0, 0.0, 0usize);
+        for v in &views[1..] {
+            t_fresh += seconds(|| fresh.select_fresh(v, tol));
+            t_incr += seconds(|| moving.adapt(v, tol));
+            assert_eq!(
+                fresh.above(),
+                moving.above(),
+                "incremental differs from fresh"
+            );
+            t_draw +=
+                seconds(|| prims += std::hint::black_box(moving.draw_set()).primitive_count());
+        }
+        let frames = (views.len() - 1) as f64;
+        println!(
+            "| {px} | {:.3} | {:.3} | {:.1}× | {:.3} | {:.0} |",
+            1e3 * t_fresh / frames,
+            1e3 * t_incr / frames,
+            t_fresh / t_incr,
+            1e3 * t_draw / frames,
+            prims as f64 / frames
+        );
+    }
 }

@@ -152,6 +152,9 @@ impl HybridCut {
             raised.push(n);
             stack.extend(mrg.child_nodes(n));
         }
+        if raised.is_empty() && lowered.is_empty() {
+            return;
+        }
         self.front.extend(&lowered);
         for n in &raised {
             self.front.extend(mrg.child_nodes(*n));
