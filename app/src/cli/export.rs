@@ -3,7 +3,9 @@
 use std::path::Path;
 
 use super::*;
-use lodstudio_core::io::gltf::{lod_screen_coverages, write_lod_chain_glb};
+use lodstudio_core::cut::DrawSet;
+use lodstudio_core::io::gltf::lod_screen_coverages;
+use lodstudio_core::io::gltf_writer::write_lod_chain;
 use lodstudio_core::simplify;
 
 /// The LOD methods `export` can use (the others are not built yet).
@@ -312,8 +314,14 @@ fn export_one(
     });
     let bounds: Vec<f32> = lods.iter().map(|(_, r)| r.error_bound()).collect();
     let coverages = lod_screen_coverages(&bounds, radius, args.pixels, args.viewport_height);
-    let meshes: Vec<lodstudio_core::TriMesh> = lods.iter().map(|(_, r)| r.mesh.clone()).collect();
-    let glb = write_lod_chain_glb(&meshes, &coverages);
+    let sets: Vec<DrawSet> = lods
+        .iter()
+        .map(|(_, r)| DrawSet {
+            mesh: r.mesh.clone(),
+            ..Default::default()
+        })
+        .collect();
+    let glb = write_lod_chain(&sets, &coverages);
     let bytes = write_gltf(output, glb)?;
     let seconds = start.elapsed().as_secs_f64();
     let per_lod: Vec<serde_json::Value> = lods

@@ -110,7 +110,7 @@ pub fn run(args: HybridArgs) -> Result<(), CliError> {
                 radii: Some(set.points.iter().map(|p| p.radius).collect()),
             };
             if io::extension(out) == "glb" {
-                let bytes = io::gltf::write_glb_with_points(&set.mesh, &points);
+                let bytes = io::gltf_writer::write_draw_set_glb(&set);
                 io::write_atomic(out, &bytes).map_err(|e| {
                     CliError::BadInput(format!("{}: cannot write: {e}", out.display()))
                 })?;

@@ -263,7 +263,10 @@ fn write_layers(
         .extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("glb"))
     {
-        let bytes = io::gltf::write_layers_glb(layers);
+        let bytes = io::gltf_writer::write_draw_set_glb(&lodstudio_core::cut::DrawSet {
+            layers: layers.to_vec(),
+            ..Default::default()
+        });
         return io::write_atomic(out, &bytes)
             .map_err(|e| CliError::BadInput(format!("{}: cannot write: {e}", out.display())));
     }

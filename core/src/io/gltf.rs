@@ -228,151 +228,10 @@ fn read_primitive(
 /// vertex normals when the mesh has none), vertex colours and UVs when it has
 /// them, and 32-bit indices in one buffer, one node, one scene.
 pub fn write_glb(mesh: &TriMesh) -> Vec<u8> {
-    let (doc, bin) = glb_document(std::slice::from_ref(mesh));
-    glb_container(doc.to_string().into_bytes(), bin)
-}
-
-/// Writes a mesh and a point set (a hybrid cut) as one binary glTF: the mesh
-/// as [`write_glb`] does, and the points as a second node whose primitive has
-/// mode POINTS, `COLOR_0` and the custom attribute `_RADIUS` (object space).
-pub fn write_glb_with_points(mesh: &TriMesh, points: &crate::geom::PointSet) -> Vec<u8> {
-    use serde_json::json;
-    let (mut doc, mut bin) = glb_document(std::slice::from_ref(mesh));
-    let n = points.positions.len();
-    if n > 0 {
-        let mut push = |doc: &mut serde_json::Value, bytes: Vec<u8>, mut acc: serde_json::Value| {
-            while !bin.len().is_multiple_of(4) {
-                bin.push(0);
-            }
-            let view = json!({"buffer": 0, "byteOffset": bin.len(), "byteLength": bytes.len(), "target": 34962});
-            bin.extend_from_slice(&bytes);
-            for key in ["bufferViews", "accessors"] {
-                if doc.get(key).is_none() {
-                    doc[key] = json!([]);
-                }
-            }
-            let views = doc["bufferViews"].as_array_mut().expect("array");
-            views.push(view);
-            acc["bufferView"] = json!(views.len() - 1);
-            let accessors = doc["accessors"].as_array_mut().expect("array");
-            accessors.push(acc);
-            accessors.len() - 1
-        };
-        let floats =
-            |v: &mut dyn Iterator<Item = f32>| v.flat_map(|x| x.to_le_bytes()).collect::<Vec<u8>>();
-        let b = points.bounds();
-        let pos = push(
-            &mut doc,
-            floats(&mut points.positions.iter().flat_map(|p| p.to_array())),
-            json!({"componentType": 5126, "count": n, "type": "VEC3", "min": b.min.to_array(), "max": b.max.to_array()}),
-        );
-        let white = vec![Vec3::ONE; n];
-        let colors = points
-            .colors
-            .as_ref()
-            .filter(|c| c.len() == n)
-            .unwrap_or(&white);
-        let col = push(
-            &mut doc,
-            floats(
-                &mut colors
-                    .iter()
-                    .flat_map(|c| c.clamp(Vec3::ZERO, Vec3::ONE).to_array()),
-            ),
-            json!({"componentType": 5126, "count": n, "type": "VEC3"}),
-        );
-        let zero = vec![0.0; n];
-        let radii = points
-            .radii
-            .as_ref()
-            .filter(|r| r.len() == n)
-            .unwrap_or(&zero);
-        let rad = push(
-            &mut doc,
-            floats(&mut radii.iter().copied()),
-            json!({"componentType": 5126, "count": n, "type": "SCALAR"}),
-        );
-        if doc.get("meshes").is_none() {
-            doc["meshes"] = json!([]);
-        }
-        let meshes = doc["meshes"].as_array_mut().expect("array");
-        meshes.push(json!({"primitives": [{"attributes": {"POSITION": pos, "COLOR_0": col, "_RADIUS": rad}, "mode": 0}]}));
-        let mesh_id = meshes.len() - 1;
-        let nodes = doc["nodes"].as_array_mut().expect("array");
-        nodes.push(json!({"mesh": mesh_id, "name": "points"}));
-        let node_id = nodes.len() - 1;
-        doc["scenes"][0]["nodes"]
-            .as_array_mut()
-            .expect("array")
-            .push(json!(node_id));
-        while !bin.len().is_multiple_of(4) {
-            bin.push(0);
-        }
-        doc["buffers"] = json!([{"byteLength": bin.len()}]);
-    }
-    glb_container(doc.to_string().into_bytes(), bin)
-}
-
-/// Writes an LOD chain as a binary glTF with the `MSFT_lod` node extension.
-///
-/// `lods` are in decreasing quality (LOD0 first). Node `i` holds `lods[i]`; the
-/// scene lists node 0 only, whose `extensions.MSFT_lod.ids` are `[1, 2, …]`
-/// (the lower LODs, in decreasing quality) and whose
-/// `extras.MSFT_screencoverage` is `coverages`: one value per LOD, LOD0's
-/// included, each the smallest screen coverage at which that LOD is shown
-/// (see [`lod_screen_coverages`]). Loaders without the extension see LOD0
-/// alone. A LOD without triangles becomes a node without a mesh.
-///
-/// # Panics
-/// If `lods` is empty or `coverages.len() != lods.len()`.
-pub fn write_lod_chain_glb(lods: &[TriMesh], coverages: &[f32]) -> Vec<u8> {
-    assert!(!lods.is_empty(), "an LOD chain needs LOD0");
-    assert_eq!(
-        coverages.len(),
-        lods.len(),
-        "one screen coverage per LOD, LOD0's included"
-    );
-    let (mut doc, bin) = glb_document(lods);
-    if lods.len() > 1 {
-        let ids: Vec<usize> = (1..lods.len()).collect();
-        let node0 = &mut doc["nodes"][0];
-        node0["extensions"] = serde_json::json!({"MSFT_lod": {"ids": ids}});
-        node0["extras"] = serde_json::json!({"MSFT_screencoverage": coverages});
-        doc["extensionsUsed"] = serde_json::json!(["MSFT_lod"]);
-    }
-    glb_container(doc.to_string().into_bytes(), bin)
-}
-
-/// Writes the translucent layers of a multi-layered voxel level (voxel paper
-/// §3) as one GLB: a node per layer, all in the scene, each with its own
-/// material whose base-colour alpha is the layer's opacity (eq. 4), alpha
-/// blended except for an opaque innermost layer. Layers come innermost first,
-/// which is also the order to draw them from outside.
-pub fn write_layers_glb(layers: &[crate::cut::Layer]) -> Vec<u8> {
-    let meshes: Vec<TriMesh> = layers.iter().map(|l| l.mesh.clone()).collect();
-    let (mut doc, bin) = glb_document(&meshes);
-    let mut materials = Vec::new();
-    let mut mesh_id = 0;
-    for (i, layer) in layers.iter().enumerate() {
-        let alpha = layer.alpha.clamp(0.0, 1.0);
-        let mut material = doc["materials"][0].clone();
-        material["pbrMetallicRoughness"]["baseColorFactor"] =
-            serde_json::json!([1.0, 1.0, 1.0, alpha]);
-        material["alphaMode"] = serde_json::json!(if alpha >= 1.0 { "OPAQUE" } else { "BLEND" });
-        material["name"] = serde_json::json!(format!("isodensity {:.3}", layer.isodensity));
-        doc["nodes"][i]["name"] = serde_json::json!(format!("layer{i}"));
-        if doc["nodes"][i].get("mesh").is_some() {
-            doc["meshes"][mesh_id]["primitives"][0]["material"] =
-                serde_json::json!(materials.len());
-            materials.push(material);
-            mesh_id += 1;
-        }
-    }
-    if !materials.is_empty() {
-        doc["materials"] = serde_json::json!(materials);
-    }
-    doc["scenes"][0]["nodes"] = serde_json::json!((0..layers.len()).collect::<Vec<_>>());
-    glb_container(doc.to_string().into_bytes(), bin)
+    super::gltf_writer::write_draw_set_glb(&crate::cut::DrawSet {
+        mesh: mesh.clone(),
+        ..Default::default()
+    })
 }
 
 /// The `MSFT_screencoverage` thresholds of an LOD chain.
@@ -430,106 +289,6 @@ pub fn lod_screen_coverages(
     out
 }
 
-/// The glTF document and binary buffer of `meshes`, one node each (named
-/// `lod{i}`); the default scene lists node 0 only.
-fn glb_document(meshes: &[TriMesh]) -> (serde_json::Value, Vec<u8>) {
-    use serde_json::json;
-    let mut bin: Vec<u8> = Vec::new();
-    let mut views = Vec::new();
-    let mut accessors = Vec::new();
-    let mut nodes = Vec::new();
-    let mut gltf_meshes = Vec::new();
-    let mut add = |bin: &mut Vec<u8>, bytes: &[u8], target: u32, acc: serde_json::Value| {
-        let offset = bin.len();
-        bin.extend_from_slice(bytes);
-        views.push(
-            json!({"buffer": 0, "byteOffset": offset, "byteLength": bytes.len(), "target": target}),
-        );
-        let mut acc = acc;
-        acc["bufferView"] = json!(views.len() - 1);
-        accessors.push(acc);
-        accessors.len() - 1
-    };
-    let le = |data: &[f32]| {
-        data.iter()
-            .flat_map(|x| x.to_le_bytes())
-            .collect::<Vec<u8>>()
-    };
-    let flat3 = |v: &[Vec3]| le(&v.iter().flat_map(|p| p.to_array()).collect::<Vec<f32>>());
-    for (i, mesh) in meshes.iter().enumerate() {
-        let name = format!("lod{i}");
-        if mesh.triangles.is_empty() || mesh.positions.is_empty() {
-            nodes.push(json!({"name": name}));
-            continue;
-        }
-        let n = mesh.positions.len();
-        let vec = |kind: &str| json!({"componentType": 5126, "count": n, "type": kind});
-        let mut attributes = serde_json::Map::new();
-        let bounds = mesh.bounds();
-        let mut pos_acc = vec("VEC3");
-        pos_acc["min"] = json!(bounds.min.to_array());
-        pos_acc["max"] = json!(bounds.max.to_array());
-        let pos = add(&mut bin, &flat3(&mesh.positions), 34962, pos_acc);
-        attributes.insert("POSITION".into(), pos.into());
-        // Every LOD shades: meshes without normals get area-weighted ones.
-        let computed;
-        let nr = match &mesh.normals {
-            Some(nr) => nr,
-            None => {
-                computed = mesh.vertex_normals();
-                &computed
-            }
-        };
-        let unit: Vec<Vec3> = nr
-            .iter()
-            .map(|v| v.try_normalize().unwrap_or(Vec3::Z))
-            .collect();
-        let a = add(&mut bin, &flat3(&unit), 34962, vec("VEC3"));
-        attributes.insert("NORMAL".into(), a.into());
-        if let Some(c) = &mesh.colors {
-            let clamped: Vec<Vec3> = c.iter().map(|v| v.clamp(Vec3::ZERO, Vec3::ONE)).collect();
-            let a = add(&mut bin, &flat3(&clamped), 34962, vec("VEC3"));
-            attributes.insert("COLOR_0".into(), a.into());
-        }
-        if let Some(uv) = &mesh.uvs {
-            let flat: Vec<f32> = uv.iter().flat_map(|v| v.to_array()).collect();
-            let a = add(&mut bin, &le(&flat), 34962, vec("VEC2"));
-            attributes.insert("TEXCOORD_0".into(), a.into());
-        }
-        let index_bytes: Vec<u8> = mesh
-            .triangles
-            .iter()
-            .flatten()
-            .flat_map(|i| i.to_le_bytes())
-            .collect();
-        let indices = add(
-            &mut bin,
-            &index_bytes,
-            34963,
-            json!({"componentType": 5125, "count": mesh.triangles.len() * 3, "type": "SCALAR"}),
-        );
-        nodes.push(json!({"mesh": gltf_meshes.len(), "name": name}));
-        gltf_meshes.push(json!({"primitives": [{"attributes": attributes, "indices": indices, "mode": 4, "material": 0}]}));
-    }
-    while !bin.len().is_multiple_of(4) {
-        bin.push(0);
-    }
-    let mut doc = json!({
-        "asset": {"version": "2.0", "generator": "lodstudio"},
-        "scene": 0,
-        "scenes": [{"nodes": [0]}],
-        "nodes": nodes,
-    });
-    if !gltf_meshes.is_empty() {
-        doc["meshes"] = json!(gltf_meshes);
-        doc["materials"] = json!([{"pbrMetallicRoughness": {"baseColorFactor": [1.0, 1.0, 1.0, 1.0], "metallicFactor": 0.0, "roughnessFactor": 0.8}, "doubleSided": false}]);
-        doc["buffers"] = json!([{"byteLength": bin.len()}]);
-        doc["bufferViews"] = json!(views);
-        doc["accessors"] = json!(accessors);
-    }
-    (doc, bin)
-}
-
 /// The .gltf JSON and the .bin buffer of a GLB made by this module's writers,
 /// the buffer referenced as `bin_name`; `None` when `glb` is no GLB container.
 pub fn split_glb(glb: &[u8], bin_name: &str) -> Option<(Vec<u8>, Vec<u8>)> {
@@ -552,7 +311,7 @@ pub fn split_glb(glb: &[u8], bin_name: &str) -> Option<(Vec<u8>, Vec<u8>)> {
 
 /// Packs a JSON chunk (space-padded) and a binary chunk (zero-padded; left out
 /// when empty) into GLB.
-fn glb_container(mut json: Vec<u8>, bin: Vec<u8>) -> Vec<u8> {
+pub(crate) fn glb_container(mut json: Vec<u8>, bin: Vec<u8>) -> Vec<u8> {
     while !json.len().is_multiple_of(4) {
         json.push(b' ');
     }
@@ -576,6 +335,7 @@ fn glb_container(mut json: Vec<u8>, bin: Vec<u8>) -> Vec<u8> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::io::gltf_writer::{write_draw_set_glb, write_lod_chain};
 
     #[test]
     fn glb_round_trips_through_the_reader() {
@@ -598,17 +358,40 @@ mod tests {
             colors: Some(vec![Vec3::new(1.0, 0.0, 0.0); 2]),
             radii: Some(vec![0.1, 0.2]),
         };
-        let glb = write_glb_with_points(&mesh, &points);
+        let set = |mesh: &TriMesh| crate::cut::DrawSet {
+            mesh: mesh.clone(),
+            points: (0..2)
+                .map(|i| crate::cut::CutPoint {
+                    center: points.positions[i],
+                    radius: points.radii.as_ref().unwrap()[i],
+                    color: Vec3::new(1.0, 0.0, 0.0),
+                    normal: Vec3::Z,
+                    error: 0.0,
+                })
+                .collect(),
+            ..Default::default()
+        };
+        let glb = write_draw_set_glb(&set(&mesh));
         let doc = glb_json(&glb);
-        assert_eq!(doc["scenes"][0]["nodes"], serde_json::json!([0, 1]));
-        let prim = &doc["meshes"][1]["primitives"][0];
+        assert_eq!(doc["scenes"][0]["nodes"], serde_json::json!([0]));
+        let prim = &doc["meshes"][0]["primitives"][1];
         assert_eq!(prim["mode"], 0);
         let radius = prim["attributes"]["_RADIUS"].as_u64().unwrap() as usize;
         assert_eq!(doc["accessors"][radius]["count"], 2);
         assert_eq!(read(&glb, None).unwrap().triangles, mesh.triangles);
         // Points alone still make a valid file.
-        let only = glb_json(&write_glb_with_points(&crate::TriMesh::default(), &points));
-        assert_eq!(only["meshes"].as_array().unwrap().len(), 1);
+        let only = glb_json(&write_draw_set_glb(&set(&TriMesh::default())));
+        assert_eq!(only["meshes"][0]["primitives"][0]["mode"], 0);
+    }
+
+    fn sets(meshes: &[TriMesh]) -> Vec<crate::cut::DrawSet> {
+        meshes
+            .iter()
+            .map(|m| crate::cut::DrawSet {
+                mesh: m.clone(),
+                ..Default::default()
+            })
+            .collect()
     }
 
     /// The JSON chunk of a GLB.
@@ -626,7 +409,7 @@ mod tests {
             crate::builtins::torus(1.0, 0.3, 8, 4),
         ];
         let coverages = lod_screen_coverages(&[0.001, 0.01, 0.1], 1.3, 2.0, 1080.0);
-        let glb = write_lod_chain_glb(&lods, &coverages);
+        let glb = write_lod_chain(&sets(&lods), &coverages);
         let doc = glb_json(&glb);
         assert_eq!(doc["extensionsUsed"], serde_json::json!(["MSFT_lod"]));
         assert_eq!(doc["scenes"][0]["nodes"], serde_json::json!([0]));
@@ -658,14 +441,14 @@ mod tests {
         assert_eq!(back.triangles, lods[0].triangles);
         assert_eq!(back.positions, lods[0].positions);
         // One LOD: the plain file, no extension.
-        let single = write_lod_chain_glb(&lods[..1], &coverages[..1]);
+        let single = write_lod_chain(&sets(&lods[..1]), &coverages[..1]);
         assert_eq!(single, write_glb(&lods[0]));
     }
 
     #[test]
     fn lod_chain_without_triangles_in_a_lod_stays_readable() {
         let lods = [crate::builtins::torus(1.0, 0.3, 8, 4), TriMesh::default()];
-        let glb = write_lod_chain_glb(&lods, &[0.5, 0.1]);
+        let glb = write_lod_chain(&sets(&lods), &[0.5, 0.1]);
         let doc = glb_json(&glb);
         assert!(doc["nodes"][1].get("mesh").is_none());
         assert_eq!(read(&glb, None).unwrap().triangles, lods[0].triangles);

@@ -6,6 +6,7 @@
 
 mod error;
 pub mod gltf;
+pub mod gltf_writer;
 pub mod hierarchy_file;
 pub mod obj;
 pub mod off;

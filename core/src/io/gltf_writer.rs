@@ -1,0 +1,426 @@
+//! The one glTF writer: any cut of any method ([`DrawSet`]: triangles,
+//! points, splats, translucent layers) becomes a node whose mesh holds one
+//! primitive per kind, and LOD chains stack such nodes under `MSFT_lod`.
+//!
+//! - triangles: positions, normals (area-weighted when the mesh has none),
+//!   `COLOR_0` and `TEXCOORD_0` when present, 32-bit indices;
+//! - points (hybrid paper §5.3): mode POINTS with `COLOR_0` and the custom
+//!   attribute `_RADIUS` (object space);
+//! - splats (AMG paper §3): textured quads, one alpha-blended unlit material
+//!   per texture, the texture embedded as PNG (colour, Ψ in alpha);
+//! - layers (voxel paper §3): one primitive per layer with a material whose
+//!   base-colour alpha is the layer's opacity, blended unless opaque.
+
+use std::collections::BTreeSet;
+
+use glam::Vec3;
+use serde_json::{Value, json};
+
+use crate::cut::{DrawSet, Texture};
+use crate::geom::{Aabb, TriMesh};
+
+const ARRAY_BUFFER: u32 = 34962;
+const ELEMENT_ARRAY_BUFFER: u32 = 34963;
+const FLOAT: u32 = 5126;
+const UNSIGNED_INT: u32 = 5125;
+
+/// Accumulates buffers, accessors, materials and nodes, then packs a GLB.
+#[derive(Default)]
+pub struct GltfWriter {
+    bin: Vec<u8>,
+    views: Vec<Value>,
+    accessors: Vec<Value>,
+    meshes: Vec<Value>,
+    nodes: Vec<Value>,
+    materials: Vec<Value>,
+    images: Vec<Value>,
+    textures: Vec<Value>,
+    extensions: BTreeSet<&'static str>,
+    /// The shared opaque surface material, once made.
+    surface: Option<usize>,
+}
+
+fn le(data: &[f32]) -> Vec<u8> {
+    data.iter().flat_map(|x| x.to_le_bytes()).collect()
+}
+
+fn flat3(v: &[Vec3]) -> Vec<f32> {
+    v.iter().flat_map(|p| p.to_array()).collect()
+}
+
+impl GltfWriter {
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// Appends `bytes` as a buffer view (4-byte aligned).
+    fn view(&mut self, bytes: &[u8], target: Option<u32>) -> usize {
+        while !self.bin.len().is_multiple_of(4) {
+            self.bin.push(0);
+        }
+        let mut v = json!({"buffer": 0, "byteOffset": self.bin.len(), "byteLength": bytes.len()});
+        if let Some(t) = target {
+            v["target"] = json!(t);
+        }
+        self.bin.extend_from_slice(bytes);
+        self.views.push(v);
+        self.views.len() - 1
+    }
+
+    /// A float accessor of `kind` ("SCALAR", "VEC2", "VEC3") over `data`.
+    fn floats(&mut self, data: &[f32], kind: &str, bounds: Option<Aabb>) -> usize {
+        let width = match kind {
+            "VEC2" => 2,
+            "VEC3" => 3,
+            _ => 1,
+        };
+        let view = self.view(&le(data), Some(ARRAY_BUFFER));
+        let mut acc = json!({"bufferView": view, "componentType": FLOAT, "count": data.len() / width, "type": kind});
+        if let Some(b) = bounds {
+            acc["min"] = json!(b.min.to_array());
+            acc["max"] = json!(b.max.to_array());
+        }
+        self.accessors.push(acc);
+        self.accessors.len() - 1
+    }
+
+    fn indices(&mut self, indices: &[u32]) -> usize {
+        let bytes: Vec<u8> = indices.iter().flat_map(|i| i.to_le_bytes()).collect();
+        let view = self.view(&bytes, Some(ELEMENT_ARRAY_BUFFER));
+        self.accessors.push(json!({"bufferView": view, "componentType": UNSIGNED_INT, "count": indices.len(), "type": "SCALAR"}));
+        self.accessors.len() - 1
+    }
+
+    fn material(&mut self, m: Value) -> usize {
+        self.materials.push(m);
+        self.materials.len() - 1
+    }
+
+    fn surface_material(&mut self) -> usize {
+        if let Some(m) = self.surface {
+            return m;
+        }
+        let m = self.material(json!({
+            "pbrMetallicRoughness": {"baseColorFactor": [1.0, 1.0, 1.0, 1.0], "metallicFactor": 0.0, "roughnessFactor": 0.8},
+            "doubleSided": false
+        }));
+        self.surface = Some(m);
+        m
+    }
+
+    /// The triangle primitive of `mesh`, or `None` when it has no triangles.
+    fn triangles(&mut self, mesh: &TriMesh, material: usize) -> Option<Value> {
+        if mesh.triangles.is_empty() || mesh.positions.is_empty() {
+            return None;
+        }
+        let mut attributes = serde_json::Map::new();
+        let pos = self.floats(&flat3(&mesh.positions), "VEC3", Some(mesh.bounds()));
+        attributes.insert("POSITION".into(), pos.into());
+        // Every mesh shades: meshes without normals get area-weighted ones.
+        let normals: Vec<Vec3> = match &mesh.normals {
+            Some(n) => n.clone(),
+            None => mesh.vertex_normals(),
+        };
+        let unit: Vec<Vec3> = normals
+            .iter()
+            .map(|v| v.try_normalize().unwrap_or(Vec3::Z))
+            .collect();
+        let nrm = self.floats(&flat3(&unit), "VEC3", None);
+        attributes.insert("NORMAL".into(), nrm.into());
+        if let Some(c) = &mesh.colors {
+            let clamped: Vec<Vec3> = c.iter().map(|v| v.clamp(Vec3::ZERO, Vec3::ONE)).collect();
+            let a = self.floats(&flat3(&clamped), "VEC3", None);
+            attributes.insert("COLOR_0".into(), a.into());
+        }
+        if let Some(uv) = &mesh.uvs {
+            let flat: Vec<f32> = uv.iter().flat_map(|v| v.to_array()).collect();
+            let a = self.floats(&flat, "VEC2", None);
+            attributes.insert("TEXCOORD_0".into(), a.into());
+        }
+        let flat: Vec<u32> = mesh.triangles.iter().flatten().copied().collect();
+        let indices = self.indices(&flat);
+        Some(json!({"attributes": attributes, "indices": indices, "mode": 4, "material": material}))
+    }
+
+    /// The points of a cut as a POINTS primitive with `_RADIUS`.
+    fn points(&mut self, set: &DrawSet) -> Option<Value> {
+        if set.points.is_empty() {
+            return None;
+        }
+        let centers: Vec<Vec3> = set.points.iter().map(|p| p.center).collect();
+        let bounds = Aabb::from_points(&centers);
+        let pos = self.floats(&flat3(&centers), "VEC3", Some(bounds));
+        let colors: Vec<Vec3> = set
+            .points
+            .iter()
+            .map(|p| p.color.clamp(Vec3::ZERO, Vec3::ONE))
+            .collect();
+        let col = self.floats(&flat3(&colors), "VEC3", None);
+        let radii: Vec<f32> = set.points.iter().map(|p| p.radius.max(0.0)).collect();
+        let rad = self.floats(&radii, "SCALAR", None);
+        Some(json!({"attributes": {"POSITION": pos, "COLOR_0": col, "_RADIUS": rad}, "mode": 0}))
+    }
+
+    /// The splats of a cut: textured quads, one material per texture.
+    fn splats(&mut self, set: &DrawSet) -> Vec<Value> {
+        let mut material_of = vec![None; set.textures.len()];
+        let mut out = Vec::new();
+        for s in &set.splats {
+            let Some(tex) = set.textures.get(s.texture) else {
+                continue;
+            };
+            let material = match material_of[s.texture] {
+                Some(m) => m,
+                None => {
+                    let image = self.texture(tex);
+                    let m = self.material(json!({
+                        "name": format!("domain{}", s.domain),
+                        "pbrMetallicRoughness": {"baseColorTexture": {"index": image}, "metallicFactor": 0.0, "roughnessFactor": 1.0},
+                        "alphaMode": "BLEND",
+                        "doubleSided": true,
+                        "extensions": {"KHR_materials_unlit": {}}
+                    }));
+                    self.extensions.insert("KHR_materials_unlit");
+                    material_of[s.texture] = Some(m);
+                    m
+                }
+            };
+            let [a, b] = s.axes;
+            let corners = [
+                s.center - a - b,
+                s.center + a - b,
+                s.center + a + b,
+                s.center - a + b,
+            ];
+            let pos = self.floats(&flat3(&corners), "VEC3", Some(Aabb::from_points(&corners)));
+            let n = s.normal.try_normalize().unwrap_or(Vec3::Z);
+            let nrm = self.floats(&flat3(&[n; 4]), "VEC3", None);
+            let uv = self.floats(&[0.0, 0.0, 1.0, 0.0, 1.0, 1.0, 0.0, 1.0], "VEC2", None);
+            let indices = self.indices(&[0, 1, 2, 0, 2, 3]);
+            out.push(json!({"attributes": {"POSITION": pos, "NORMAL": nrm, "TEXCOORD_0": uv}, "indices": indices, "mode": 4, "material": material}));
+        }
+        out
+    }
+
+    /// Embeds `tex` as a PNG image and returns its texture index.
+    fn texture(&mut self, tex: &Texture) -> usize {
+        let view = self.view(&encode_png(tex), None);
+        self.images
+            .push(json!({"bufferView": view, "mimeType": "image/png"}));
+        self.textures
+            .push(json!({"source": self.images.len() - 1, "sampler": 0}));
+        self.textures.len() - 1
+    }
+
+    /// One primitive per translucent layer, innermost first.
+    fn layers(&mut self, set: &DrawSet) -> Vec<Value> {
+        let mut out = Vec::new();
+        for layer in &set.layers {
+            let alpha = layer.alpha.clamp(0.0, 1.0);
+            let m = self.material(json!({
+                "name": format!("isodensity {:.3}", layer.isodensity),
+                "pbrMetallicRoughness": {"baseColorFactor": [1.0, 1.0, 1.0, alpha], "metallicFactor": 0.0, "roughnessFactor": 0.8},
+                "alphaMode": if alpha >= 1.0 { "OPAQUE" } else { "BLEND" },
+            }));
+            out.extend(self.triangles(&layer.mesh, m));
+        }
+        out
+    }
+
+    /// A node named `name` showing `set` (a node without a mesh when empty).
+    pub fn node(&mut self, name: &str, set: &DrawSet) -> usize {
+        let surface = if set.mesh.triangles.is_empty() {
+            0
+        } else {
+            self.surface_material()
+        };
+        let mut primitives: Vec<Value> = Vec::new();
+        primitives.extend(self.triangles(&set.mesh, surface));
+        primitives.extend(self.points(set));
+        primitives.extend(self.layers(set));
+        primitives.extend(self.splats(set));
+        let mut node = json!({"name": name});
+        if !primitives.is_empty() {
+            self.meshes.push(json!({"primitives": primitives}));
+            node["mesh"] = json!(self.meshes.len() - 1);
+        }
+        self.nodes.push(node);
+        self.nodes.len() - 1
+    }
+
+    /// The glTF document (scene = `scene_nodes`) and its binary buffer.
+    pub fn document(mut self, scene_nodes: &[usize]) -> (Value, Vec<u8>) {
+        while !self.bin.len().is_multiple_of(4) {
+            self.bin.push(0);
+        }
+        let mut doc = json!({
+            "asset": {"version": "2.0", "generator": "lodstudio"},
+            "scene": 0,
+            "scenes": [{"nodes": scene_nodes}],
+            "nodes": self.nodes,
+        });
+        if !self.meshes.is_empty() {
+            doc["meshes"] = json!(self.meshes);
+            doc["materials"] = json!(self.materials);
+            doc["buffers"] = json!([{"byteLength": self.bin.len()}]);
+            doc["bufferViews"] = json!(self.views);
+            doc["accessors"] = json!(self.accessors);
+        }
+        if !self.images.is_empty() {
+            doc["images"] = json!(self.images);
+            doc["textures"] = json!(self.textures);
+            doc["samplers"] =
+                json!([{"magFilter": 9729, "minFilter": 9729, "wrapS": 33071, "wrapT": 33071}]);
+        }
+        if !self.extensions.is_empty() {
+            doc["extensionsUsed"] = json!(self.extensions.iter().collect::<Vec<_>>());
+        }
+        (doc, self.bin)
+    }
+}
+
+/// One cut as a GLB: a single node in the scene.
+pub fn write_draw_set_glb(set: &DrawSet) -> Vec<u8> {
+    let mut w = GltfWriter::new();
+    let node = w.node("lod0", set);
+    let (doc, bin) = w.document(&[node]);
+    super::gltf::glb_container(doc.to_string().into_bytes(), bin)
+}
+
+/// An LOD chain as a GLB with the `MSFT_lod` node extension.
+///
+/// `lods` are in decreasing quality (LOD0 first). Node `i` holds `lods[i]`;
+/// the scene lists node 0 only, whose `extensions.MSFT_lod.ids` are `[1, 2,
+/// …]` (the lower LODs, in decreasing quality) and whose
+/// `extras.MSFT_screencoverage` is `coverages`: one value per LOD, LOD0's
+/// included, each the smallest screen coverage at which that LOD is shown
+/// (see [`super::gltf::lod_screen_coverages`]). Loaders without the extension
+/// see LOD0 alone.
+///
+/// # Panics
+/// If `lods` is empty or `coverages.len() != lods.len()`.
+pub fn write_lod_chain(lods: &[DrawSet], coverages: &[f32]) -> Vec<u8> {
+    assert!(!lods.is_empty(), "an LOD chain needs LOD0");
+    assert_eq!(
+        coverages.len(),
+        lods.len(),
+        "one screen coverage per LOD, LOD0's included"
+    );
+    let mut w = GltfWriter::new();
+    for (i, lod) in lods.iter().enumerate() {
+        w.node(&format!("lod{i}"), lod);
+    }
+    let (mut doc, bin) = w.document(&[0]);
+    if lods.len() > 1 {
+        let ids: Vec<usize> = (1..lods.len()).collect();
+        doc["nodes"][0]["extensions"] = json!({"MSFT_lod": {"ids": ids}});
+        doc["nodes"][0]["extras"] = json!({"MSFT_screencoverage": coverages});
+        let mut used = doc["extensionsUsed"]
+            .as_array()
+            .cloned()
+            .unwrap_or_default();
+        used.push(json!("MSFT_lod"));
+        doc["extensionsUsed"] = json!(used);
+    }
+    super::gltf::glb_container(doc.to_string().into_bytes(), bin)
+}
+
+/// An RGBA8 texture as PNG.
+fn encode_png(tex: &Texture) -> Vec<u8> {
+    let (w, h) = (tex.width.max(1), tex.height.max(1));
+    let mut data: Vec<u8> = tex.rgba.concat();
+    data.resize((w * h * 4) as usize, 0);
+    let mut out = Vec::new();
+    let mut enc = png::Encoder::new(&mut out, w, h);
+    enc.set_color(png::ColorType::Rgba);
+    enc.set_depth(png::BitDepth::Eight);
+    // Encoding into memory with a matching size cannot fail.
+    let mut writer = enc.write_header().expect("writing to memory");
+    writer
+        .write_image_data(&data)
+        .expect("size matches the header");
+    drop(writer);
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::cut::{Layer, Splat};
+
+    #[test]
+    fn splats_and_layers_read_back_with_their_textures_and_alpha() {
+        let tex = |w: u32, h: u32| Texture {
+            width: w,
+            height: h,
+            rgba: (0..w * h).map(|i| [i as u8, 7, 9, (i * 3) as u8]).collect(),
+        };
+        let splat = |c: f32, t: usize| Splat {
+            center: Vec3::new(c, 0.0, 0.0),
+            axes: [Vec3::X * 0.5, Vec3::Y * 0.25],
+            normal: Vec3::Z,
+            texture: t,
+            domain: t,
+        };
+        let torus = crate::builtins::torus(1.0, 0.3, 8, 4);
+        let set = DrawSet {
+            splats: vec![splat(0.0, 0), splat(2.0, 1), splat(4.0, 1)],
+            textures: vec![tex(3, 2), tex(5, 4)],
+            layers: vec![
+                Layer {
+                    mesh: torus.clone(),
+                    alpha: 1.0,
+                    isodensity: 0.8,
+                },
+                Layer {
+                    mesh: torus.clone(),
+                    alpha: 0.4,
+                    isodensity: 0.3,
+                },
+            ],
+            ..DrawSet::default()
+        };
+        let glb = write_draw_set_glb(&set);
+        let (doc, buffers, images) = gltf::import_slice(&glb).expect("valid glTF");
+        let prims: Vec<_> = doc.meshes().flat_map(|m| m.primitives()).collect();
+        assert_eq!(prims.len(), 2 + 3, "two layers, three quads");
+        let alpha: Vec<_> = prims[..2]
+            .iter()
+            .map(|p| p.material().alpha_mode())
+            .collect();
+        assert_eq!(
+            alpha,
+            [
+                gltf::material::AlphaMode::Opaque,
+                gltf::material::AlphaMode::Blend
+            ]
+        );
+        assert_eq!(
+            prims[1]
+                .material()
+                .pbr_metallic_roughness()
+                .base_color_factor()[3],
+            0.4
+        );
+        for (k, p) in prims[2..].iter().enumerate() {
+            let reader = p.reader(|b| Some(&buffers[b.index()]));
+            let pos: Vec<[f32; 3]> = reader.read_positions().unwrap().collect();
+            assert_eq!(pos[2], [2.0 * k as f32 + 0.5, 0.25, 0.0]);
+            assert_eq!(p.material().alpha_mode(), gltf::material::AlphaMode::Blend);
+            let t = p
+                .material()
+                .pbr_metallic_roughness()
+                .base_color_texture()
+                .unwrap();
+            let img = &images[t.texture().source().index()];
+            let want = &set.textures[set.splats[k].texture];
+            assert_eq!((img.width, img.height), (want.width, want.height));
+            assert_eq!(&img.pixels[..8], want.rgba[..2].concat().as_slice());
+        }
+        assert_eq!(
+            images.len(),
+            2,
+            "one image per texture, shared by its splats"
+        );
+    }
+}
