@@ -260,8 +260,8 @@ pub fn csg_part() -> Csg {
 }
 
 /// A triangle mesh as a solid: inside where its generalised winding number is at
-/// least ½, so open and self-overlapping meshes (the bunny's open base, CAD
-/// assemblies) sample sensibly; |value| is the exact distance to the surface, which
+/// least ½ in magnitude, so open and self-overlapping meshes (the bunny's open
+/// base, CAD assemblies) and inward-oriented ones (the horse) sample sensibly; |value| is the exact distance to the surface, which
 /// keeps the [`Implicit`] contract the sampler relies on.
 pub struct MeshSolid<'a> {
     winding: crate::distance::WindingNumber<'a>,
@@ -280,7 +280,7 @@ impl<'a> MeshSolid<'a> {
 impl Implicit for MeshSolid<'_> {
     fn value(&self, p: Vec3) -> f32 {
         let d = self.winding.distance(p);
-        if self.winding.winding(p) >= 0.5 {
+        if self.winding.winding(p).abs() >= 0.5 {
             -d
         } else {
             d
@@ -294,6 +294,23 @@ impl Implicit for MeshSolid<'_> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn meshes_are_solid_whichever_way_they_face() {
+        let torus = crate::builtins::torus(1.0, 0.35, 32, 16);
+        let mut inward = torus.clone();
+        for t in &mut inward.triangles {
+            t.swap(1, 2);
+        }
+        for mesh in [&torus, &inward] {
+            let solid = MeshSolid::new(mesh);
+            assert!(
+                (solid.value(Vec3::new(1.0, 0.0, 0.0)) + 0.35).abs() < 0.01,
+                "inside the tube"
+            );
+            assert!(solid.value(Vec3::ZERO) > 0.6, "in the hole");
+        }
+    }
 
     #[test]
     fn sphereflake_has_820_spheres_that_do_not_overlap_their_parent() {

@@ -46,8 +46,8 @@ fn check_chain(out: &Path, report: &Value) -> Vec<Value> {
         .iter()
         .map(|l| l["triangles"].as_u64().unwrap())
         .collect();
+    let points: Vec<u64> = lods.iter().map(|l| l["points"].as_u64().unwrap()).collect();
     for l in &lods {
-        assert_eq!(l["points"], 0);
         assert_eq!(l["splats"], 0);
         assert!(l["tolerance"].is_string());
     }
@@ -57,7 +57,16 @@ fn check_chain(out: &Path, report: &Value) -> Vec<Value> {
         .map(|l| l["error_bound"].as_f64().unwrap())
         .collect();
     assert!(bounds.windows(2).all(|w| w[0] <= w[1]), "{bounds:?}");
-    assert!(triangles.windows(2).all(|w| w[0] > w[1]), "{triangles:?}");
+    assert!(triangles.windows(2).all(|w| w[0] >= w[1]), "{triangles:?}");
+    let kinds: Vec<(u64, u64)> = triangles
+        .iter()
+        .copied()
+        .zip(points.iter().copied())
+        .collect();
+    assert!(
+        kinds.windows(2).all(|w| w[0] != w[1]),
+        "distinct LODs: {kinds:?}"
+    );
 
     // A reader without MSFT_lod sees LOD0 alone.
     let back = gltf::read(&glb, None).expect("the GLB reads back");
@@ -102,20 +111,39 @@ fn check_chain(out: &Path, report: &Value) -> Vec<Value> {
             "{coverage:?} vs {reported:?}"
         );
     }
-    // Node i (LOD0, then the ids in order) holds LOD i's triangles and attributes.
+    // Node i (LOD0, then the ids in order) holds LOD i's triangles (with
+    // normals) and its points (POINTS with _RADIUS).
     let nodes: Vec<u64> = std::iter::once(0).chain(ids).collect();
     for (i, node) in nodes.iter().enumerate() {
         let mesh = doc["nodes"][*node as usize]["mesh"].as_u64().unwrap() as usize;
-        let prim = &doc["meshes"][mesh]["primitives"][0];
-        assert_eq!(prim["mode"], 4);
-        let acc = prim["indices"].as_u64().unwrap() as usize;
-        assert_eq!(
-            doc["accessors"][acc]["count"].as_u64().unwrap(),
-            3 * triangles[i],
-            "lod{i}"
-        );
-        for attr in ["POSITION", "NORMAL"] {
-            assert!(prim["attributes"][attr].is_u64(), "lod{i} has {attr}");
+        let prims = doc["meshes"][mesh]["primitives"].as_array().unwrap();
+        let of_mode = |m: u64| prims.iter().find(|p| p["mode"] == m);
+        if let Some(prim) = of_mode(4) {
+            let acc = prim["indices"].as_u64().unwrap() as usize;
+            assert_eq!(
+                doc["accessors"][acc]["count"].as_u64().unwrap(),
+                3 * triangles[i],
+                "lod{i}"
+            );
+            for attr in ["POSITION", "NORMAL"] {
+                assert!(prim["attributes"][attr].is_u64(), "lod{i} has {attr}");
+            }
+        } else {
+            assert_eq!(triangles[i], 0, "lod{i}");
+        }
+        if let Some(prim) = of_mode(0) {
+            let acc = prim["attributes"]["POSITION"].as_u64().unwrap() as usize;
+            assert_eq!(
+                doc["accessors"][acc]["count"].as_u64().unwrap(),
+                points[i],
+                "lod{i}"
+            );
+            assert!(
+                prim["attributes"]["_RADIUS"].is_u64(),
+                "lod{i} points carry _RADIUS"
+            );
+        } else {
+            assert_eq!(points[i], 0, "lod{i}");
         }
     }
     lods
@@ -223,7 +251,7 @@ fn bad_input_exits_2_and_loses_nothing() {
         ("builtin:torus", "simplify", "-1px", &["--force"]),
         ("builtin:torus", "simplify", "", &["--force"]),
         // A method that does not export yet, and a point set.
-        ("builtin:torus", "hybrid", "1%", &["--force"]),
+        ("builtin:torus", "splines", "1%", &["--force"]),
         ("builtin:octahedron-points", "simplify", "1%", &["--force"]),
         // Bad thresholds.
         (
@@ -342,4 +370,46 @@ fn folder_batch_writes_one_file_per_model_and_reports_failures() {
         "export", &pattern, "--method", "simplify", "--lods", "2%", "-o", o, "--force",
     ]);
     assert_eq!(forced["models"].as_array().unwrap().len(), 1);
+}
+
+/// Every hierarchy method exports a chain whose bounds meet the tolerances:
+/// hybrid cuts (points included), merge-tree cuts and certified voxel levels.
+#[test]
+fn hybrid_mergetree_and_voxel_chains_round_trip() {
+    let bunny = shared_model("stanford-bunny.obj");
+    let b = bunny.to_str().unwrap();
+    for (method, lods, extra) in [
+        ("hybrid", "0.5%,2%,8%", &["--kappa", "8", "--tau", "5"][..]),
+        ("mergetree", "0.5%,2%,8%", &[][..]),
+        ("voxel", "4%,30%", &["--resolution", "64"][..]),
+    ] {
+        let out = temp(&format!("bunny-{method}.glb"));
+        let mut args = vec![
+            "export",
+            b,
+            "--method",
+            method,
+            "--lods",
+            lods,
+            "-o",
+            out.to_str().unwrap(),
+        ];
+        args.extend_from_slice(extra);
+        let report = lodstudio_json(&args);
+        assert_eq!(report["method"], method);
+        let chain = check_chain(&out, &report);
+        for (l, tol) in chain.iter().zip(lods.split(',')) {
+            let f: f64 = tol.trim_end_matches('%').parse::<f64>().unwrap() / 100.0;
+            assert!(
+                l["error_bound_relative"].as_f64().unwrap() <= f * (1.0 + 1e-5),
+                "{method}: {l}"
+            );
+        }
+        if method == "hybrid" {
+            assert!(
+                chain.iter().any(|l| l["points"].as_u64().unwrap() > 0),
+                "points in the chain"
+            );
+        }
+    }
 }

@@ -8,12 +8,20 @@ use lodstudio_core::io::gltf::lod_screen_coverages;
 use lodstudio_core::io::gltf_writer::write_lod_chain;
 use lodstudio_core::simplify;
 
-/// The LOD methods `export` can use (the others are not built yet).
-#[derive(clap::ValueEnum, Debug, Clone, Copy)]
+/// The LOD methods `export` can use.
+#[derive(clap::ValueEnum, Debug, Clone, Copy, PartialEq)]
 enum ExportMethod {
     /// Edge collapse with a certified two-sided Hausdorff bound; every LOD is
     /// simplified from the original mesh.
     Simplify,
+    /// Cuts of one hybrid multi-resolution graph (triangles + points with
+    /// `_RADIUS`); each LOD's bound is its cut's guaranteed bound.
+    Hybrid,
+    /// Uniform cuts of one merge tree at object-space switch distances.
+    Mergetree,
+    /// Levels of the voxel pyramid (resolution halves, filter doubles), each
+    /// certified against the input mesh by the two-sided bound.
+    Voxel,
 }
 
 #[derive(Args, Debug)]
@@ -48,6 +56,15 @@ pub struct ExportArgs {
     /// Border, seam and non-manifold vertices never move.
     #[arg(long)]
     lock_borders: bool,
+    /// Hybrid: points per triangle's rendering time (κ).
+    #[arg(long, default_value_t = 3.0)]
+    kappa: f32,
+    /// Hybrid: transition factor τ.
+    #[arg(long, default_value_t = 1.0)]
+    tau: f32,
+    /// Voxel: finest pyramid resolution (voxels along the longest side).
+    #[arg(long, default_value_t = 64)]
+    resolution: usize,
     #[command(flatten)]
     report: ReportArgs,
     #[command(flatten)]
@@ -243,6 +260,13 @@ fn batch(
     }
 }
 
+/// One LOD: what is drawn and its guaranteed (object-space) error bound.
+struct Lod {
+    label: String,
+    set: DrawSet,
+    bound: f32,
+}
+
 /// Builds the LODs of `file`, writes them to `output` and returns the JSON
 /// report (nothing is printed).
 fn export_one(
@@ -251,32 +275,94 @@ fn export_one(
     file: &Path,
     output: &Path,
 ) -> Result<serde_json::Value, CliError> {
-    let ExportMethod::Simplify = args.method;
     let mesh = load_mesh(file, &args.input)?;
     let start = std::time::Instant::now();
     let diag = mesh.bounds().diagonal();
     // The bounding box's circumscribed sphere bounds the object.
     let radius = 0.5 * diag;
+    // p pixels at coverage C: e = p · 2r / (H · C).
+    let pixels_to_error = |p: f32| p * 2.0 * radius / (args.viewport_height * args.coverage);
+    let mut lods = match args.method {
+        ExportMethod::Simplify => simplify_lods(args, items, &mesh, pixels_to_error)?,
+        ExportMethod::Hybrid | ExportMethod::Mergetree => {
+            cut_lods(args, items, &mesh, pixels_to_error)?
+        }
+        ExportMethod::Voxel => voxel_lods(args, items, &mesh, pixels_to_error)?,
+    };
+    // Decreasing quality: increasing bound, then decreasing primitive count.
+    lods.sort_by(|a, b| {
+        a.bound
+            .total_cmp(&b.bound)
+            .then(b.set.primitive_count().cmp(&a.set.primitive_count()))
+    });
+    // Tolerances met by the same LOD share it (one node, both labels).
+    lods.dedup_by(|later, kept| {
+        let same = later.bound == kept.bound && later.set == kept.set;
+        if same {
+            kept.label = format!("{},{}", kept.label, later.label);
+        }
+        same
+    });
+    let bounds: Vec<f32> = lods.iter().map(|l| l.bound).collect();
+    let coverages = lod_screen_coverages(&bounds, radius, args.pixels, args.viewport_height);
+    let sets: Vec<DrawSet> = lods.iter().map(|l| l.set.clone()).collect();
+    let glb = write_lod_chain(&sets, &coverages);
+    let bytes = write_gltf(output, glb)?;
+    let seconds = start.elapsed().as_secs_f64();
+    let per_lod: Vec<serde_json::Value> = lods
+        .iter()
+        .zip(&coverages)
+        .map(|(l, c)| {
+            serde_json::json!({
+                "tolerance": l.label,
+                "triangles": l.set.mesh.triangles.len(),
+                "points": l.set.points.len(),
+                "splats": l.set.splats.len(),
+                "layers": l.set.layers.len(),
+                "vertices": l.set.mesh.positions.len(),
+                "error_bound": l.bound,
+                "error_bound_relative": l.bound / diag,
+                "screen_coverage": c,
+            })
+        })
+        .collect();
+    let method = format!("{:?}", args.method).to_lowercase();
+    Ok(serde_json::json!({
+        "file": file.display().to_string(),
+        "method": method,
+        "lods": per_lod,
+        "bytes": bytes,
+        "input_triangles": mesh.triangles.len(),
+        "bbox_diagonal": diag,
+        "pixels": args.pixels,
+        "viewport_height": args.viewport_height,
+        "seconds": seconds,
+        "output": output.display().to_string(),
+    }))
+}
+
+/// Edge collapse: every LOD simplified from the original, one thread each.
+fn simplify_lods(
+    args: &ExportArgs,
+    items: &[(String, LodTolerance)],
+    mesh: &lodstudio_core::TriMesh,
+    pixels_to_error: impl Fn(f32) -> f32,
+) -> Result<Vec<Lod>, CliError> {
     let targets: Vec<(String, Target)> = items
         .iter()
-        .cloned()
         .map(|(label, tol)| {
-            let target = match tol {
+            let target = match *tol {
                 LodTolerance::Relative(e) => Target::RelativeError(e),
-                // p pixels at coverage C: e = p · 2r / (H · C).
-                LodTolerance::Pixels(p) => {
-                    Target::Error(p * 2.0 * radius / (args.viewport_height * args.coverage))
-                }
+                LodTolerance::Pixels(p) => Target::Error(pixels_to_error(p)),
                 LodTolerance::Ratio(r) => Target::Ratio(r),
             };
-            (label, target)
+            (label.clone(), target)
         })
         .collect();
     let collapse = CollapseOptions {
         lock_borders: args.lock_borders,
         ..Default::default()
     };
-    // Every LOD is simplified from the original, independently: one thread each.
     let results: Vec<Result<simplify::Simplified, simplify::SimplifyError>> =
         std::thread::scope(|scope| {
             let handles: Vec<_> = targets
@@ -287,7 +373,6 @@ fn export_one(
                         target: *target,
                         collapse,
                     };
-                    let mesh = &mesh;
                     scope.spawn(move || simplify::simplify(mesh, &opts, &Progress::new()))
                 })
                 .collect();
@@ -296,63 +381,180 @@ fn export_one(
                 .map(|h| h.join().unwrap_or_else(|p| std::panic::resume_unwind(p)))
                 .collect()
         });
-    let mut lods = Vec::with_capacity(targets.len());
-    for ((label, _), result) in targets.into_iter().zip(results) {
-        let result = result.map_err(|e| match e {
-            simplify::SimplifyError::BadTarget(m) => {
-                CliError::BadInput(format!("--lods {label}: {m}"))
-            }
-            simplify::SimplifyError::Cancelled => CliError::Failure(e.to_string()),
-        })?;
-        lods.push((label, result));
-    }
-    // Decreasing quality: increasing bound, then decreasing triangle count.
-    lods.sort_by(|(_, a), (_, b)| {
-        a.error_bound()
-            .total_cmp(&b.error_bound())
-            .then(b.mesh.triangles.len().cmp(&a.mesh.triangles.len()))
-    });
-    let bounds: Vec<f32> = lods.iter().map(|(_, r)| r.error_bound()).collect();
-    let coverages = lod_screen_coverages(&bounds, radius, args.pixels, args.viewport_height);
-    let sets: Vec<DrawSet> = lods
-        .iter()
-        .map(|(_, r)| DrawSet {
-            mesh: r.mesh.clone(),
-            ..Default::default()
-        })
-        .collect();
-    let glb = write_lod_chain(&sets, &coverages);
-    let bytes = write_gltf(output, glb)?;
-    let seconds = start.elapsed().as_secs_f64();
-    let per_lod: Vec<serde_json::Value> = lods
-        .iter()
-        .zip(&coverages)
-        .map(|((label, r), c)| {
-            let e = r.error_bound();
-            serde_json::json!({
-                "tolerance": label,
-                "triangles": r.mesh.triangles.len(),
-                "points": 0,
-                "splats": 0,
-                "vertices": r.mesh.positions.len(),
-                "error_bound": e,
-                "error_bound_relative": e / diag,
-                "screen_coverage": c,
+    targets
+        .into_iter()
+        .zip(results)
+        .map(|((label, _), result)| {
+            let r = result.map_err(|e| match e {
+                simplify::SimplifyError::BadTarget(m) => {
+                    CliError::BadInput(format!("--lods {label}: {m}"))
+                }
+                simplify::SimplifyError::Cancelled => CliError::Failure(e.to_string()),
+            })?;
+            Ok(Lod {
+                label,
+                bound: r.error_bound(),
+                set: DrawSet {
+                    mesh: r.mesh,
+                    ..Default::default()
+                },
             })
         })
-        .collect();
-    Ok(serde_json::json!({
-        "file": file.display().to_string(),
-        "method": "simplify",
-        "lods": per_lod,
-        "bytes": bytes,
-        "input_triangles": mesh.triangles.len(),
-        "bbox_diagonal": diag,
-        "pixels": args.pixels,
-        "viewport_height": args.viewport_height,
-        "seconds": seconds,
-        "output": output.display().to_string(),
-    }))
+        .collect()
+}
+
+/// The object-space tolerance (a fraction of the diagonal) of one item; a
+/// triangle ratio is met by bisecting the tolerance until the cut has at most
+/// that share of the input's primitives.
+fn cut_at(
+    item: LodTolerance,
+    diag: f32,
+    input: usize,
+    pixels_to_error: &impl Fn(f32) -> f32,
+    cut: &mut dyn FnMut(f32) -> DrawSet,
+) -> DrawSet {
+    match item {
+        LodTolerance::Relative(f) => cut(f),
+        LodTolerance::Pixels(p) => cut(pixels_to_error(p) / diag.max(f32::MIN_POSITIVE)),
+        LodTolerance::Ratio(r) => {
+            let goal = (r as f64 * input as f64).ceil() as usize;
+            let (mut lo, mut hi) = (0.0f32, 1.0f32);
+            let mut best = cut(hi);
+            for _ in 0..24 {
+                let mid = 0.5 * (lo + hi);
+                let set = cut(mid);
+                if set.primitive_count() <= goal {
+                    hi = mid;
+                    best = set;
+                } else {
+                    lo = mid;
+                }
+            }
+            best
+        }
+    }
+}
+
+/// Hybrid and merge tree: one hierarchy built once, cut per LOD in object
+/// space (view-independent, so every viewer gets the same chain).
+fn cut_lods(
+    args: &ExportArgs,
+    items: &[(String, LodTolerance)],
+    mesh: &lodstudio_core::TriMesh,
+    pixels_to_error: impl Fn(f32) -> f32,
+) -> Result<Vec<Lod>, CliError> {
+    use lodstudio_core::cut::Hierarchy;
+    use lodstudio_core::view::{Tolerance, View};
+    let progress = Progress::new();
+    let failed = |_| CliError::Failure("cancelled".into());
+    let mut hierarchy: Box<dyn Hierarchy> = match args.method {
+        ExportMethod::Hybrid => {
+            let opts = lodstudio_core::hybrid::HybridOptions {
+                kappa: args.kappa,
+                tau: args.tau,
+                ..Default::default()
+            };
+            opts.validate().map_err(CliError::BadInput)?;
+            let mrg = lodstudio_core::hybrid::build(mesh, &opts, &progress).map_err(failed)?;
+            Box::new(lodstudio_core::hybrid::HybridCut::new(std::sync::Arc::new(
+                mrg,
+            )))
+        }
+        _ => {
+            let tree = lodstudio_core::mergetree::build(mesh, &Default::default(), &progress)
+                .map_err(failed)?;
+            Box::new(lodstudio_core::mergetree::MergeTreeView::new(
+                std::sync::Arc::new(tree),
+                Default::default(),
+            ))
+        }
+    };
+    let diag = mesh.bounds().diagonal();
+    let view = View::orbit(mesh.bounds().center(), diag, 0.0, 0.0);
+    let mut cut = |f: f32| hierarchy.select(&view, Tolerance::Relative(f));
+    Ok(items
+        .iter()
+        .map(|(label, item)| {
+            let set = cut_at(
+                *item,
+                diag,
+                mesh.triangles.len(),
+                &pixels_to_error,
+                &mut cut,
+            );
+            Lod {
+                label: label.clone(),
+                bound: set.error_bound,
+                set,
+            }
+        })
+        .collect())
+}
+
+/// Voxel: the pyramid of the mesh's solid; each level certified against the
+/// input (two-sided bound), and each item takes the coarsest level within it.
+fn voxel_lods(
+    args: &ExportArgs,
+    items: &[(String, LodTolerance)],
+    mesh: &lodstudio_core::TriMesh,
+    pixels_to_error: impl Fn(f32) -> f32,
+) -> Result<Vec<Lod>, CliError> {
+    use lodstudio_core::voxel::{Filter, Pyramid, Source};
+    if !(8..=512).contains(&args.resolution) {
+        return Err(CliError::BadInput(format!(
+            "--resolution must be in 8..=512, got {}",
+            args.resolution
+        )));
+    }
+    let progress = Progress::new();
+    let failed = |_| CliError::Failure("cancelled".into());
+    let solid = lodstudio_core::implicit::MeshSolid::new(mesh);
+    let pyramid = Pyramid::build(
+        Source::Solid(&solid),
+        args.resolution,
+        1.0,
+        Filter::Gaussian,
+        &progress,
+    )
+    .map_err(failed)?;
+    let diag = mesh.bounds().diagonal();
+    let opts = simplify::BoundOptions::for_diagonal(diag);
+    let mut levels = Vec::new();
+    for i in 0..pyramid.levels.len() {
+        let level = pyramid.level(i, &progress).map_err(failed)?;
+        let bound = simplify::certify(mesh, &level.mesh, &opts).error_bound();
+        levels.push((level.mesh, bound));
+    }
+    items
+        .iter()
+        .map(|(label, item)| {
+            let fits = |(m, b): &(lodstudio_core::TriMesh, f32)| match *item {
+                LodTolerance::Relative(f) => *b <= f * diag,
+                LodTolerance::Pixels(p) => *b <= pixels_to_error(p),
+                LodTolerance::Ratio(r) => m.triangles.len() as f64 <= r as f64 * mesh.triangles.len() as f64,
+            };
+            // An error tolerance takes the coarsest level within it, a triangle
+            // budget the finest (levels go from finest to coarsest).
+            let found = match item {
+                LodTolerance::Ratio(_) => levels.iter().find(|l| fits(l)),
+                _ => levels.iter().rev().find(|l| fits(l)),
+            };
+            let (m, b) = found.ok_or_else(|| {
+                CliError::BadInput(format!(
+                    "--lods {label}: no pyramid level is that fine (finest bound {:.3}% of the diagonal; raise --resolution)",
+                    100.0 * levels[0].1 / diag
+                ))
+            })?;
+            Ok(Lod {
+                label: label.clone(),
+                bound: *b,
+                set: DrawSet {
+                    mesh: m.clone(),
+                    ..Default::default()
+                },
+            })
+        })
+        .collect()
 }
 
 /// Writes a GLB as is, or as .gltf + .bin by its extension (atomically);
