@@ -55,7 +55,7 @@ fn hybrid_curve_is_not_above_the_triangle_curve_for_tau_one() {
     // And points pay off at the coarse end: fewer primitives where triangles stop.
     let end = t.last().unwrap();
     assert!(curve::primitives_at(&h, end.0, input) < end.1);
-    assert!(hybrid.points.len() > 0 && triangles.points.is_empty());
+    assert!(!hybrid.points.is_empty() && triangles.points.is_empty());
 }
 
 #[test]
