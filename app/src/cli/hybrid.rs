@@ -33,6 +33,8 @@ pub struct HybridArgs {
     )]
     output: Option<PathBuf>,
     #[command(flatten)]
+    save: SaveArgs,
+    #[command(flatten)]
     report: ReportArgs,
     #[command(flatten)]
     input: InputArgs,
@@ -74,9 +76,14 @@ pub fn run(args: HybridArgs) -> Result<(), CliError> {
     {
         check_output(&out, args.report.force)?;
     }
+    args.save.check(args.report.force)?;
     let mesh = load_mesh(&args.file, &args.input)?;
     let start = std::time::Instant::now();
     let mrg = Arc::new(build(&mesh, &opts)?);
+    args.save.write(
+        &HybridCut::new(Arc::clone(&mrg)),
+        serde_json::json!({"kappa": args.kappa, "tau": args.tau, "file": args.file.display().to_string()}),
+    )?;
     let seconds = start.elapsed().as_secs_f64();
     let triangle_only = build(&mesh, &opts.triangles_only())?;
     let input = mesh.triangles.len() as f64;

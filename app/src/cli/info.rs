@@ -33,6 +33,33 @@ pub fn run(args: InfoArgs) -> Result<(), CliError> {
         return Ok(());
     }
     let file = args.file.expect("clap requires FILE without --builtins");
+    if let Ok(bytes) = std::fs::read(&file)
+        && io::hierarchy_file::is_hierarchy(&bytes)
+    {
+        // A saved hierarchy: what it holds, checked whole.
+        let h = io::hierarchy_file::peek(&bytes)
+            .map_err(|e| CliError::BadInput(format!("{}: {e}", file.display())))?;
+        let j = serde_json::json!({
+            "file": file.display().to_string(),
+            "kind": "hierarchy",
+            "method": h.method,
+            "version": h.version,
+            "params": h.params,
+            "bytes": bytes.len(),
+        });
+        if args.json {
+            println!("{j}");
+        } else {
+            println!(
+                "{}: saved {} hierarchy (format {}), {}",
+                file.display(),
+                h.method,
+                h.version,
+                h.params
+            );
+        }
+        return Ok(());
+    }
     let opts = args.input.load_options()?;
     let loaded = io::load(&file, &opts, &Progress::new())?;
     let summary = ModelSummary::of(&loaded);

@@ -41,6 +41,8 @@ pub struct MergeTreeArgs {
     #[arg(short = 'o', long = "output", value_name = "OUT")]
     output: Option<PathBuf>,
     #[command(flatten)]
+    save: SaveArgs,
+    #[command(flatten)]
     report: ReportArgs,
     #[command(flatten)]
     input: InputArgs,
@@ -105,6 +107,7 @@ pub fn run(args: MergeTreeArgs) -> Result<(), CliError> {
             ..Default::default()
         },
     };
+    args.save.check(args.report.force)?;
     let start = Instant::now();
     let tree = Arc::new(
         mergetree::build(&mesh, &opts, &Progress::new())
@@ -116,6 +119,10 @@ pub fn run(args: MergeTreeArgs) -> Result<(), CliError> {
         silhouette: !args.no_silhouette,
         lighting: !args.no_lighting,
     };
+    args.save.write(
+        &MergeTreeView::new(tree.clone(), criteria),
+        serde_json::json!({"min_vertices": args.min_vertices, "min_quality": args.min_quality, "file": args.file.display().to_string()}),
+    )?;
     let bounds = mesh.bounds();
     let (center, diagonal) = (bounds.center(), bounds.diagonal());
     let tolerance = Tolerance::Pixels(args.pixels);

@@ -10,6 +10,7 @@ use lodstudio_core::simplify::{CollapseOptions, SimplifyOptions, Target};
 use lodstudio_core::stats::ModelSummary;
 use lodstudio_core::{Progress, builtins};
 
+mod cut;
 mod export;
 mod flythrough;
 mod hybrid;
@@ -46,6 +47,9 @@ enum Command {
     /// Export an LOD chain as one GLB: the MSFT_lod node extension with
     /// MSFT_screencoverage thresholds from each LOD's guaranteed error bound.
     Export(export::ExportArgs),
+    /// Reopen a saved hierarchy (hybrid, mergetree, voxel --pyramid --save) and
+    /// write its cut at an object-space error, without rebuilding.
+    Cut(cut::CutArgs),
     /// View-dependent merge tree: build it, replay a camera orbit (or zoom) and
     /// time the incremental update against a cold start (merge-tree paper Table 1).
     Mergetree(mergetree::MergeTreeArgs),
@@ -54,6 +58,39 @@ enum Command {
     Hybrid(hybrid::HybridArgs),
     /// Primitive counts of triangle-only and hybrid cuts along a fly-through.
     Flythrough(flythrough::FlythroughArgs),
+}
+
+/// Where a built hierarchy is saved (reopen it with `cut`, or in the studio).
+#[derive(Args, Debug)]
+pub struct SaveArgs {
+    /// Save the built hierarchy (versioned, checksummed) to FILE.lodh.
+    #[arg(long, value_name = "FILE.lodh")]
+    pub save: Option<PathBuf>,
+}
+
+impl SaveArgs {
+    /// Refuses an existing file (without --force) before anything is built.
+    pub fn check(&self, force: bool) -> Result<(), CliError> {
+        self.save
+            .as_deref()
+            .map_or(Ok(()), |p| check_output(p, force))
+    }
+
+    /// Writes `hierarchy` with its `params` when --save was given.
+    pub fn write(
+        &self,
+        hierarchy: &dyn lodstudio_core::cut::Hierarchy,
+        params: serde_json::Value,
+    ) -> Result<(), CliError> {
+        let Some(path) = &self.save else {
+            return Ok(());
+        };
+        let bytes = hierarchy
+            .save(&params)
+            .ok_or_else(|| CliError::Failure("this hierarchy cannot be saved".into()))?;
+        io::write_atomic(path, &bytes)
+            .map_err(|e| CliError::BadInput(format!("{}: cannot write: {e}", path.display())))
+    }
 }
 
 /// How results are reported and written.
@@ -163,6 +200,7 @@ pub fn run() -> Result<(), CliError> {
         Some(Command::Measure(args)) => measure::run(args),
         Some(Command::Voxel(args)) => voxel::run(args),
         Some(Command::Export(args)) => export::run(args),
+        Some(Command::Cut(args)) => cut::run(args),
         Some(Command::Mergetree(args)) => mergetree::run(args),
         Some(Command::Hybrid(args)) => hybrid::run(args),
         Some(Command::Flythrough(args)) => flythrough::run(args),

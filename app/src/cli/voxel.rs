@@ -43,6 +43,8 @@ pub struct VoxelArgs {
     #[arg(short = 'o', long = "output", value_name = "OUT")]
     output: Option<PathBuf>,
     #[command(flatten)]
+    save: SaveArgs,
+    #[command(flatten)]
     report: ReportArgs,
     #[command(flatten)]
     input: InputArgs,
@@ -144,8 +146,17 @@ pub fn run(args: VoxelArgs) -> Result<(), CliError> {
     let start = std::time::Instant::now();
     let failed = |_| CliError::Failure("cancelled".into());
     if args.pyramid || args.at.is_some() {
+        args.save.check(args.report.force)?;
         let pyramid = Pyramid::build(source, args.resolution, args.radius, filter, &progress)
             .map_err(failed)?;
+        let pyramid = {
+            let cut = lodstudio_core::voxel::pyramid::PyramidCut::new(pyramid, 0.0);
+            args.save.write(
+                &cut,
+                serde_json::json!({"resolution": args.resolution, "radius": args.radius, "file": args.file.display().to_string()}),
+            )?;
+            cut.pyramid
+        };
         if let Some(t) = args.at {
             let l = pyramid.in_between(t, &progress).map_err(failed)?;
             if let Some(out) = &args.output {

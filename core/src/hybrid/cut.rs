@@ -274,6 +274,14 @@ impl Hierarchy for HybridCut {
         self.draw_set()
     }
 
+    fn save(&self, params: &serde_json::Value) -> Option<Vec<u8>> {
+        Some(crate::io::hierarchy_file::save(
+            "hybrid",
+            params,
+            self.mrg().as_ref(),
+        ))
+    }
+
     /// Object-space cuts do not depend on the view.
     fn view_key(&self, _view: &View, tolerance: Tolerance) -> Option<u64> {
         matches!(tolerance, Tolerance::Relative(_)).then_some(0)

@@ -173,6 +173,59 @@ pub fn load<T: DeserializeOwned>(
     Ok((header, value))
 }
 
+/// Reopens any saved hierarchy, ready to cut: a hybrid MRG, a merge tree
+/// (with the default criteria; the studio sets its own) or a voxel pyramid.
+pub fn reopen(
+    bytes: &[u8],
+) -> Result<(Header, Box<dyn crate::cut::Hierarchy>), HierarchyFileError> {
+    use std::sync::Arc;
+    let header = peek(bytes)?;
+    let hierarchy: Box<dyn crate::cut::Hierarchy> = match header.method.as_str() {
+        "hybrid" => {
+            let (_, mrg) = load::<crate::hybrid::Mrg>(bytes, "hybrid")?;
+            // The graph's invariants (ids in range, arcs consistent) before any cut.
+            mrg.check()
+                .map_err(|why| HierarchyFileError::Corrupt { what: "graph", why })?;
+            Box::new(crate::hybrid::HybridCut::new(Arc::new(mrg)))
+        }
+        "mergetree" => {
+            let (_, tree) = load::<crate::mergetree::MergeTree>(bytes, "mergetree")?;
+            Box::new(crate::mergetree::MergeTreeView::new(
+                Arc::new(tree),
+                Default::default(),
+            ))
+        }
+        "voxel" => {
+            let (_, pyramid) = load::<crate::voxel::Pyramid>(bytes, "voxel")?;
+            let grids_fit = pyramid.levels.iter().all(|l| {
+                let d = l.density.dims;
+                d.iter().all(|&n| n >= 2)
+                    && d.iter().try_fold(1usize, |a, &n| a.checked_mul(n))
+                        == Some(l.density.data.len())
+            });
+            if pyramid.levels.is_empty() || !grids_fit {
+                return Err(HierarchyFileError::Corrupt {
+                    what: "pyramid",
+                    why: "levels missing or grids not matching their samples".into(),
+                });
+            }
+            Box::new(crate::voxel::pyramid::PyramidCut::new(pyramid, 0.0))
+        }
+        other => {
+            return Err(HierarchyFileError::WrongMethod {
+                found: other.to_string(),
+                expected: "hybrid, mergetree or voxel".into(),
+            });
+        }
+    };
+    Ok((header, hierarchy))
+}
+
+/// Whether `bytes` start like a saved hierarchy.
+pub fn is_hierarchy(bytes: &[u8]) -> bool {
+    bytes.starts_with(MAGIC)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

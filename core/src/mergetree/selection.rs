@@ -330,6 +330,14 @@ impl Hierarchy for MergeTreeView {
         self.draw_set()
     }
 
+    fn save(&self, params: &serde_json::Value) -> Option<Vec<u8>> {
+        Some(crate::io::hierarchy_file::save(
+            "mergetree",
+            params,
+            self.tree().as_ref(),
+        ))
+    }
+
     /// The criteria switches `backface`, `silhouette` and `lighting` (§3).
     fn set_runtime(&mut self, params: &serde_json::Value) {
         let flag =

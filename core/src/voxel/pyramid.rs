@@ -186,6 +186,14 @@ impl Hierarchy for PyramidCut {
         Some(0)
     }
 
+    fn save(&self, params: &serde_json::Value) -> Option<Vec<u8>> {
+        Some(crate::io::hierarchy_file::save(
+            "voxel",
+            params,
+            &self.pyramid,
+        ))
+    }
+
     /// `position`: the continuous pyramid level (0 = finest).
     fn set_runtime(&mut self, params: &serde_json::Value) {
         if let Some(t) = params.get("position").and_then(|v| v.as_f64()) {
