@@ -35,14 +35,32 @@ pub fn choose_and_write(mesh: &TriMesh, file_name: &str) -> Saved {
     }
 }
 
+/// Asks where to save a built hierarchy (suggesting `file_name`), then
+/// writes its encoded `bytes`.
+pub fn choose_and_write_hierarchy(bytes: &[u8], file_name: &str) -> Saved {
+    let chosen = rfd::FileDialog::new()
+        .set_title("Save hierarchy")
+        .set_file_name(file_name)
+        .add_filter("Saved hierarchies (lodh)", &["lodh"])
+        .save_file();
+    match chosen {
+        Some(path) => write_bytes(bytes, &path),
+        None => Saved::NoFile,
+    }
+}
+
 /// Writes `mesh` to `path` in the format its extension names, atomically (a
 /// failed write leaves any existing file as it was).
 pub fn write(mesh: &TriMesh, path: &Path) -> Saved {
-    let bytes = match encode_mesh(path, mesh) {
-        Ok(bytes) => bytes,
-        Err(e) => return Saved::Failed(e),
-    };
-    match write_atomic(path, &bytes) {
+    match encode_mesh(path, mesh) {
+        Ok(bytes) => write_bytes(&bytes, path),
+        Err(e) => Saved::Failed(e),
+    }
+}
+
+/// Writes `bytes` to `path` atomically.
+pub fn write_bytes(bytes: &[u8], path: &Path) -> Saved {
+    match write_atomic(path, bytes) {
         Ok(()) => Saved::Written {
             path: path.to_path_buf(),
             bytes: bytes.len(),

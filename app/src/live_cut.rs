@@ -168,6 +168,11 @@ impl LiveCut {
         true
     }
 
+    /// The hierarchy as a saved-hierarchy file with `params`, when it saves.
+    pub fn save(&self, params: &serde_json::Value) -> Option<Vec<u8>> {
+        self.hierarchy.save(params)
+    }
+
     pub fn scene(&self) -> &Arc<Scene> {
         &self.scene
     }

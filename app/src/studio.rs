@@ -113,6 +113,8 @@ struct Finished {
     summary: ModelSummary,
     scene: Scene,
     volume: Option<VolumeGrid>,
+    /// A saved hierarchy's own structure, to cut live without rebuilding.
+    reopened: Option<build::Reopened>,
 }
 
 struct LoadJob {
@@ -426,11 +428,21 @@ impl StudioApp {
                 lodstudio_core::io::Model::Volume(v) => Some(VolumeGrid::of(v)),
                 _ => None,
             };
+            let reopened = if loaded.format == lodstudio_core::io::Format::Hierarchy {
+                progress.stage("reopening the hierarchy");
+                match build::reopen(&worker_path) {
+                    Ok(r) => Some(r),
+                    Err(e) => return Ok(Err(e)),
+                }
+            } else {
+                None
+            };
             Ok(Ok(Box::new(Finished {
                 loaded,
                 summary,
                 scene,
                 volume,
+                reopened,
             })))
         });
         match spawned {
@@ -470,6 +482,7 @@ impl StudioApp {
                     summary,
                     scene,
                     volume,
+                    reopened,
                 } = *done;
                 let seconds = job.elapsed().as_secs_f32();
                 let counts = match (summary.triangles, summary.points) {
@@ -501,6 +514,21 @@ impl StudioApp {
                     scene,
                     volume,
                 });
+                if let Some(reopened) = reopened {
+                    // Its parameters become the shown ones, so it is not stale.
+                    self.methods = reopened.apply(self.methods);
+                    let built = reopened.built(
+                        &self.methods,
+                        &self.viewport.core_view(),
+                        self.methods.threshold.tolerance(),
+                    );
+                    self.info(format!(
+                        "Reopened the saved {} hierarchy without rebuilding",
+                        built.method().name()
+                    ));
+                    self.result = Some(built);
+                    self.view = View::Simplified;
+                }
             }
             Err(e) => self.load_failed(e.to_string()),
         }
@@ -534,7 +562,9 @@ impl StudioApp {
     fn parameters_changed(&mut self) {
         self.build_note = None;
         let buildable = matches!(self.input_check(), Some(Ok(())));
-        if self.methods.auto_rebuild && buildable {
+        // Run-time settings (the threshold, criteria, pyramid position) leave
+        // the result current: nothing to rebuild.
+        if self.methods.auto_rebuild && buildable && self.result_is_stale() {
             self.build_at = Some(BuildRequest::Settled);
         }
     }
@@ -755,6 +785,70 @@ impl StudioApp {
         }
     }
 
+    /// The running result's hierarchy as saved-hierarchy bytes, with the shown
+    /// parameters of its method.
+    fn hierarchy_bytes(&self) -> Option<Vec<u8>> {
+        let live = self.result.as_ref()?.live.as_ref()?;
+        let m = &self.methods;
+        let params = match m.method {
+            Method::Hybrid => serde_json::json!({"kappa": m.hybrid.kappa, "tau": m.hybrid.tau}),
+            Method::MergeTree => serde_json::json!({
+                "min_vertices": m.merge_tree.min_vertices,
+                "min_quality": m.merge_tree.min_quality,
+            }),
+            Method::Voxel => {
+                serde_json::json!({"resolution": m.voxel.resolution, "radius": m.voxel.radius})
+            }
+            Method::EdgeCollapse => serde_json::json!({}),
+        };
+        live.save(&params)
+    }
+
+    /// Saves the built hierarchy to `path` on a worker (no dialog).
+    pub fn save_hierarchy_to(&mut self, path: impl Into<PathBuf>, ctx: &egui::Context) {
+        let path = path.into();
+        match self.hierarchy_bytes() {
+            Some(bytes) => self.spawn_save(ctx, move || export::write_bytes(&bytes, &path)),
+            None => self.error(
+                "Nothing to save: only whole hierarchies save (hybrid, merge tree, voxel pyramid)"
+                    .into(),
+            ),
+        }
+    }
+
+    fn save_hierarchy_dialog(&mut self, ctx: &egui::Context) {
+        let (Some(current), Some(bytes)) = (&self.current, self.hierarchy_bytes()) else {
+            self.error(
+                "Nothing to save: only whole hierarchies save (hybrid, merge tree, voxel pyramid)"
+                    .into(),
+            );
+            return;
+        };
+        let name = format!(
+            "{}.lodh",
+            current
+                .name
+                .trim_start_matches("builtin:")
+                .split('.')
+                .next()
+                .unwrap_or("model")
+        );
+        self.spawn_save(ctx, move || {
+            export::choose_and_write_hierarchy(&bytes, &name)
+        });
+    }
+
+    /// Runs a save (dialog and writing) on a worker, reported like exports.
+    fn spawn_save(&mut self, ctx: &egui::Context, save: impl FnOnce() -> Saved + Send + 'static) {
+        if self.export.is_some() {
+            return;
+        }
+        match Job::spawn("export", "Saving".into(), ctx, move |_| Ok(save())) {
+            Ok(job) => self.export = Some(job),
+            Err(e) => self.error(format!("cannot start saving: {e}")),
+        }
+    }
+
     fn export_dialog(&mut self, ctx: &egui::Context) {
         let (Some(current), Some(built)) = (&self.current, &self.result) else {
             return;
@@ -960,6 +1054,15 @@ impl StudioApp {
                 .on_disabled_hover_text("Build a LOD first.");
             if export.clicked() {
                 self.export_dialog(ui.ctx());
+            }
+            let can_save = self.export.is_none()
+                && self.result.as_ref().is_some_and(|b| b.live.is_some() && b.method() != Method::EdgeCollapse);
+            let save = ui
+                .add_enabled(can_save, egui::Button::new("Save hierarchy…"))
+                .on_hover_text("Save the built hierarchy (versioned, checksummed .lodh) to reopen it later without rebuilding.")
+                .on_disabled_hover_text("Build a hybrid, merge-tree or voxel-pyramid hierarchy first.");
+            if save.clicked() {
+                self.save_hierarchy_dialog(ui.ctx());
             }
         });
         let error_color = ui.visuals().error_fg_color;

@@ -1074,3 +1074,53 @@ fn hybrid_cut_mixes_triangles_and_points_live() {
     harness.run();
     assert_eq!(cut_stats(&harness).cuts, coarse.cuts);
 }
+
+/// A saved hierarchy reopens in the studio as a live cut, with its method and
+/// parameters chosen, and without a rebuild.
+#[test]
+fn saved_hierarchies_reopen_without_rebuilding() {
+    let mut harness = studio(None);
+    wait_for_load(&mut harness);
+    let mut methods = *harness.state().methods();
+    methods.method = Method::MergeTree;
+    methods.merge_tree.min_vertices = 40;
+    // An object-space threshold: the cut does not depend on the panels' widths.
+    methods.threshold.in_pixels = false;
+    methods.threshold.percent = 1.0;
+    harness.state_mut().set_methods(methods);
+    harness.step();
+    wait_for_build(&mut harness);
+    let before = cut_stats(&harness);
+    let out = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("gui-tree.lodh");
+    let _ = std::fs::remove_file(&out);
+    let ctx = harness.ctx.clone();
+    harness.state_mut().save_hierarchy_to(&out, &ctx);
+    wait_while(&mut harness, "saving", StudioApp::is_exporting);
+    assert!(out.exists(), "the hierarchy was saved");
+
+    let mut reopened = studio(Some(out.clone()));
+    wait_for_load(&mut reopened);
+    reopened.run();
+    assert!(!reopened.state().is_building(), "no rebuild");
+    assert_eq!(reopened.state().methods().method, Method::MergeTree);
+    assert_eq!(reopened.state().methods().merge_tree.min_vertices, 40);
+    let mut shown = *reopened.state().methods();
+    shown.threshold = methods.threshold;
+    reopened.state_mut().set_methods(shown);
+    reopened.run();
+    assert!(
+        !reopened.state().is_building(),
+        "a threshold needs no rebuild"
+    );
+    let after = cut_stats(&reopened);
+    assert_eq!(
+        after.triangles, before.triangles,
+        "same threshold, same cut"
+    );
+    assert!(
+        reopened
+            .state()
+            .log_lines()
+            .any(|l| l.contains("without rebuilding"))
+    );
+}

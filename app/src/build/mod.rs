@@ -4,6 +4,9 @@
 
 pub mod hybrid;
 pub mod mergetree;
+mod reopen;
+
+pub use reopen::{Reopened, reopen};
 
 use std::path::Path;
 use std::sync::Arc;

@@ -63,6 +63,8 @@ pub enum Format {
     Inr,
     Raw,
     Builtin,
+    /// A saved hierarchy (`--save`, the studio), opened as its finest cut.
+    Hierarchy,
 }
 
 impl Format {
@@ -78,6 +80,7 @@ impl Format {
             Format::Inr => "INRIMAGE-4",
             Format::Raw => "raw volume",
             Format::Builtin => "built-in",
+            Format::Hierarchy => "saved hierarchy",
         }
     }
 }
@@ -142,6 +145,14 @@ pub fn load_bytes(
             Model::Volume(volume::read_raw(data, spec).map_err(malformed)?)
         }
         Format::Builtin => unreachable!("detect never answers Builtin"),
+        // A saved hierarchy opens as its finest cut (the studio also reopens
+        // the hierarchy itself, to cut it live).
+        Format::Hierarchy => {
+            let (_, mut h) = hierarchy_file::reopen(data)
+                .map_err(|e| malformed(ParseError::new(Location::File, e.to_string())))?;
+            let view = crate::view::View::orbit(glam::Vec3::ZERO, 1.0, 0.0, 0.0);
+            Model::Mesh(h.select(&view, crate::view::Tolerance::Relative(0.0)).mesh)
+        }
     };
     progress.check()?;
     let loaded = finish(model, format, opts);
@@ -247,6 +258,9 @@ pub fn detect(path: &Path, data: &[u8], raw_given: bool) -> Result<Format, LoadE
         b"OFF" | b"COFF" | b"NOFF" | b"CNOFF" | b"STOFF" | b"NCOFF"
     ) {
         return Ok(Format::Off);
+    }
+    if hierarchy_file::is_hierarchy(data) {
+        return Ok(Format::Hierarchy);
     }
     let trimmed = head.trim_ascii_start();
     if trimmed.starts_with(b"{") && head.windows(7).any(|w| w == b"\"asset\"") {

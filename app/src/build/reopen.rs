@@ -1,0 +1,100 @@
+//! Reopening a saved hierarchy in the studio: its structure is cut live at
+//! once, and its parameters become the shown ones, so nothing is rebuilt.
+
+use std::path::Path;
+use std::sync::Arc;
+
+use lodstudio_core::cut::Hierarchy;
+use lodstudio_core::io::{LoadError, Location, ParseError, hierarchy_file};
+use lodstudio_core::view::{Tolerance, View};
+
+use super::{Built, Lod, Row};
+use crate::live_cut::LiveCut;
+use crate::panels::{Method, MethodSettings};
+
+/// A saved hierarchy, decoded.
+pub struct Reopened {
+    method: Method,
+    hierarchy: Box<dyn Hierarchy>,
+    params: serde_json::Value,
+}
+
+/// Reads and decodes the saved hierarchy at `path`.
+///
+/// # Errors
+/// The file cannot be read, or is damaged (a one-line reason).
+pub fn reopen(path: &Path) -> Result<Reopened, LoadError> {
+    let bytes = std::fs::read(path).map_err(|source| LoadError::Io {
+        file: path.to_path_buf(),
+        source,
+    })?;
+    let bad = |why: String| LoadError::malformed(path, ParseError::new(Location::File, why));
+    let (header, hierarchy) = hierarchy_file::reopen(&bytes).map_err(|e| bad(e.to_string()))?;
+    let method = match header.method.as_str() {
+        "hybrid" => Method::Hybrid,
+        "mergetree" => Method::MergeTree,
+        "voxel" => Method::Voxel,
+        other => {
+            return Err(bad(format!(
+                "a {other} hierarchy, which the studio cannot show"
+            )));
+        }
+    };
+    Ok(Reopened {
+        method,
+        hierarchy,
+        params: header.params,
+    })
+}
+
+impl Reopened {
+    /// `methods` with the saved method chosen and its saved parameters.
+    pub fn apply(&self, mut methods: MethodSettings) -> MethodSettings {
+        let number = |key: &str| self.params.get(key).and_then(|v| v.as_f64());
+        methods.method = self.method;
+        match self.method {
+            Method::Hybrid => {
+                methods.hybrid.kappa =
+                    number("kappa").unwrap_or(methods.hybrid.kappa as f64) as f32;
+                methods.hybrid.tau = number("tau").unwrap_or(methods.hybrid.tau as f64) as f32;
+                methods.hybrid = methods.hybrid.sanitized();
+            }
+            Method::MergeTree => {
+                let mt = &mut methods.merge_tree;
+                mt.min_vertices = number("min_vertices").map_or(mt.min_vertices, |v| v as usize);
+                mt.min_quality = number("min_quality").unwrap_or(mt.min_quality as f64) as f32;
+                methods.merge_tree = methods.merge_tree.sanitized();
+            }
+            Method::Voxel => {
+                let v = &mut methods.voxel;
+                v.pyramid = true;
+                v.resolution = number("resolution").map_or(v.resolution, |r| r as usize);
+                v.radius = number("radius").unwrap_or(v.radius as f64) as f32;
+                methods.voxel = methods.voxel.sanitized();
+            }
+            Method::EdgeCollapse => {}
+        }
+        methods
+    }
+
+    /// The result the studio shows: the hierarchy cut live, built with
+    /// `methods` (as [`Reopened::apply`] made them).
+    pub fn built(self, methods: &MethodSettings, view: &View, tolerance: Tolerance) -> Built {
+        let live = LiveCut::new(self.hierarchy, view, tolerance);
+        Built {
+            lod: Lod::Cut,
+            params: methods.params(None),
+            seconds: 0.0,
+            scene: Arc::clone(live.scene()),
+            heat: None,
+            rows: vec![Row {
+                label: "saved with",
+                value: self.params.to_string(),
+                hint: "The parameters the hierarchy was built with; it was reopened from \
+                       its file, not rebuilt.",
+            }],
+            plots: Vec::new(),
+            live: Some(live),
+        }
+    }
+}
