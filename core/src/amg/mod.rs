@@ -82,7 +82,7 @@ pub struct Multiscale {
     pub points: PointSet,
     /// C_ε of every point (eq. 3), for colouring.
     pub classifier: Vec<f32>,
-    /// Point radius (distance to the 6th nearest neighbour unless the input has radii):
+    /// Point radius (the input's, at least the distance to the 6th nearest neighbour):
     /// the concavity test and radial fall-off of §3.2.
     pub radii: Vec<f32>,
     pub coarsening: coarsening::Coarsening,
@@ -186,18 +186,20 @@ pub fn decompose(
     let a = stiffness::stiffness(pos, &nb, &class, opts.contrast, progress)?;
     progress.stage("AMG coarsening");
     let coarsening = coarsening::coarsen(a, &opts.coarsening, progress)?;
-    let radii = match &points.radii {
-        Some(r) if r.len() == pos.len() && r.iter().all(|v| v.is_finite() && *v > 0.0) => r.clone(),
-        _ => nb
-            .lists
-            .iter()
-            .enumerate()
-            .map(|(i, l)| {
-                let j = l[l.len().min(6) - 1] as usize;
-                pos[i].distance(pos[j])
-            })
-            .collect(),
-    };
+    // §3.2's point radius: at least the distance to the 6th nearest neighbour,
+    // so randomly sampled flat regions are not cut by the concavity test.
+    let radii = nb
+        .lists
+        .iter()
+        .enumerate()
+        .map(|(i, l)| {
+            let sixth = pos[i].distance(pos[l[l.len().min(6) - 1] as usize]);
+            let given = points.radii.as_ref().and_then(|r| r.get(i)).copied();
+            given
+                .filter(|r| r.is_finite())
+                .map_or(sixth, |r| r.max(sixth))
+        })
+        .collect();
     Ok(Multiscale {
         points: points.clone(),
         classifier: class.value,

@@ -197,3 +197,96 @@ fn raster(
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::amg::{AmgOptions, decompose, primitives};
+    use crate::builtins::octahedron_points;
+    use crate::progress::Progress;
+
+    /// The face of the true octahedron |x|+|y|+|z| = 1 a ray hits first
+    /// (bit k set when coordinate k is negative, as the builtin numbers them).
+    fn hit_face(eye: Vec3, dir: Vec3) -> Option<usize> {
+        let mut best: Option<(f32, usize)> = None;
+        for f in 0..8 {
+            let s = Vec3::new(
+                if f & 1 == 0 { 1.0 } else { -1.0 },
+                if f & 2 == 0 { 1.0 } else { -1.0 },
+                if f & 4 == 0 { 1.0 } else { -1.0 },
+            );
+            let t = (1.0 - s.dot(eye)) / s.dot(dir);
+            let p = eye + dir * t;
+            if t > 0.0 && (p * s).min_element() >= -1e-5 && best.is_none_or(|(bt, _)| t < bt) {
+                best = Some((t, f));
+            }
+        }
+        best.map(|(_, f)| f)
+    }
+
+    #[test]
+    fn octahedron_image_covers_its_silhouette_once_in_face_colours() {
+        let pts = octahedron_points(16_000, 1);
+        let ms = decompose(&pts, &AmgOptions::default(), &Progress::new()).unwrap();
+        let level = (0..ms.levels())
+            .find(|&l| ms.domains(l).len() == 8)
+            .unwrap();
+        let prims = primitives(&ms, level, 0.02, &Progress::new()).unwrap();
+        let mut view = View::orbit(Vec3::ZERO, 2.6, 0.6, 0.45);
+        (view.width, view.height) = (160, 120);
+        let set = prims.draw_set(Some(view.eye));
+        let image = render(&set, &view);
+        let cam = Camera::new(&view);
+        let colors = pts.colors.as_ref().unwrap();
+        let (mut inside, mut covered, mut right_colour, mut outside, mut empty) = (0, 0, 0, 0, 0);
+        for y in 0..cam.height {
+            for x in 0..cam.width {
+                let px = image.pixels[(y * cam.width + x) as usize];
+                let dir = cam.ray(x, y);
+                match hit_face(cam.eye, dir) {
+                    Some(f) => {
+                        // Skip pixels near an edge of the true faces: blending and
+                        // the projection error (§5) live there.
+                        let near_edge = [(-0.5, 0.0), (0.5, 0.0), (0.0, -0.5), (0.0, 0.5)]
+                            .iter()
+                            .any(|&(dx, dy)| {
+                                let d = cam.ray(x, y)
+                                    + cam.right * (dx * 3.0 * 2.0 * cam.tan_x / cam.width as f32)
+                                    + cam.up * (dy * 3.0 * 2.0 * cam.tan_y / cam.height as f32);
+                                hit_face(cam.eye, d) != Some(f)
+                            });
+                        if near_edge {
+                            continue;
+                        }
+                        inside += 1;
+
+                        if (0.8..=1.25).contains(&px[3]) {
+                            covered += 1;
+                            let c = Vec3::new(px[0], px[1], px[2]) / px[3];
+                            if c.distance(colors[f]) < 0.1 {
+                                right_colour += 1;
+                            }
+                        }
+                    }
+                    None => {
+                        outside += 1;
+                        empty += (px[3] == 0.0) as usize;
+                    }
+                }
+            }
+        }
+        assert!(inside > 2000, "{inside} pixels inside");
+        assert!(
+            covered as f32 > 0.95 * inside as f32,
+            "Ψ sums to ~1 on {covered} of {inside} pixels"
+        );
+        assert!(
+            right_colour as f32 > 0.95 * inside as f32,
+            "face colour on {right_colour} of {inside}"
+        );
+        assert!(
+            empty as f32 > 0.98 * outside as f32,
+            "{empty} of {outside} outside pixels empty"
+        );
+    }
+}
