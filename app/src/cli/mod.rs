@@ -10,6 +10,7 @@ use lodstudio_core::simplify::{CollapseOptions, SimplifyOptions, Target};
 use lodstudio_core::stats::ModelSummary;
 use lodstudio_core::{Progress, builtins};
 
+mod amg;
 mod export;
 mod info;
 mod measure;
@@ -43,6 +44,9 @@ enum Command {
     /// Export an LOD chain as one GLB: the MSFT_lod node extension with
     /// MSFT_screencoverage thresholds from each LOD's guaranteed error bound.
     Export(export::ExportArgs),
+    /// AMG extreme simplification of a point set: quasi-flat domains drawn as
+    /// textured, alpha-blended quads (domain primitives).
+    Amg(amg::AmgArgs),
 }
 
 /// How results are reported and written.
@@ -152,6 +156,7 @@ pub fn run() -> Result<(), CliError> {
         Some(Command::Measure(args)) => measure::run(args),
         Some(Command::Voxel(args)) => voxel::run(args),
         Some(Command::Export(args)) => export::run(args),
+        Some(Command::Amg(args)) => amg::run(args),
     }
 }
 

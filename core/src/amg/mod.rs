@@ -119,6 +119,11 @@ impl Multiscale {
     }
 }
 
+/// Writes the stiffness matrix A as MatrixMarket (for cross-checks with PyAMG).
+pub fn write_matrix_market(ms: &Multiscale, path: &std::path::Path) -> std::io::Result<()> {
+    sprs::io::write_matrix_market(path, ms.stiffness())
+}
+
 /// The point set of a model: a point set as is, or a mesh's vertices with
 /// their colours and normals.
 pub fn point_set(model: &Model) -> Option<PointSet> {
