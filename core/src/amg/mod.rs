@@ -400,6 +400,38 @@ mod tests {
     }
 
     #[test]
+    fn hierarchy_selects_by_plane_error_and_sorts_front_to_back() {
+        let (_, ms) = octahedron();
+        let eight = eight_face_level(ms);
+        let mut h = AmgHierarchy::new(ms.clone(), 0.05);
+        let view = View::orbit(Vec3::ZERO, 3.0, 0.4, 0.3);
+        // Coarse tolerance: the coarsest level whose planes all pass.
+        let coarse = h.select(&view, Tolerance::Relative(0.05));
+        let fine = h.select(&view, Tolerance::Relative(0.002));
+        assert!(coarse.splats.len() <= 8 + 1, "{}", coarse.splats.len());
+        assert!(coarse.error_bound <= 0.05 * ms.points.bounds().diagonal());
+        assert!(fine.splats.len() > 8 * coarse.splats.len());
+        assert!(fine.error_bound <= 0.002 * ms.points.bounds().diagonal());
+        h.set_level(Some(eight));
+        let fixed = h.select(&view, Tolerance::Relative(0.0));
+        assert_eq!(fixed.splats.len(), 8);
+        let d: Vec<f32> = fixed
+            .splats
+            .iter()
+            .map(|s| s.center.distance(view.eye))
+            .collect();
+        assert!(d.windows(2).all(|w| w[0] <= w[1]), "front to back: {d:?}");
+        for (i, s) in fixed.splats.iter().enumerate() {
+            for &j in &s.neighbours {
+                assert!(
+                    fixed.splats[j].neighbours.contains(&i),
+                    "neighbours are symmetric"
+                );
+            }
+        }
+    }
+
+    #[test]
     fn bad_inputs_are_refused() {
         let mut pts = octahedron_points(40, 1);
         let opts = AmgOptions::default();
