@@ -37,6 +37,9 @@ pub struct Splat {
     pub texture: usize,
     /// Domain id (AMG level, index) for inspection.
     pub domain: usize,
+    /// Splats (indices into [`DrawSet::splats`]) whose domains overlap this
+    /// one's; AMG §4 blends a primitive with these before locking its depth.
+    pub neighbours: Vec<usize>,
 }
 
 /// A translucent layer mesh (voxel paper §3) with its opacity.

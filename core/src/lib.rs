@@ -5,6 +5,7 @@
 //! studio's worker threads, the CLI) can show the stage, the fraction done and
 //! cancel at once.
 
+pub mod amg;
 pub mod builtins;
 pub mod cut;
 pub mod distance;

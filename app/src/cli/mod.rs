@@ -10,6 +10,7 @@ use lodstudio_core::simplify::{CollapseOptions, SimplifyOptions, Target};
 use lodstudio_core::stats::ModelSummary;
 use lodstudio_core::{Progress, builtins};
 
+mod amg;
 mod cut;
 mod export;
 mod flythrough;
@@ -58,6 +59,9 @@ enum Command {
     Hybrid(hybrid::HybridArgs),
     /// Primitive counts of triangle-only and hybrid cuts along a fly-through.
     Flythrough(flythrough::FlythroughArgs),
+    /// AMG extreme simplification of a point set: quasi-flat domains drawn as
+    /// textured, alpha-blended quads (domain primitives).
+    Amg(amg::AmgArgs),
 }
 
 /// Where a built hierarchy is saved (reopen it with `cut`, or in the studio).
@@ -204,6 +208,7 @@ pub fn run() -> Result<(), CliError> {
         Some(Command::Mergetree(args)) => mergetree::run(args),
         Some(Command::Hybrid(args)) => hybrid::run(args),
         Some(Command::Flythrough(args)) => flythrough::run(args),
+        Some(Command::Amg(args)) => amg::run(args),
     }
 }
 

@@ -309,6 +309,129 @@ pub fn split_glb(glb: &[u8], bin_name: &str) -> Option<(Vec<u8>, Vec<u8>)> {
     Some((serde_json::to_vec_pretty(&doc).ok()?, bin))
 }
 
+/// Writes the splats of a draw set (AMG domain primitives, §3) as a binary
+/// glTF: one quad primitive per splat, each with its own unlit, alpha-blended
+/// material whose base-colour texture is the splat's texture, embedded as PNG
+/// (colour sRGB, Ψ in alpha). Texture row 0 lies along `center − axes[1]`.
+pub fn write_splats_glb(set: &crate::cut::DrawSet) -> Vec<u8> {
+    use serde_json::json;
+    let mut bin: Vec<u8> = Vec::new();
+    let mut views = Vec::new();
+    let mut add = |bin: &mut Vec<u8>, bytes: &[u8], target: Option<u32>| {
+        let offset = bin.len();
+        bin.extend_from_slice(bytes);
+        while !bin.len().is_multiple_of(4) {
+            bin.push(0);
+        }
+        let mut v = json!({"buffer": 0, "byteOffset": offset, "byteLength": bytes.len()});
+        if let Some(t) = target {
+            v["target"] = json!(t);
+        }
+        views.push(v);
+        views.len() - 1
+    };
+    let f32s = |v: &[f32]| v.iter().flat_map(|x| x.to_le_bytes()).collect::<Vec<u8>>();
+    let mut accessors = Vec::new();
+    let index_view = add(
+        &mut bin,
+        &[0u16, 1, 2, 0, 2, 3].map(u16::to_le_bytes).concat(),
+        Some(34963),
+    );
+    accessors.push(
+        json!({"bufferView": index_view, "componentType": 5123, "count": 6, "type": "SCALAR"}),
+    );
+    let uv_view = add(
+        &mut bin,
+        &f32s(&[0.0, 0.0, 1.0, 0.0, 1.0, 1.0, 0.0, 1.0]),
+        Some(34962),
+    );
+    accessors
+        .push(json!({"bufferView": uv_view, "componentType": 5126, "count": 4, "type": "VEC2"}));
+    let (mut primitives, mut materials, mut images, mut textures) =
+        (vec![], vec![], vec![], vec![]);
+    for (t, tex) in set.textures.iter().enumerate() {
+        let view = add(&mut bin, &encode_png(tex), None);
+        images.push(
+            json!({"bufferView": view, "mimeType": "image/png", "name": format!("domain{t}")}),
+        );
+        textures.push(json!({"source": t, "sampler": 0}));
+    }
+    for s in &set.splats {
+        if s.texture >= set.textures.len() {
+            continue;
+        }
+        let [a0, a1] = s.axes;
+        let corners = [
+            s.center - a0 - a1,
+            s.center + a0 - a1,
+            s.center + a0 + a1,
+            s.center - a0 + a1,
+        ];
+        let bounds = crate::geom::Aabb::from_points(&corners);
+        let flat: Vec<f32> = corners.iter().flat_map(|c| c.to_array()).collect();
+        let pos_view = add(&mut bin, &f32s(&flat), Some(34962));
+        accessors.push(
+            json!({"bufferView": pos_view, "componentType": 5126, "count": 4, "type": "VEC3",
+            "min": bounds.min.to_array(), "max": bounds.max.to_array()}),
+        );
+        let pos = accessors.len() - 1;
+        let n = s.normal.try_normalize().unwrap_or(Vec3::Z).to_array();
+        let normals: Vec<f32> = (0..4).flat_map(|_| n).collect();
+        let nrm_view = add(&mut bin, &f32s(&normals), Some(34962));
+        accessors.push(
+            json!({"bufferView": nrm_view, "componentType": 5126, "count": 4, "type": "VEC3"}),
+        );
+        let nrm = accessors.len() - 1;
+        materials.push(json!({
+            "name": format!("domain{}", s.domain),
+            "pbrMetallicRoughness": {"baseColorTexture": {"index": s.texture}, "metallicFactor": 0.0, "roughnessFactor": 1.0},
+            "alphaMode": "BLEND",
+            "extensions": {"KHR_materials_unlit": {}}
+        }));
+        primitives.push(
+            json!({"attributes": {"POSITION": pos, "NORMAL": nrm, "TEXCOORD_0": 1},
+            "indices": 0, "mode": 4, "material": materials.len() - 1}),
+        );
+    }
+    let mut doc = json!({
+        "asset": {"version": "2.0", "generator": "lodstudio"},
+        "scene": 0,
+        "scenes": [{"nodes": [0]}],
+        "nodes": [{"name": "amg_domain_primitives"}],
+        "buffers": [{"byteLength": bin.len()}],
+        "bufferViews": views,
+        "accessors": accessors,
+    });
+    if !primitives.is_empty() {
+        doc["nodes"][0]["mesh"] = json!(0);
+        doc["meshes"] = json!([{"primitives": primitives}]);
+        doc["materials"] = json!(materials);
+        doc["images"] = json!(images);
+        doc["textures"] = json!(textures);
+        doc["samplers"] =
+            json!([{"magFilter": 9729, "minFilter": 9729, "wrapS": 33071, "wrapT": 33071}]);
+        doc["extensionsUsed"] = json!(["KHR_materials_unlit"]);
+    }
+    glb_container(doc.to_string().into_bytes(), bin)
+}
+
+/// An RGBA8 texture as PNG.
+fn encode_png(tex: &crate::cut::Texture) -> Vec<u8> {
+    let mut out = Vec::new();
+    let mut enc = png::Encoder::new(&mut out, tex.width.max(1), tex.height.max(1));
+    enc.set_color(png::ColorType::Rgba);
+    enc.set_depth(png::BitDepth::Eight);
+    let data: Vec<u8> = if tex.rgba.is_empty() {
+        vec![0; 4]
+    } else {
+        tex.rgba.concat()
+    };
+    let mut w = enc.write_header().expect("writing to memory");
+    w.write_image_data(&data).expect("size matches the header");
+    drop(w);
+    out
+}
+
 /// Packs a JSON chunk (space-padded) and a binary chunk (zero-padded; left out
 /// when empty) into GLB.
 pub(crate) fn glb_container(mut json: Vec<u8>, bin: Vec<u8>) -> Vec<u8> {
@@ -336,6 +459,53 @@ pub(crate) fn glb_container(mut json: Vec<u8>, bin: Vec<u8>) -> Vec<u8> {
 mod tests {
     use super::*;
     use crate::io::gltf_writer::{write_draw_set_glb, write_lod_chain};
+
+    #[test]
+    fn splat_glb_holds_one_textured_quad_per_splat() {
+        use crate::cut::{DrawSet, Splat, Texture};
+        let tex = |w: u32, h: u32| Texture {
+            width: w,
+            height: h,
+            rgba: (0..w * h).map(|i| [i as u8, 7, 9, (i * 3) as u8]).collect(),
+        };
+        let splat = |c: f32, t: usize| Splat {
+            center: Vec3::new(c, 0.0, 0.0),
+            axes: [Vec3::X * 0.5, Vec3::Y * 0.25],
+            normal: Vec3::Z,
+            texture: t,
+            domain: t,
+            neighbours: vec![],
+        };
+        let set = DrawSet {
+            splats: vec![splat(0.0, 0), splat(2.0, 1)],
+            textures: vec![tex(3, 2), tex(5, 4)],
+            ..DrawSet::default()
+        };
+        let glb = write_splats_glb(&set);
+        let (doc, buffers, images) = gltf::import_slice(&glb).unwrap();
+        let prims: Vec<_> = doc.meshes().flat_map(|m| m.primitives()).collect();
+        assert_eq!(prims.len(), 2);
+        for (k, p) in prims.iter().enumerate() {
+            let reader = p.reader(|b| Some(&buffers[b.index()]));
+            let pos: Vec<[f32; 3]> = reader.read_positions().unwrap().collect();
+            assert_eq!(pos[2], [2.0 * k as f32 + 0.5, 0.25, 0.0]);
+            assert_eq!(p.material().alpha_mode(), gltf::material::AlphaMode::Blend);
+            let t = p
+                .material()
+                .pbr_metallic_roughness()
+                .base_color_texture()
+                .unwrap();
+            let img = &images[t.texture().source().index()];
+            assert_eq!(
+                (img.width, img.height),
+                (set.textures[k].width, set.textures[k].height)
+            );
+            assert_eq!(
+                &img.pixels[..8],
+                set.textures[k].rgba[..2].concat().as_slice()
+            );
+        }
+    }
 
     #[test]
     fn glb_round_trips_through_the_reader() {

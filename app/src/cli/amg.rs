@@ -1,0 +1,122 @@
+//! `amg`: extreme point-set simplification by algebraic multigrid (AMG paper):
+//! decomposition into quasi-flat domains, then textured domain primitives.
+
+use lodstudio_core::amg::{self, AmgError, AmgOptions};
+
+use super::*;
+
+#[derive(Args, Debug)]
+pub struct AmgArgs {
+    /// A point set (PLY with or without colours and normals), a mesh (its vertices), or builtin:NAME.
+    file: PathBuf,
+    /// Neighbours k_min per point for the classifier (§2.1; the paper uses 50–100).
+    #[arg(long, default_value_t = 50)]
+    k: usize,
+    /// Minimal feature size ε: neighbourhoods grow to the whole ball B_ε (§2.1); 0 = k nearest only.
+    #[arg(long, default_value_t = 0.0)]
+    epsilon: f32,
+    /// AMG level to build primitives for, 0 = the points; default L−5 with L the coarsest (§2.3).
+    #[arg(long)]
+    level: Option<usize>,
+    /// Texel size in model units (§3.2); default: the median point radius.
+    #[arg(long)]
+    texel: Option<f32>,
+    /// Output GLB of textured, alpha-blended quads.
+    #[arg(short = 'o', long = "output", value_name = "OUT")]
+    output: Option<PathBuf>,
+    /// Also write the stiffness matrix A (eq. 5–7) as MatrixMarket, e.g. for PyAMG.
+    #[arg(long, value_name = "A.mtx")]
+    matrix_out: Option<PathBuf>,
+    #[command(flatten)]
+    report: ReportArgs,
+    #[command(flatten)]
+    input: InputArgs,
+}
+
+pub fn run(args: AmgArgs) -> Result<(), CliError> {
+    let opts = AmgOptions {
+        k: args.k,
+        epsilon: args.epsilon,
+        ..AmgOptions::default()
+    };
+    if let Some(t) = args.texel
+        && !(t.is_finite() && t > 0.0)
+    {
+        return Err(CliError::BadInput(format!(
+            "--texel must be a length > 0, got {t}"
+        )));
+    }
+    for out in [&args.output, &args.matrix_out].into_iter().flatten() {
+        check_output(out, args.report.force)?;
+    }
+    let loaded = io::load(&args.file, &args.input.load_options()?, &Progress::new())?;
+    let points = amg::point_set(&loaded.model).ok_or_else(|| {
+        CliError::BadInput(format!(
+            "{}: the amg method takes point sets and meshes, not a {}",
+            args.file.display(),
+            loaded.model.kind()
+        ))
+    })?;
+    let progress = Progress::new();
+    let start = std::time::Instant::now();
+    let ms = amg::decompose(&points, &opts, &progress).map_err(|e| match e {
+        AmgError::BadInput(m) => CliError::BadInput(format!("{}: {m}", args.file.display())),
+        AmgError::Cancelled => CliError::Failure("cancelled".into()),
+    })?;
+    let seconds_decomposition = start.elapsed().as_secs_f64();
+    let coarsest = ms.levels() - 1;
+    let level = args.level.unwrap_or(ms.default_level());
+    if level > coarsest {
+        return Err(CliError::BadInput(format!(
+            "--level {level}: the coarsest level is {coarsest}"
+        )));
+    }
+    let texel = args.texel.unwrap_or_else(|| {
+        let mut r = ms.radii.clone();
+        r.sort_by(f32::total_cmp);
+        r[r.len() / 2]
+    });
+    let start = std::time::Instant::now();
+    let prims = amg::primitives(&ms, level, texel, &progress)
+        .map_err(|_| CliError::Failure("cancelled".into()))?;
+    let seconds_primitives = start.elapsed().as_secs_f64();
+    if let Some(out) = &args.matrix_out {
+        amg::write_matrix_market(&ms, out)
+            .map_err(|e| CliError::BadInput(format!("{}: cannot write: {e}", out.display())))?;
+    }
+    if let Some(out) = &args.output {
+        let glb = io::gltf::write_splats_glb(&prims.draw_set(None));
+        io::write_atomic(out, &glb)
+            .map_err(|e| CliError::BadInput(format!("{}: cannot write: {e}", out.display())))?;
+    }
+    let levels: Vec<usize> = (0..ms.levels()).map(|l| ms.domains(l).len()).collect();
+    let j = serde_json::json!({
+        "points": points.positions.len(),
+        "levels": levels,
+        "level_sizes": ms.level_sizes(),
+        "level": level,
+        "coarsest_level": coarsest,
+        "primitives": prims.splats.len(),
+        "texels": prims.texels(),
+        "texel": texel,
+        "max_plane_error": prims.errors.iter().copied().fold(0.0, f32::max),
+        "seconds_decomposition": seconds_decomposition,
+        "seconds_primitives": seconds_primitives,
+    });
+    if args.report.json {
+        println!("{j}");
+    } else {
+        println!(
+            "{}: {} points, domains per level {:?}; level {level} (L-{}): {} primitives, {} texels; decomposition {:.2} s, primitives {:.2} s",
+            args.file.display(),
+            points.positions.len(),
+            levels,
+            coarsest - level,
+            prims.splats.len(),
+            prims.texels(),
+            seconds_decomposition,
+            seconds_primitives
+        );
+    }
+    Ok(())
+}

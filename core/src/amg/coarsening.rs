@@ -1,0 +1,309 @@
+//! §2.3: classical Ruge–Stüben algebraic multigrid coarsening — strength of
+//! connection, C/F splitting, direct interpolation P and the Galerkin product
+//! A_c = Pᵀ A P — repeated until a handful of unknowns remain.
+
+use std::collections::BTreeSet;
+
+use rayon::prelude::*;
+use sprs::{CsMat, TriMat};
+
+use crate::progress::{Cancelled, Progress};
+
+/// Parameters of the Ruge–Stüben setup. θ = 0.5 rather than the usual 0.25:
+/// with it the octahedron's creases stay weak couplings down to one domain per
+/// face (§2.3, Fig. 5c); compare with PyAMG at the same θ.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RugeStuben {
+    /// j strongly influences i when −a_ij ≥ θ·max_k(−a_ik).
+    pub theta: f64,
+    /// Stop once a level has at most this many unknowns.
+    pub max_coarse: usize,
+    pub max_levels: usize,
+}
+
+impl Default for RugeStuben {
+    fn default() -> Self {
+        Self {
+            theta: 0.5,
+            max_coarse: 8,
+            max_levels: 30,
+        }
+    }
+}
+
+/// The AMG hierarchy: `operators[0]` = A, `operators[l+1]` = P_lᵀ A_l P_l with
+/// `prolongations[l]` mapping level l+1 to level l.
+#[derive(Debug, Clone)]
+pub struct Coarsening {
+    pub operators: Vec<CsMat<f64>>,
+    pub prolongations: Vec<CsMat<f64>>,
+}
+
+impl Coarsening {
+    /// Unknowns per level, finest first.
+    pub fn level_sizes(&self) -> Vec<usize> {
+        self.operators.iter().map(|a| a.rows()).collect()
+    }
+}
+
+/// Classical strength of connection (Ruge–Stüben's −a_ij form): the strong
+/// influencers S_i of every row.
+pub fn strength(a: &CsMat<f64>, theta: f64) -> Vec<Vec<u32>> {
+    (0..a.rows())
+        .into_par_iter()
+        .map(|i| {
+            let row = a.outer_view(i).expect("row in range");
+            let max = row
+                .iter()
+                .filter(|&(j, _)| j != i)
+                .fold(0f64, |m, (_, &v)| m.max(-v));
+            if max <= 0.0 {
+                return Vec::new();
+            }
+            row.iter()
+                .filter(|&(j, &v)| j != i && -v >= theta * max)
+                .map(|(j, _)| j as u32)
+                .collect()
+        })
+        .collect()
+}
+
+/// Transposes an adjacency list: `out[j]` holds every i with j ∈ s[i].
+fn transpose(s: &[Vec<u32>]) -> Vec<Vec<u32>> {
+    let mut t = vec![Vec::new(); s.len()];
+    for (i, row) in s.iter().enumerate() {
+        for &j in row {
+            t[j as usize].push(i as u32);
+        }
+    }
+    t
+}
+
+/// Ruge–Stüben first-pass C/F splitting: repeatedly make the undecided point
+/// that strongly influences the most undecided points a C point and the points
+/// it strongly influences F points, raising the weight of their other strong
+/// influencers. Returns `true` for C points.
+pub fn cf_splitting(s: &[Vec<u32>]) -> Vec<bool> {
+    #[derive(Clone, Copy, PartialEq)]
+    enum State {
+        Undecided,
+        C,
+        F,
+    }
+    let n = s.len();
+    let st = transpose(s);
+    let mut lambda: Vec<usize> = st.iter().map(Vec::len).collect();
+    let mut state = vec![State::Undecided; n];
+    let mut queue: BTreeSet<(usize, u32)> = (0..n).map(|i| (lambda[i], i as u32)).collect();
+    while let Some((_, i)) = queue.pop_last() {
+        let i = i as usize;
+        state[i] = State::C;
+        for &j in &st[i] {
+            let j = j as usize;
+            if state[j] != State::Undecided {
+                continue;
+            }
+            state[j] = State::F;
+            queue.remove(&(lambda[j], j as u32));
+            for &k in &s[j] {
+                let k = k as usize;
+                if state[k] == State::Undecided {
+                    queue.remove(&(lambda[k], k as u32));
+                    lambda[k] += 1;
+                    queue.insert((lambda[k], k as u32));
+                }
+            }
+        }
+        for &j in &s[i] {
+            let j = j as usize;
+            if state[j] == State::Undecided && lambda[j] > 0 {
+                queue.remove(&(lambda[j], j as u32));
+                lambda[j] -= 1;
+                queue.insert((lambda[j], j as u32));
+            }
+        }
+    }
+    state.into_iter().map(|x| x == State::C).collect()
+}
+
+/// Direct interpolation (Stüben): an F point takes its strong C neighbours'
+/// values with weights −α a_ij / a_ii (β for positive entries), scaled so the
+/// weights of a zero-row-sum row sum to one — which keeps Ψ a partition of unity.
+pub fn direct_interpolation(a: &CsMat<f64>, s: &[Vec<u32>], is_c: &[bool]) -> CsMat<f64> {
+    let n = a.rows();
+    let mut coarse = vec![u32::MAX; n];
+    let mut nc = 0u32;
+    for i in 0..n {
+        if is_c[i] {
+            coarse[i] = nc;
+            nc += 1;
+        }
+    }
+    let rows: Vec<Vec<(u32, f64)>> = (0..n)
+        .into_par_iter()
+        .map(|i| {
+            if is_c[i] {
+                return vec![(coarse[i], 1.0)];
+            }
+            let row = a.outer_view(i).expect("row in range");
+            let strong_c = |j: usize| is_c[j] && s[i].binary_search(&(j as u32)).is_ok();
+            let (mut diag, mut all_neg, mut all_pos, mut c_neg, mut c_pos) =
+                (0.0, 0.0, 0.0, 0.0, 0.0);
+            for (j, &v) in row.iter() {
+                if j == i {
+                    diag += v;
+                    continue;
+                }
+                let c = strong_c(j);
+                if v < 0.0 {
+                    all_neg += v;
+                    if c {
+                        c_neg += v;
+                    }
+                } else {
+                    all_pos += v;
+                    if c {
+                        c_pos += v;
+                    }
+                }
+            }
+            let alpha = if c_neg != 0.0 { all_neg / c_neg } else { 0.0 };
+            let beta = if c_pos != 0.0 {
+                all_pos / c_pos
+            } else {
+                diag += all_pos;
+                0.0
+            };
+            if diag == 0.0 {
+                return Vec::new();
+            }
+            row.iter()
+                .filter(|&(j, _)| j != i && strong_c(j))
+                .map(|(j, &v)| {
+                    let w = if v < 0.0 { alpha } else { beta };
+                    (coarse[j], -w * v / diag)
+                })
+                .filter(|&(_, w)| w != 0.0)
+                .collect()
+        })
+        .collect();
+    let mut t = TriMat::new((n, nc as usize));
+    for (i, row) in rows.iter().enumerate() {
+        for &(j, w) in row {
+            t.add_triplet(i, j as usize, w);
+        }
+    }
+    t.to_csr()
+}
+
+/// The Galerkin coarse operator Pᵀ A P.
+pub fn galerkin(a: &CsMat<f64>, p: &CsMat<f64>) -> CsMat<f64> {
+    let pt: CsMat<f64> = p.transpose_view().to_csr();
+    let ap = a * p;
+    &pt * &ap
+}
+
+/// Coarsens A level by level until at most `max_coarse` unknowns remain, the
+/// coarsening stalls, or `max_levels` is reached.
+pub fn coarsen(
+    a: CsMat<f64>,
+    opts: &RugeStuben,
+    progress: &Progress,
+) -> Result<Coarsening, Cancelled> {
+    let mut operators = vec![a];
+    let mut prolongations = Vec::new();
+    while operators.len() < opts.max_levels {
+        progress.check()?;
+        let a = operators.last().expect("the fine level");
+        if a.rows() <= opts.max_coarse {
+            break;
+        }
+        let mut s = strength(a, opts.theta);
+        s.par_iter_mut().for_each(|r| r.sort_unstable());
+        let is_c = cf_splitting(&s);
+        let nc = is_c.iter().filter(|&&c| c).count();
+        if nc == 0 || nc == a.rows() {
+            break;
+        }
+        let p = direct_interpolation(a, &s, &is_c);
+        let ac = galerkin(a, &p);
+        prolongations.push(p);
+        operators.push(ac);
+        progress.set_fraction(operators.len() as f32 / opts.max_levels as f32);
+    }
+    Ok(Coarsening {
+        operators,
+        prolongations,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The 5-point Laplacian of an m×m grid (Neumann: zero row sums).
+    fn grid_laplacian(m: usize) -> CsMat<f64> {
+        let mut t = TriMat::new((m * m, m * m));
+        for y in 0..m {
+            for x in 0..m {
+                let i = y * m + x;
+                for (dx, dy) in [(1usize, 0usize), (0, 1)] {
+                    if x + dx < m && y + dy < m {
+                        let j = (y + dy) * m + x + dx;
+                        t.add_triplet(i, j, -1.0);
+                        t.add_triplet(j, i, -1.0);
+                        t.add_triplet(i, i, 1.0);
+                        t.add_triplet(j, j, 1.0);
+                    }
+                }
+            }
+        }
+        t.to_csr()
+    }
+
+    #[test]
+    fn splitting_is_a_valid_rs_split() {
+        let a = grid_laplacian(20);
+        let mut s = strength(&a, 0.25);
+        s.iter_mut().for_each(|r| r.sort_unstable());
+        let is_c = cf_splitting(&s);
+        let nc = is_c.iter().filter(|&&c| c).count();
+        // The 5-point stencil coarsens to a red–black-like half.
+        assert!((150..=250).contains(&nc), "{nc} C points of 400");
+        // Every F point has a strong C neighbour to interpolate from.
+        for i in 0..400 {
+            if !is_c[i] {
+                assert!(
+                    s[i].iter().any(|&j| is_c[j as usize]),
+                    "F point {i} has no C neighbour"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn galerkin_levels_keep_symmetry_and_zero_row_sums_and_shrink() {
+        let h = coarsen(grid_laplacian(30), &RugeStuben::default(), &Progress::new()).unwrap();
+        let sizes = h.level_sizes();
+        assert!(sizes.windows(2).all(|w| w[1] < w[0]), "{sizes:?}");
+        assert!(*sizes.last().unwrap() <= 8 && sizes.len() >= 4, "{sizes:?}");
+        for (l, a) in h.operators.iter().enumerate() {
+            let dense = a.to_dense();
+            let scale = dense.iter().fold(0f64, |m, v| m.max(v.abs()));
+            for i in 0..a.rows() {
+                let sum: f64 = dense.row(i).sum();
+                assert!(sum.abs() <= 1e-9 * scale, "level {l} row {i} sums to {sum}");
+                for j in 0..a.rows() {
+                    assert!((dense[[i, j]] - dense[[j, i]]).abs() <= 1e-9 * scale);
+                }
+            }
+        }
+        // Interpolation reproduces constants: every row of P sums to one.
+        for p in &h.prolongations {
+            for (i, row) in p.outer_iterator().enumerate() {
+                let sum: f64 = row.iter().map(|(_, v)| v).sum();
+                assert!((sum - 1.0).abs() < 1e-9, "P row {i} sums to {sum}");
+            }
+        }
+    }
+}

@@ -1,0 +1,456 @@
+//! AMG extreme point-set simplification (Reniers & Telea): a moment-based
+//! surface classifier (§2.1) encoded in a finite-element stiffness matrix
+//! (§2.2), coarsened by Ruge–Stüben algebraic multigrid into a multiscale of
+//! quasi-flat domains (§2.3), each drawn as a textured domain primitive (§3)
+//! blended with its domain neighbours (§4).
+
+pub mod basis;
+pub mod classifier;
+pub mod coarsening;
+pub mod neighbourhood;
+pub mod primitive;
+pub mod render;
+pub mod stiffness;
+
+use std::collections::HashMap;
+
+use glam::Vec3;
+use sprs::CsMat;
+
+use crate::cut::{DrawSet, Hierarchy};
+use crate::view::{Tolerance, View};
+
+use crate::geom::PointSet;
+use crate::io::Model;
+use crate::progress::{Cancelled, Progress};
+pub use coarsening::RugeStuben;
+pub use primitive::{Primitives, primitives};
+
+/// User parameters of the decomposition (§6: neighbourhood size; τ and the
+/// neighbour fraction are the paper's fixed values).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct AmgOptions {
+    /// k_min of §2.1 (the paper uses 50–100).
+    pub k: usize,
+    /// Minimal feature size ε of §2.1 (0: plain k nearest neighbours).
+    pub epsilon: f32,
+    /// Exponent applied to the triangle classifier C(T) in eq. 5 (1 = the paper).
+    /// The literal classifier is only ~5× lower on the octahedron's 109° creases
+    /// than on its faces, which a relative strength of connection does not see as
+    /// a cut; raising it to the 4th power gives the "several orders of magnitude"
+    /// the paper describes (§2.1) and one domain per face.
+    pub contrast: f64,
+    /// Domain threshold τ of eq. 8.
+    pub tau: f64,
+    /// Shared-point fraction above which two domains are neighbours (§4).
+    pub neighbour_fraction: f64,
+    pub coarsening: RugeStuben,
+}
+
+impl Default for AmgOptions {
+    fn default() -> Self {
+        Self {
+            k: 50,
+            epsilon: 0.0,
+            contrast: 4.0,
+            tau: 0.05,
+            neighbour_fraction: 0.05,
+            coarsening: RugeStuben::default(),
+        }
+    }
+}
+
+/// Why a decomposition did not run.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum AmgError {
+    #[error("{0}")]
+    BadInput(String),
+    #[error("cancelled")]
+    Cancelled,
+}
+
+impl From<Cancelled> for AmgError {
+    fn from(_: Cancelled) -> Self {
+        AmgError::Cancelled
+    }
+}
+
+/// The built multiscale: the points, their classifier values, the stiffness
+/// matrix and the AMG hierarchy.
+#[derive(Debug, Clone)]
+pub struct Multiscale {
+    pub points: PointSet,
+    /// C_ε of every point (eq. 3), for colouring.
+    pub classifier: Vec<f32>,
+    /// Point radius (the input's, at least the distance to the 6th nearest neighbour):
+    /// the concavity test and radial fall-off of §3.2.
+    pub radii: Vec<f32>,
+    pub coarsening: coarsening::Coarsening,
+    pub options: AmgOptions,
+}
+
+impl Multiscale {
+    /// The stiffness matrix A (eq. 5–7).
+    pub fn stiffness(&self) -> &CsMat<f64> {
+        &self.coarsening.operators[0]
+    }
+
+    /// Basis functions per level, finest (the points) first.
+    pub fn level_sizes(&self) -> Vec<usize> {
+        self.coarsening.level_sizes()
+    }
+
+    pub fn levels(&self) -> usize {
+        self.coarsening.operators.len()
+    }
+
+    /// The paper's default level L − 5 (§2.3), L the coarsest.
+    pub fn default_level(&self) -> usize {
+        self.levels().saturating_sub(6)
+    }
+
+    /// Non-empty domains D^{l,i} (eq. 8) of `level`, with their Ψ values.
+    pub fn domains(&self, level: usize) -> Vec<Vec<(u32, f32)>> {
+        let psi = basis::basis(&self.coarsening, level);
+        basis::domains(&psi, self.options.tau)
+            .into_iter()
+            .filter(|d| !d.is_empty())
+            .collect()
+    }
+}
+
+/// Writes the stiffness matrix A as MatrixMarket (for cross-checks with PyAMG).
+pub fn write_matrix_market(ms: &Multiscale, path: &std::path::Path) -> std::io::Result<()> {
+    sprs::io::write_matrix_market(path, ms.stiffness())
+}
+
+/// The point set of a model: a point set as is, or a mesh's vertices with
+/// their colours and normals.
+pub fn point_set(model: &Model) -> Option<PointSet> {
+    match model {
+        Model::Points(p) => Some(p.clone()),
+        Model::Mesh(m) => Some(PointSet {
+            positions: m.positions.clone(),
+            normals: m.normals.clone(),
+            colors: m.colors.clone(),
+            radii: None,
+        }),
+        _ => None,
+    }
+}
+
+/// Checks a point set and options before a decomposition.
+pub fn validate(points: &PointSet, opts: &AmgOptions) -> Result<(), AmgError> {
+    let bad = |m: String| Err(AmgError::BadInput(m));
+    if !(3..=1000).contains(&opts.k) {
+        return bad(format!("k must be between 3 and 1000, got {}", opts.k));
+    }
+    if !(opts.contrast.is_finite() && (0.0..=8.0).contains(&opts.contrast)) {
+        return bad(format!("contrast must be in 0..=8, got {}", opts.contrast));
+    }
+    if !(opts.tau > 0.0 && opts.tau < 1.0) {
+        return bad(format!("tau must be in (0, 1), got {}", opts.tau));
+    }
+    if !(opts.epsilon.is_finite() && opts.epsilon >= 0.0) {
+        return bad(format!(
+            "epsilon must be finite and >= 0, got {}",
+            opts.epsilon
+        ));
+    }
+    if points.positions.len() <= opts.k {
+        return bad(format!(
+            "{} points are too few for k = {} neighbours",
+            points.positions.len(),
+            opts.k
+        ));
+    }
+    if let Some(i) = points.positions.iter().position(|p| !p.is_finite()) {
+        return bad(format!("point {i} is not finite"));
+    }
+    if points.bounds().diagonal() <= 0.0 {
+        return bad("all points coincide".into());
+    }
+    Ok(())
+}
+
+/// §2: neighbourhoods, classifier, stiffness matrix and AMG coarsening.
+pub fn decompose(
+    points: &PointSet,
+    opts: &AmgOptions,
+    progress: &Progress,
+) -> Result<Multiscale, AmgError> {
+    validate(points, opts)?;
+    let pos = &points.positions;
+    progress.stage("neighbourhoods");
+    let nb = neighbourhood::neighbourhoods(pos, opts.k, opts.epsilon);
+    progress.check()?;
+    progress.stage("classifier");
+    let class = classifier::classify(pos, &nb);
+    progress.check()?;
+    progress.stage("stiffness matrix");
+    let a = stiffness::stiffness(pos, &nb, &class, opts.contrast, progress)?;
+    progress.stage("AMG coarsening");
+    let coarsening = coarsening::coarsen(a, &opts.coarsening, progress)?;
+    // §3.2's point radius: at least the distance to the 6th nearest neighbour,
+    // so randomly sampled flat regions are not cut by the concavity test.
+    let radii = nb
+        .lists
+        .iter()
+        .enumerate()
+        .map(|(i, l)| {
+            let sixth = pos[i].distance(pos[l[l.len().min(6) - 1] as usize]);
+            let given = points.radii.as_ref().and_then(|r| r.get(i)).copied();
+            given
+                .filter(|r| r.is_finite())
+                .map_or(sixth, |r| r.max(sixth))
+        })
+        .collect();
+    Ok(Multiscale {
+        points: points.clone(),
+        classifier: class.value,
+        radii,
+        coarsening,
+        options: *opts,
+    })
+}
+
+/// The centre of a point set's bounds, towards which normals of sets without
+/// normals are oriented away.
+fn centre(points: &[Vec3]) -> Vec3 {
+    crate::geom::Aabb::from_points(points).center()
+}
+
+/// The built multiscale as a [`Hierarchy`]: `select` draws the coarsest level
+/// whose every primitive's plane error meets the tolerance, or the level fixed
+/// with [`AmgHierarchy::set_level`], sorted front to back (§4).
+pub struct AmgHierarchy {
+    multiscale: Multiscale,
+    texel: f32,
+    level: Option<usize>,
+    built: HashMap<usize, Primitives>,
+}
+
+impl AmgHierarchy {
+    pub fn new(multiscale: Multiscale, texel: f32) -> Self {
+        Self {
+            multiscale,
+            texel,
+            level: None,
+            built: HashMap::new(),
+        }
+    }
+
+    pub fn multiscale(&self) -> &Multiscale {
+        &self.multiscale
+    }
+
+    /// Fixes the drawn level (`None`: chosen by the tolerance).
+    pub fn set_level(&mut self, level: Option<usize>) {
+        self.level = level.map(|l| l.min(self.multiscale.levels() - 1));
+    }
+
+    /// The primitives of `level`, built once.
+    pub fn primitives(&mut self, level: usize) -> &Primitives {
+        let (ms, texel) = (&self.multiscale, self.texel);
+        self.built.entry(level).or_insert_with(|| {
+            primitives(ms, level, texel, &Progress::new()).expect("never cancelled")
+        })
+    }
+}
+
+impl Hierarchy for AmgHierarchy {
+    fn method(&self) -> &'static str {
+        "amg"
+    }
+
+    fn select(&mut self, view: &View, tolerance: Tolerance) -> DrawSet {
+        let diagonal = self.multiscale.points.bounds().diagonal();
+        let level = match self.level {
+            Some(l) => l,
+            // Coarsest first: the first level whose primitives all pass.
+            None => (1..self.multiscale.levels())
+                .rev()
+                .find(|&l| {
+                    let p = self.primitives(l);
+                    (0..p.splats.len()).all(|k| {
+                        tolerance.accepts(
+                            view,
+                            diagonal,
+                            p.errors[k],
+                            p.splats[k].center,
+                            p.bounds[k],
+                        )
+                    })
+                })
+                .unwrap_or(1),
+        };
+        self.primitives(level).draw_set(Some(view.eye))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use std::sync::OnceLock;
+
+    use super::*;
+    use crate::builtins::octahedron_points;
+
+    /// The octahedron of Fig. 1 (16,000 points), decomposed once for all tests.
+    fn octahedron() -> &'static (PointSet, Multiscale) {
+        static MS: OnceLock<(PointSet, Multiscale)> = OnceLock::new();
+        MS.get_or_init(|| {
+            let pts = octahedron_points(16_000, 1);
+            let ms = decompose(&pts, &AmgOptions::default(), &Progress::new()).unwrap();
+            (pts, ms)
+        })
+    }
+
+    fn eight_face_level(ms: &Multiscale) -> usize {
+        (0..ms.levels())
+            .find(|&l| ms.domains(l).len() == 8)
+            .unwrap_or_else(|| panic!("no level with 8 domains: {:?}", ms.level_sizes()))
+    }
+
+    #[test]
+    fn octahedron_has_a_level_of_eight_face_domains() {
+        let (pts, ms) = octahedron();
+        let sizes = ms.level_sizes();
+        assert!(sizes.windows(2).all(|w| w[1] < w[0]), "{sizes:?}");
+        let level = eight_face_level(ms);
+        let prims = primitives(ms, level, 0.02, &Progress::new()).unwrap();
+        let mut faces: Vec<usize> = prims
+            .splats
+            .iter()
+            .map(|s| {
+                // The face normal (±1, ±1, ±1)/√3 it should match, within 5°.
+                let f = Vec3::new(
+                    s.normal.x.signum(),
+                    s.normal.y.signum(),
+                    s.normal.z.signum(),
+                );
+                let angle = s.normal.angle_between(f.normalize()).to_degrees();
+                assert!(angle < 5.0, "normal {} is {angle}° off its face", s.normal);
+                ((f.x > 0.0) as usize) | ((f.y > 0.0) as usize) << 1 | ((f.z > 0.0) as usize) << 2
+            })
+            .collect();
+        faces.sort();
+        faces.dedup();
+        assert_eq!(faces.len(), 8, "one domain per face");
+        // Nearly no overlap (Fig. 5c): few points lie in two domains.
+        let mut count = vec![0u8; pts.positions.len()];
+        for d in ms.domains(level) {
+            for (i, _) in d {
+                count[i as usize] += 1;
+            }
+        }
+        let shared = count.iter().filter(|&&c| c > 1).count();
+        assert!(
+            shared * 10 < pts.positions.len(),
+            "{shared} points in several domains"
+        );
+        assert!(count.iter().all(|&c| c > 0), "every point is in a domain");
+    }
+
+    #[test]
+    fn basis_functions_are_a_partition_of_unity() {
+        let (_, ms) = octahedron();
+        for level in 0..ms.levels() {
+            let psi = basis::basis(&ms.coarsening, level);
+            for (i, row) in psi.outer_iterator().enumerate() {
+                let sum: f64 = row.iter().map(|(_, v)| v).sum();
+                assert!(
+                    (sum - 1.0).abs() < 1e-6,
+                    "level {level} point {i}: ΣΨ = {sum}"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn stiffness_is_symmetric_with_zero_row_sums() {
+        let (_, ms) = octahedron();
+        let a = ms.stiffness();
+        let t: CsMat<f64> = a.transpose_view().to_csr();
+        let mut negative = 0usize;
+        let mut off = 0usize;
+        for (i, row) in a.outer_iterator().enumerate() {
+            let scale = row.iter().fold(0f64, |m, (_, v)| m.max(v.abs()));
+            assert!(scale > 0.0, "row {i} is empty");
+            let sum: f64 = row.iter().map(|(_, v)| v).sum();
+            assert!(sum.abs() <= 1e-9 * scale, "row {i} sums to {sum}");
+            for (j, &v) in row.iter() {
+                let vt = t.get(i, j).copied().unwrap_or(0.0);
+                assert!(
+                    (v - vt).abs() <= 1e-12 * scale,
+                    "A[{i},{j}] = {v} but A[{j},{i}] = {vt}"
+                );
+                if i != j {
+                    off += 1;
+                    negative += (v < 0.0) as usize;
+                }
+            }
+        }
+        // A stiffness matrix: fans of 5–10 triangles, nearly all couplings negative.
+        let per_row = off as f64 / a.rows() as f64;
+        assert!(
+            (4.0..=14.0).contains(&per_row),
+            "{per_row} neighbours per point"
+        );
+        assert!(negative as f64 > 0.95 * off as f64);
+    }
+
+    #[test]
+    fn hierarchy_selects_by_plane_error_and_sorts_front_to_back() {
+        let (_, ms) = octahedron();
+        let eight = eight_face_level(ms);
+        let mut h = AmgHierarchy::new(ms.clone(), 0.05);
+        let view = View::orbit(Vec3::ZERO, 3.0, 0.4, 0.3);
+        // Coarse tolerance: the coarsest level whose planes all pass.
+        let coarse = h.select(&view, Tolerance::Relative(0.05));
+        let fine = h.select(&view, Tolerance::Relative(0.002));
+        assert!(coarse.splats.len() <= 8 + 1, "{}", coarse.splats.len());
+        assert!(coarse.error_bound <= 0.05 * ms.points.bounds().diagonal());
+        assert!(fine.splats.len() > 8 * coarse.splats.len());
+        assert!(fine.error_bound <= 0.002 * ms.points.bounds().diagonal());
+        h.set_level(Some(eight));
+        let fixed = h.select(&view, Tolerance::Relative(0.0));
+        assert_eq!(fixed.splats.len(), 8);
+        let d: Vec<f32> = fixed
+            .splats
+            .iter()
+            .map(|s| s.center.distance(view.eye))
+            .collect();
+        assert!(d.windows(2).all(|w| w[0] <= w[1]), "front to back: {d:?}");
+        for (i, s) in fixed.splats.iter().enumerate() {
+            for &j in &s.neighbours {
+                assert!(
+                    fixed.splats[j].neighbours.contains(&i),
+                    "neighbours are symmetric"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn bad_inputs_are_refused() {
+        let mut pts = octahedron_points(40, 1);
+        let opts = AmgOptions::default();
+        assert!(matches!(
+            decompose(&pts, &opts, &Progress::new()),
+            Err(AmgError::BadInput(_))
+        ));
+        let few = AmgOptions { k: 10, ..opts };
+        pts.positions[3].x = f32::NAN;
+        assert!(matches!(
+            decompose(&pts, &few, &Progress::new()),
+            Err(AmgError::BadInput(_))
+        ));
+        let cancelled = Progress::new();
+        cancelled.cancel();
+        let ok = octahedron_points(500, 1);
+        assert_eq!(
+            decompose(&ok, &few, &cancelled).unwrap_err(),
+            AmgError::Cancelled
+        );
+    }
+}

@@ -1,0 +1,87 @@
+//! End-to-end runs of `lodstudio amg` (AMG extreme point-set simplification).
+
+use lodstudio_tests::{lodstudio, lodstudio_json, shared_model};
+
+fn tmp(name: &str) -> std::path::PathBuf {
+    let dir = std::env::temp_dir().join(format!("lodstudio-amg-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir.join(name)
+}
+
+fn counts(j: &serde_json::Value, key: &str) -> Vec<u64> {
+    j[key]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_u64().unwrap())
+        .collect()
+}
+
+#[test]
+fn octahedron_reaches_eight_face_primitives_in_a_glb() {
+    let probe = lodstudio_json(&["amg", "builtin:octahedron-points"]);
+    let levels = counts(&probe, "levels");
+    assert_eq!(probe["points"], 16000);
+    assert_eq!(levels[0], 16000, "level 0: one domain per point");
+    assert!(levels.windows(2).all(|w| w[1] < w[0]), "{levels:?}");
+    let eight = levels
+        .iter()
+        .position(|&d| d == 8)
+        .expect("a level of 8 domains");
+    let out = tmp("octahedron.glb");
+    let j = lodstudio_json(&[
+        "amg",
+        "builtin:octahedron-points",
+        "--level",
+        &eight.to_string(),
+        "--texel",
+        "0.02",
+        "-o",
+        out.to_str().unwrap(),
+        "--force",
+    ]);
+    assert_eq!(j["primitives"], 8);
+    // Face planes: every domain point (crease points shared with the next face
+    // included) within 0.1 of its plane; a domain across two faces would reach ~0.4.
+    assert!(j["max_plane_error"].as_f64().unwrap() < 0.1, "{j}");
+    let texels = j["texels"].as_u64().unwrap();
+    // Each face (area √3/2) at texel 0.02 needs at least ~2,165 texels.
+    assert!((8 * 2165..8 * 20_000).contains(&texels), "{texels} texels");
+    let glb = std::fs::read(&out).unwrap();
+    assert_eq!(&glb[..4], b"glTF");
+    let text = String::from_utf8_lossy(&glb);
+    assert_eq!(text.matches("\"image/png\"").count(), 8);
+    assert_eq!(text.matches("\"BLEND\"").count(), 8);
+}
+
+#[test]
+fn ball_decomposes_like_table_1() {
+    let j = lodstudio_json(&["amg", &shared_model("ball.ply").to_string_lossy()]);
+    let levels = counts(&j, "levels");
+    assert_eq!(j["points"], 31374);
+    assert!(levels.windows(2).all(|w| w[1] < w[0]), "{levels:?}");
+    // 2–3× fewer per level (§2.3) and about ten levels.
+    assert!((7..=16).contains(&levels.len()), "{levels:?}");
+    let level = j["level"].as_u64().unwrap() as usize;
+    assert_eq!(j["primitives"].as_u64().unwrap(), levels[level]);
+    assert!(j["texels"].as_u64().unwrap() > j["primitives"].as_u64().unwrap());
+}
+
+#[test]
+fn bad_amg_arguments_exit_2_with_one_line() {
+    let oct = "builtin:octahedron-points";
+    for args in [
+        vec!["amg", oct, "--k", "2"],
+        vec!["amg", oct, "--level", "99"],
+        vec!["amg", oct, "--texel", "-1"],
+        vec!["amg", oct, "--texel", "nan"],
+        vec!["amg", "/nonexistent/points.ply"],
+        vec!["amg", "builtin:sphereflake", "--k", "100000"],
+    ] {
+        let out = lodstudio(&args);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{args:?}: {err}");
+        assert_eq!(err.trim().lines().count(), 1, "{args:?}: {err}");
+        assert!(!err.contains("panicked"), "{args:?}: {err}");
+    }
+}
