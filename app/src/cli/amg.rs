@@ -85,7 +85,7 @@ pub fn run(args: AmgArgs) -> Result<(), CliError> {
             .map_err(|e| CliError::BadInput(format!("{}: cannot write: {e}", out.display())))?;
     }
     if let Some(out) = &args.output {
-        let glb = io::gltf::write_splats_glb(&prims.draw_set(None));
+        let glb = io::gltf_writer::write_draw_set_glb(&prims.draw_set(None));
         io::write_atomic(out, &glb)
             .map_err(|e| CliError::BadInput(format!("{}: cannot write: {e}", out.display())))?;
     }

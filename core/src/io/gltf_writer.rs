@@ -361,6 +361,7 @@ mod tests {
             normal: Vec3::Z,
             texture: t,
             domain: t,
+            neighbours: Vec::new(),
         };
         let torus = crate::builtins::torus(1.0, 0.3, 8, 4);
         let set = DrawSet {
