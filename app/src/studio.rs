@@ -608,6 +608,14 @@ impl StudioApp {
                 let loaded = Arc::clone(&current.loaded);
                 Box::new(move |progress| build::run(&loaded.model, options, progress))
             }
+            BuildParams::Amg(settings) => {
+                let loaded = Arc::clone(&current.loaded);
+                let settings = crate::panels::amg::AmgSettings {
+                    level: self.methods.amg.level,
+                    ..settings
+                };
+                Box::new(move |progress| build::amg::run(&loaded.model, settings, progress))
+            }
             BuildParams::Hybrid(settings) => {
                 let loaded = Arc::clone(&current.loaded);
                 Box::new(move |progress| build::hybrid::run(&loaded.model, settings, progress))
@@ -733,6 +741,7 @@ impl StudioApp {
                 "silhouette": mt.silhouette,
                 "lighting": mt.lighting,
                 "position": self.methods.voxel.position,
+                "amg_level": self.methods.amg.runtime_level(),
             }));
             live.update(&view, self.methods.threshold.tolerance());
         }
@@ -799,7 +808,7 @@ impl StudioApp {
             Method::Voxel => {
                 serde_json::json!({"resolution": m.voxel.resolution, "radius": m.voxel.radius})
             }
-            Method::EdgeCollapse => serde_json::json!({}),
+            Method::EdgeCollapse | Method::Amg => serde_json::json!({}),
         };
         live.save(&params)
     }
@@ -1019,6 +1028,16 @@ impl StudioApp {
             Method::Hybrid => {
                 changed |= self.methods.hybrid.ui(ui);
             }
+            Method::Amg => {
+                let levels = self
+                    .result
+                    .as_ref()
+                    .filter(|b| b.method() == Method::Amg)
+                    .and_then(|b| b.plots.first())
+                    .and_then(|p| p.series.first())
+                    .map(|s| s.1.len());
+                changed |= self.methods.amg.ui(ui, levels);
+            }
             Method::MergeTree => {
                 // Criteria changes re-cut the live tree; only build options rebuild.
                 changed |= self.methods.merge_tree.ui(ui).0;
@@ -1056,7 +1075,7 @@ impl StudioApp {
                 self.export_dialog(ui.ctx());
             }
             let can_save = self.export.is_none()
-                && self.result.as_ref().is_some_and(|b| b.live.is_some() && b.method() != Method::EdgeCollapse);
+                && self.result.as_ref().is_some_and(|b| b.live.is_some() && !matches!(b.method(), Method::EdgeCollapse | Method::Amg));
             let save = ui
                 .add_enabled(can_save, egui::Button::new("Save hierarchy…"))
                 .on_hover_text("Save the built hierarchy (versioned, checksummed .lodh) to reopen it later without rebuilding.")

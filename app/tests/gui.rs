@@ -1124,3 +1124,34 @@ fn saved_hierarchies_reopen_without_rebuilding() {
             .any(|l| l.contains("without rebuilding"))
     );
 }
+
+/// AMG domain primitives: textured splats blended by Ψ, the level moved live.
+#[test]
+fn amg_splats_are_drawn_and_the_level_moves_live() {
+    let mut harness = studio(Some("builtin:octahedron-points".into()));
+    wait_for_load(&mut harness);
+    let mut methods = *harness.state().methods();
+    methods.method = Method::Amg;
+    methods.amg.level = 3;
+    methods.amg.auto_level = false;
+    harness.state_mut().set_methods(methods);
+    harness.step();
+    wait_for_build(&mut harness);
+    assert!(has_label(&harness, "unknowns per AMG level"));
+    let fine = cut_stats(&harness);
+    assert!(fine.splats > 8, "{fine:?}");
+    let (covered, shades) = viewport_pixels(&mut harness, "studio_splats");
+    assert!(covered > 0.05, "splats drawn: {:.1}%", covered * 100.0);
+    assert!(shades > 8, "textured, blended colours: {shades}");
+    let last = result_row(&harness, "AMG levels").parse::<usize>().unwrap() - 1;
+    harness
+        .get_by_role_and_label(egui::Role::Slider, "AMG level")
+        .set_value_accesskit(last as f64);
+    harness.run();
+    assert!(!harness.state().is_building(), "the level needs no rebuild");
+    let coarse = cut_stats(&harness);
+    assert_eq!(
+        coarse.splats, 8,
+        "one domain per face at the coarsest level"
+    );
+}

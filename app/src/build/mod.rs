@@ -2,6 +2,7 @@
 //! mesh (with its certificate or topology), the scenes the viewport shows for
 //! it, and the inspector rows that report it. One module per hierarchy method.
 
+pub mod amg;
 pub mod hybrid;
 pub mod mergetree;
 mod reopen;
@@ -173,6 +174,11 @@ impl Built {
 pub fn check(method: Method, path: &Path, model: &Model) -> Result<(), String> {
     match method {
         Method::EdgeCollapse | Method::MergeTree | Method::Hybrid => mesh_of(model).map(|_| ()),
+        Method::Amg => lodstudio_core::amg::point_set(model)
+            .map(|_| ())
+            .ok_or_else(|| {
+                "AMG simplification needs points: a point set or a mesh's vertices.".to_string()
+            }),
         Method::Voxel => voxel_source(path, model).map(|_| ()),
     }
 }

@@ -72,7 +72,7 @@ impl Reopened {
                 v.radius = number("radius").unwrap_or(v.radius as f64) as f32;
                 methods.voxel = methods.voxel.sanitized();
             }
-            Method::EdgeCollapse => {}
+            Method::EdgeCollapse | Method::Amg => {}
         }
         methods
     }

@@ -3,6 +3,7 @@
 //! between sessions except the voxel threshold, which is in the units of one
 //! volume's values (see [`voxel::VoxelSettings::threshold`]).
 
+pub mod amg;
 pub mod hybrid;
 pub mod mergetree;
 pub mod simplify;
@@ -13,6 +14,7 @@ use serde::{Deserialize, Serialize};
 
 use lodstudio_core::mergetree::MergeTreeOptions;
 
+use self::amg::AmgSettings;
 use self::hybrid::HybridSettings;
 use self::mergetree::MergeTreeSettings;
 use self::simplify::EdgeCollapseSettings;
@@ -31,6 +33,8 @@ pub enum Method {
     MergeTree,
     /// A multi-resolution graph of triangles and points (hybrid paper).
     Hybrid,
+    /// Domain primitives of a point set by algebraic multigrid (AMG paper).
+    Amg,
 }
 
 impl Method {
@@ -40,6 +44,7 @@ impl Method {
         Method::Hybrid,
         Method::MergeTree,
         Method::Voxel,
+        Method::Amg,
     ];
 
     pub fn name(self) -> &'static str {
@@ -48,6 +53,7 @@ impl Method {
             Method::Voxel => "Voxel (low-pass + marching cubes)",
             Method::MergeTree => "Merge tree (view-dependent)",
             Method::Hybrid => "Hybrid (triangles + points)",
+            Method::Amg => "AMG (splats)",
         }
     }
 
@@ -64,6 +70,13 @@ impl Method {
                  (Gaussian or hyper-cone) and extracts the iso-density surface by marching \
                  cubes: wider filters remove small features, holes and tunnels, so the genus \
                  falls (voxel-based object simplification paper, §2)."
+            }
+            Method::Amg => {
+                "Decomposes a point set (or a mesh's vertices) into quasi-flat domains \
+                 by algebraic multigrid on a stiffness matrix of local finite elements, and \
+                 draws each domain as a textured quad whose alpha is its partition-of-unity \
+                 weight, so overlapping splats blend seamlessly (AMG extreme \
+                 simplification paper)."
             }
             Method::Hybrid => {
                 "Simplifies by edge collapse and by replacing triangles with points and \
@@ -94,6 +107,7 @@ pub struct MethodSettings {
     pub voxel: VoxelSettings,
     pub merge_tree: MergeTreeSettings,
     pub hybrid: HybridSettings,
+    pub amg: AmgSettings,
     /// The error threshold of live cuts (hierarchies).
     pub threshold: Threshold,
 }
@@ -107,6 +121,8 @@ pub enum BuildParams {
     /// The tree's build options (its criteria apply at run time).
     MergeTree(MergeTreeOptions),
     Hybrid(HybridSettings),
+    /// The decomposition's parameters (the level is chosen at run time).
+    Amg(AmgSettings),
 }
 
 impl BuildParams {
@@ -116,6 +132,7 @@ impl BuildParams {
             BuildParams::Voxel(_) => Method::Voxel,
             BuildParams::MergeTree(_) => Method::MergeTree,
             BuildParams::Hybrid(_) => Method::Hybrid,
+            BuildParams::Amg(_) => Method::Amg,
         }
     }
 }
@@ -129,6 +146,7 @@ impl Default for MethodSettings {
             voxel: VoxelSettings::default(),
             merge_tree: MergeTreeSettings::default(),
             hybrid: HybridSettings::default(),
+            amg: AmgSettings::default(),
             threshold: Threshold::default(),
         }
     }
@@ -144,6 +162,7 @@ impl MethodSettings {
         settings.threshold = settings.threshold.sanitized();
         settings.merge_tree = settings.merge_tree.sanitized();
         settings.hybrid = settings.hybrid.sanitized();
+        settings.amg = settings.amg.sanitized();
         Some(settings)
     }
 
@@ -158,6 +177,7 @@ impl MethodSettings {
             }),
             Method::MergeTree => BuildParams::MergeTree(self.merge_tree.sanitized().options()),
             Method::Hybrid => BuildParams::Hybrid(self.hybrid.sanitized()),
+            Method::Amg => BuildParams::Amg(self.amg.build_params()),
         }
     }
 

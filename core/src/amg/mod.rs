@@ -286,6 +286,20 @@ impl Hierarchy for AmgHierarchy {
         };
         self.primitives(level).draw_set(Some(view.eye))
     }
+
+    /// A fixed level draws the same primitives from every view (only their
+    /// front-to-back order changes, which order-independent blending ignores).
+    fn view_key(&self, _view: &View, _tolerance: Tolerance) -> Option<u64> {
+        self.level.map(|l| l as u64)
+    }
+
+    /// `amg_level`: the level to draw, or a negative number for the
+    /// tolerance's choice.
+    fn set_runtime(&mut self, params: &serde_json::Value) {
+        if let Some(l) = params.get("amg_level").and_then(|v| v.as_i64()) {
+            self.set_level(usize::try_from(l).ok());
+        }
+    }
 }
 
 #[cfg(test)]
