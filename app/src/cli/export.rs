@@ -22,6 +22,9 @@ enum ExportMethod {
     /// Levels of the voxel pyramid (resolution halves, filter doubles), each
     /// certified against the input mesh by the two-sided bound.
     Voxel,
+    /// AMG levels of the mesh's vertices as textured splats (PNG in the file);
+    /// each LOD's bound is its largest domain plane error (points to plane).
+    Amg,
 }
 
 #[derive(Args, Debug)]
@@ -275,9 +278,29 @@ fn export_one(
     file: &Path,
     output: &Path,
 ) -> Result<serde_json::Value, CliError> {
-    let mesh = load_mesh(file, &args.input)?;
+    let loaded = io::load(file, &args.input.load_options()?, &Progress::new())?;
+    // AMG takes point sets too; every other method needs a triangle mesh.
+    let mut point_set = None;
+    let (mesh, bounds) = match loaded.model {
+        Model::Mesh(m) => {
+            let b = m.bounds();
+            (m, b)
+        }
+        Model::Points(p) if args.method == ExportMethod::Amg => {
+            let b = p.bounds();
+            point_set = Some(p);
+            (lodstudio_core::TriMesh::default(), b)
+        }
+        other => {
+            return Err(CliError::BadInput(format!(
+                "{}: this method needs a triangle mesh, not a {}",
+                file.display(),
+                other.kind()
+            )));
+        }
+    };
     let start = std::time::Instant::now();
-    let diag = mesh.bounds().diagonal();
+    let diag = bounds.diagonal();
     // The bounding box's circumscribed sphere bounds the object.
     let radius = 0.5 * diag;
     // p pixels at coverage C: e = p · 2r / (H · C).
@@ -288,6 +311,14 @@ fn export_one(
             cut_lods(args, items, &mesh, pixels_to_error)?
         }
         ExportMethod::Voxel => voxel_lods(args, items, &mesh, pixels_to_error)?,
+        ExportMethod::Amg => {
+            let points = match point_set {
+                Some(p) => p,
+                None => lodstudio_core::amg::point_set(&Model::Mesh(mesh.clone()))
+                    .ok_or_else(|| CliError::BadInput("no points to decompose".into()))?,
+            };
+            amg_lods(items, &points, pixels_to_error)?
+        }
     };
     // Decreasing quality: increasing bound, then decreasing primitive count.
     lods.sort_by(|a, b| {
@@ -552,6 +583,57 @@ fn voxel_lods(
                     mesh: m.clone(),
                     ..Default::default()
                 },
+            })
+        })
+        .collect()
+}
+
+/// AMG: the multiscale of the mesh's vertices; an error item takes the
+/// coarsest level whose every domain's plane error meets it, a ratio the
+/// finest level with at most that share of the points as domains.
+fn amg_lods(
+    items: &[(String, LodTolerance)],
+    points: &lodstudio_core::PointSet,
+    pixels_to_error: impl Fn(f32) -> f32,
+) -> Result<Vec<Lod>, CliError> {
+    use lodstudio_core::amg::{self, AmgError, AmgOptions};
+    let progress = Progress::new();
+    let ms = amg::decompose(points, &AmgOptions::default(), &progress).map_err(|e| match e {
+        AmgError::BadInput(m) => CliError::BadInput(m),
+        AmgError::Cancelled => CliError::Failure("cancelled".into()),
+    })?;
+    let mut radii = ms.radii.clone();
+    radii.sort_by(f32::total_cmp);
+    let texel = radii.get(radii.len() / 2).copied().unwrap_or(0.0);
+    let diag = points.bounds().diagonal();
+    let mut levels = Vec::new();
+    for l in 1..ms.levels() {
+        let prims = amg::primitives(&ms, l, texel, &progress)
+            .map_err(|_| CliError::Failure("cancelled".into()))?;
+        let bound = prims.errors.iter().copied().fold(0.0f32, f32::max);
+        levels.push((prims.draw_set(None), bound));
+    }
+    items
+        .iter()
+        .map(|(label, item)| {
+            let fits = |(set, b): &(DrawSet, f32)| match *item {
+                LodTolerance::Relative(f) => *b <= f * diag,
+                LodTolerance::Pixels(p) => *b <= pixels_to_error(p),
+                LodTolerance::Ratio(r) => {
+                    set.splats.len() as f64 <= r as f64 * points.positions.len() as f64
+                }
+            };
+            let found = match item {
+                LodTolerance::Ratio(_) => levels.iter().find(|l| fits(l)),
+                _ => levels.iter().rev().find(|l| fits(l)),
+            };
+            let (set, bound) = found.ok_or_else(|| {
+                CliError::BadInput(format!("--lods {label}: no AMG level is that fine"))
+            })?;
+            Ok(Lod {
+                label: label.clone(),
+                bound: *bound,
+                set: set.clone(),
             })
         })
         .collect()
