@@ -808,7 +808,8 @@ impl StudioApp {
             Method::Voxel => {
                 serde_json::json!({"resolution": m.voxel.resolution, "radius": m.voxel.radius})
             }
-            Method::EdgeCollapse | Method::Amg => serde_json::json!({}),
+            Method::Amg => serde_json::json!({"k": m.amg.k}),
+            Method::EdgeCollapse => serde_json::json!({}),
         };
         live.save(&params)
     }
@@ -1075,7 +1076,7 @@ impl StudioApp {
                 self.export_dialog(ui.ctx());
             }
             let can_save = self.export.is_none()
-                && self.result.as_ref().is_some_and(|b| b.live.is_some() && !matches!(b.method(), Method::EdgeCollapse | Method::Amg));
+                && self.result.as_ref().is_some_and(|b| b.live.is_some() && b.method() != Method::EdgeCollapse);
             let save = ui
                 .add_enabled(can_save, egui::Button::new("Save hierarchy…"))
                 .on_hover_text("Save the built hierarchy (versioned, checksummed .lodh) to reopen it later without rebuilding.")

@@ -91,6 +91,23 @@ fn reopened_hierarchies_cut_exactly_as_built() {
     assert_eq!(level0["triangles"], direct["levels"][0]["triangles"]);
     let between = lodstudio_json(&["cut", v.to_str().unwrap(), "--at", "0.5"]);
     assert!(between["triangles"].as_u64() < level0["triangles"].as_u64());
+
+    // AMG multiscale: a looser plane error draws fewer, larger splats.
+    let a = temp("octahedron.lodh");
+    lodstudio_json(&[
+        "amg",
+        "builtin:octahedron-points",
+        "--save",
+        a.to_str().unwrap(),
+        "--force",
+    ]);
+    let fine = lodstudio_json(&["cut", a.to_str().unwrap(), "--error", "1.8%"]);
+    let coarse = lodstudio_json(&["cut", a.to_str().unwrap(), "--error", "8%"]);
+    assert_eq!(fine["method"], "amg");
+    assert!(
+        coarse["splats"].as_u64() < fine["splats"].as_u64(),
+        "{coarse} {fine}"
+    );
 }
 
 #[test]

@@ -34,6 +34,7 @@ pub fn reopen(path: &Path) -> Result<Reopened, LoadError> {
         "hybrid" => Method::Hybrid,
         "mergetree" => Method::MergeTree,
         "voxel" => Method::Voxel,
+        "amg" => Method::Amg,
         other => {
             return Err(bad(format!(
                 "a {other} hierarchy, which the studio cannot show"
@@ -72,7 +73,11 @@ impl Reopened {
                 v.radius = number("radius").unwrap_or(v.radius as f64) as f32;
                 methods.voxel = methods.voxel.sanitized();
             }
-            Method::EdgeCollapse | Method::Amg => {}
+            Method::Amg => {
+                methods.amg.k = number("k").map_or(methods.amg.k, |k| k as usize);
+                methods.amg = methods.amg.sanitized();
+            }
+            Method::EdgeCollapse => {}
         }
         methods
     }

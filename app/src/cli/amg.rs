@@ -28,6 +28,8 @@ pub struct AmgArgs {
     #[arg(long, value_name = "A.mtx")]
     matrix_out: Option<PathBuf>,
     #[command(flatten)]
+    save: SaveArgs,
+    #[command(flatten)]
     report: ReportArgs,
     #[command(flatten)]
     input: InputArgs,
@@ -46,6 +48,7 @@ pub fn run(args: AmgArgs) -> Result<(), CliError> {
             "--texel must be a length > 0, got {t}"
         )));
     }
+    args.save.check(args.report.force)?;
     for out in [&args.output, &args.matrix_out].into_iter().flatten() {
         check_output(out, args.report.force)?;
     }
@@ -80,6 +83,12 @@ pub fn run(args: AmgArgs) -> Result<(), CliError> {
     let prims = amg::primitives(&ms, level, texel, &progress)
         .map_err(|_| CliError::Failure("cancelled".into()))?;
     let seconds_primitives = start.elapsed().as_secs_f64();
+    if args.save.save.is_some() {
+        args.save.write(
+            &amg::AmgHierarchy::new(ms.clone(), texel),
+            serde_json::json!({"k": args.k, "file": args.file.display().to_string()}),
+        )?;
+    }
     if let Some(out) = &args.matrix_out {
         amg::write_matrix_market(&ms, out)
             .map_err(|e| CliError::BadInput(format!("{}: cannot write: {e}", out.display())))?;

@@ -12,7 +12,7 @@ use crate::progress::{Cancelled, Progress};
 /// Parameters of the Ruge–Stüben setup. θ = 0.5 rather than the usual 0.25:
 /// with it the octahedron's creases stay weak couplings down to one domain per
 /// face (§2.3, Fig. 5c); compare with PyAMG at the same θ.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct RugeStuben {
     /// j strongly influences i when −a_ij ≥ θ·max_k(−a_ik).
     pub theta: f64,
@@ -33,7 +33,7 @@ impl Default for RugeStuben {
 
 /// The AMG hierarchy: `operators[0]` = A, `operators[l+1]` = P_lᵀ A_l P_l with
 /// `prolongations[l]` mapping level l+1 to level l.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 pub struct Coarsening {
     pub operators: Vec<CsMat<f64>>,
     pub prolongations: Vec<CsMat<f64>>,

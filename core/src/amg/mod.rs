@@ -28,7 +28,7 @@ pub use primitive::{Primitives, primitives};
 
 /// User parameters of the decomposition (§6: neighbourhood size; τ and the
 /// neighbour fraction are the paper's fixed values).
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct AmgOptions {
     /// k_min of §2.1 (the paper uses 50–100).
     pub k: usize,
@@ -77,7 +77,7 @@ impl From<Cancelled> for AmgError {
 
 /// The built multiscale: the points, their classifier values, the stiffness
 /// matrix and the AMG hierarchy.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 pub struct Multiscale {
     pub points: PointSet,
     /// C_ε of every point (eq. 3), for colouring.
@@ -258,9 +258,38 @@ impl AmgHierarchy {
     }
 }
 
+impl Multiscale {
+    /// Whether the parts agree in size (a reopened file's is checked before use).
+    pub fn is_consistent(&self) -> bool {
+        let n = self.points.positions.len();
+        let ops = &self.coarsening.operators;
+        let pro = &self.coarsening.prolongations;
+        n > 0
+            && self.radii.len() == n
+            && self.classifier.len() == n
+            && ops.first().is_some_and(|a| a.rows() == n)
+            && ops.iter().all(|a| a.rows() == a.cols())
+            && pro.len() + 1 == ops.len()
+            && pro
+                .iter()
+                .zip(ops.windows(2))
+                .all(|(p, a)| p.rows() == a[0].rows() && p.cols() == a[1].rows())
+    }
+}
+
 impl Hierarchy for AmgHierarchy {
     fn method(&self) -> &'static str {
         "amg"
+    }
+
+    fn save(&self, params: &serde_json::Value) -> Option<Vec<u8>> {
+        let mut params = params.clone();
+        params["texel"] = serde_json::json!(self.texel);
+        Some(crate::io::hierarchy_file::save(
+            "amg",
+            &params,
+            &self.multiscale,
+        ))
     }
 
     fn select(&mut self, view: &View, tolerance: Tolerance) -> DrawSet {

@@ -174,7 +174,8 @@ pub fn load<T: DeserializeOwned>(
 }
 
 /// Reopens any saved hierarchy, ready to cut: a hybrid MRG, a merge tree
-/// (with the default criteria; the studio sets its own) or a voxel pyramid.
+/// (with the default criteria; the studio sets its own), a voxel pyramid or
+/// an AMG multiscale.
 pub fn reopen(
     bytes: &[u8],
 ) -> Result<(Header, Box<dyn crate::cut::Hierarchy>), HierarchyFileError> {
@@ -211,10 +212,32 @@ pub fn reopen(
             }
             Box::new(crate::voxel::pyramid::PyramidCut::new(pyramid, 0.0))
         }
+        "amg" => {
+            let (_, ms) = load::<crate::amg::Multiscale>(bytes, "amg")?;
+            if !ms.is_consistent() {
+                return Err(HierarchyFileError::Corrupt {
+                    what: "multiscale",
+                    why: "points, radii and operators disagree in size".into(),
+                });
+            }
+            let texel = header
+                .params
+                .get("texel")
+                .and_then(|t| t.as_f64())
+                .unwrap_or(0.0) as f32;
+            let texel = if texel.is_finite() && texel > 0.0 {
+                texel
+            } else {
+                let mut r = ms.radii.clone();
+                r.sort_by(f32::total_cmp);
+                r[r.len() / 2]
+            };
+            Box::new(crate::amg::AmgHierarchy::new(ms, texel))
+        }
         other => {
             return Err(HierarchyFileError::WrongMethod {
                 found: other.to_string(),
-                expected: "hybrid, mergetree or voxel".into(),
+                expected: "hybrid, mergetree, voxel or amg".into(),
             });
         }
     };
