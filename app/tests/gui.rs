@@ -395,8 +395,8 @@ fn dropped_file_opens_and_becomes_recent() {
         .input_mut()
         .dropped_files
         .push(std::sync::Arc::new(Dropped(file.clone())));
+    // The tiny file may load within the first frame already: wait either way.
     harness.step();
-    assert!(harness.state().is_loading());
     wait_for_load(&mut harness);
 
     assert_eq!(harness.state().summary().map(|s| s.triangles), Some(4));
