@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Runs the whole test suite on a fresh machine: installs the software renderer the
 # GUI tests draw with (Mesa's lavapipe Vulkan driver; llvmpipe GL is the fallback)
-# when it is missing, then `cargo test --workspace`.
+# when it is missing, then `cargo test --workspace --no-fail-fast`.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -19,4 +19,4 @@ unset DISPLAY WAYLAND_DISPLAY
 export XDG_RUNTIME_DIR="${XDG_RUNTIME_DIR:-$(mktemp -d)}"
 chmod 700 "$XDG_RUNTIME_DIR"
 export CARGO_INCREMENTAL=0 CARGO_TERM_COLOR=never
-exec cargo test --workspace "$@"
+exec cargo test --workspace --no-fail-fast "$@"
