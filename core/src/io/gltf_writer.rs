@@ -212,23 +212,33 @@ impl GltfWriter {
         self.textures.len() - 1
     }
 
-    /// One primitive per translucent layer, innermost first.
-    fn layers(&mut self, set: &DrawSet) -> Vec<Value> {
+    /// One child node per translucent layer (a separate mesh each, as
+    /// translucent meshes are drawn one after another), innermost first.
+    fn layers(&mut self, set: &DrawSet) -> Vec<usize> {
         let mut out = Vec::new();
-        for layer in &set.layers {
+        for (i, layer) in set.layers.iter().enumerate() {
             let alpha = layer.alpha.clamp(0.0, 1.0);
             let m = self.material(json!({
                 "name": format!("isodensity {:.3}", layer.isodensity),
                 "pbrMetallicRoughness": {"baseColorFactor": [1.0, 1.0, 1.0, alpha], "metallicFactor": 0.0, "roughnessFactor": 0.8},
                 "alphaMode": if alpha >= 1.0 { "OPAQUE" } else { "BLEND" },
             }));
-            out.extend(self.triangles(&layer.mesh, m));
+            let mut node = json!({"name": format!("layer{i}")});
+            if let Some(primitive) = self.triangles(&layer.mesh, m) {
+                self.meshes.push(json!({"primitives": [primitive]}));
+                node["mesh"] = json!(self.meshes.len() - 1);
+            }
+            self.nodes.push(node);
+            out.push(self.nodes.len() - 1);
         }
         out
     }
 
     /// A node named `name` showing `set` (a node without a mesh when empty).
     pub fn node(&mut self, name: &str, set: &DrawSet) -> usize {
+        // The node's id first: its layers' child nodes come after it.
+        let id = self.nodes.len();
+        self.nodes.push(json!({"name": name}));
         let surface = if set.mesh.triangles.is_empty() {
             0
         } else {
@@ -237,15 +247,16 @@ impl GltfWriter {
         let mut primitives: Vec<Value> = Vec::new();
         primitives.extend(self.triangles(&set.mesh, surface));
         primitives.extend(self.points(set));
-        primitives.extend(self.layers(set));
         primitives.extend(self.splats(set));
-        let mut node = json!({"name": name});
+        let layers = self.layers(set);
         if !primitives.is_empty() {
             self.meshes.push(json!({"primitives": primitives}));
-            node["mesh"] = json!(self.meshes.len() - 1);
+            self.nodes[id]["mesh"] = json!(self.meshes.len() - 1);
         }
-        self.nodes.push(node);
-        self.nodes.len() - 1
+        if !layers.is_empty() {
+            self.nodes[id]["children"] = json!(layers);
+        }
+        id
     }
 
     /// The glTF document (scene = `scene_nodes`) and its binary buffer.
@@ -289,9 +300,10 @@ pub fn write_draw_set_glb(set: &DrawSet) -> Vec<u8> {
 
 /// An LOD chain as a GLB with the `MSFT_lod` node extension.
 ///
-/// `lods` are in decreasing quality (LOD0 first). Node `i` holds `lods[i]`;
-/// the scene lists node 0 only, whose `extensions.MSFT_lod.ids` are `[1, 2,
-/// …]` (the lower LODs, in decreasing quality) and whose
+/// `lods` are in decreasing quality (LOD0 first), one node each (node `i`
+/// unless earlier LODs have layer child nodes); the scene lists LOD0's node
+/// only (node 0), whose `extensions.MSFT_lod.ids` are the lower LODs' nodes in
+/// decreasing quality and whose
 /// `extras.MSFT_screencoverage` is `coverages`: one value per LOD, LOD0's
 /// included, each the smallest screen coverage at which that LOD is shown
 /// (see [`super::gltf::lod_screen_coverages`]). Loaders without the extension
@@ -307,14 +319,16 @@ pub fn write_lod_chain(lods: &[DrawSet], coverages: &[f32]) -> Vec<u8> {
         "one screen coverage per LOD, LOD0's included"
     );
     let mut w = GltfWriter::new();
-    for (i, lod) in lods.iter().enumerate() {
-        w.node(&format!("lod{i}"), lod);
-    }
-    let (mut doc, bin) = w.document(&[0]);
+    let ids: Vec<usize> = lods
+        .iter()
+        .enumerate()
+        .map(|(i, lod)| w.node(&format!("lod{i}"), lod))
+        .collect();
+    let (mut doc, bin) = w.document(&ids[..1]);
     if lods.len() > 1 {
-        let ids: Vec<usize> = (1..lods.len()).collect();
-        doc["nodes"][0]["extensions"] = json!({"MSFT_lod": {"ids": ids}});
-        doc["nodes"][0]["extras"] = json!({"MSFT_screencoverage": coverages});
+        let root = ids[0];
+        doc["nodes"][root]["extensions"] = json!({"MSFT_lod": {"ids": ids[1..]}});
+        doc["nodes"][root]["extras"] = json!({"MSFT_screencoverage": coverages});
         let mut used = doc["extensionsUsed"]
             .as_array()
             .cloned()
