@@ -1141,6 +1141,11 @@ impl StudioApp {
                             "Only edge collapse certifies a bound per triangle.",
                         );
                     });
+                    ui.separator();
+                    ui.checkbox(&mut self.viewport.fly, "Fly").on_hover_text(
+                        "Walk through the scene: W/S forward and back, A/D sideways, Q/E down \
+                         and up (Shift: faster); drag to look around.",
+                    );
                 });
             });
         if has_result {

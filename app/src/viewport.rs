@@ -536,6 +536,9 @@ pub struct Viewport {
     too_large: Arc<AtomicBool>,
     /// Pixel size of the last shown rect (what cuts are taken for).
     size_px: [u32; 2],
+    /// Fly mode: W/A/S/D/Q/E walk the camera through the scene and dragging
+    /// looks around the eye instead of orbiting the target.
+    pub fly: bool,
 }
 
 impl Viewport {
@@ -556,6 +559,7 @@ impl Viewport {
             has_wgpu: render_state.is_some(),
             too_large: Arc::new(AtomicBool::new(false)),
             size_px: [1024, 768],
+            fly: false,
         }
     }
 
@@ -745,6 +749,23 @@ impl Viewport {
         response
     }
 
+    /// Turns the view about the eye (fly mode's look), keeping the eye still.
+    fn look(&mut self, delta: egui::Vec2) {
+        let eye = self.eye();
+        self.orbit(-delta);
+        self.target = eye - (self.eye() - self.target);
+    }
+
+    /// Fly mode's walk: `dir` in camera axes (right, up, forward), scaled to
+    /// half the scene's radius per second (shift: four times faster).
+    fn walk(&mut self, dir: Vec3, seconds: f32, fast: bool) {
+        let (_, radius) = self.scene_sphere();
+        let forward = (self.target - self.eye()).normalize_or(Vec3::NEG_Z);
+        let (right, up) = self.basis();
+        let speed = 0.5 * radius * if fast { 4.0 } else { 1.0 };
+        self.target += (right * dir.x + up * dir.y + forward * dir.z) * speed * seconds;
+    }
+
     fn handle_input(&mut self, ui: &egui::Ui, response: &egui::Response, rect: egui::Rect) {
         use egui::PointerButton::{Middle, Primary, Secondary};
         let delta = response.drag_delta();
@@ -755,7 +776,27 @@ impl Viewport {
         {
             self.pan(delta, rect.height());
         } else if response.dragged_by(Primary) {
-            self.orbit(delta);
+            if self.fly {
+                self.look(delta);
+            } else {
+                self.orbit(delta);
+            }
+        }
+        // Keys walk unless a text field has the keyboard.
+        if self.fly && ui.memory(|m| m.focused().is_none()) {
+            let (dir, dt) = ui.input(|i| {
+                let key = |k: egui::Key| if i.key_down(k) { 1.0 } else { 0.0 };
+                let dir = Vec3::new(
+                    key(egui::Key::D) - key(egui::Key::A),
+                    key(egui::Key::E) - key(egui::Key::Q),
+                    key(egui::Key::W) - key(egui::Key::S),
+                );
+                (dir, i.stable_dt.min(0.1))
+            });
+            if dir != Vec3::ZERO {
+                self.walk(dir, dt, shift);
+                ui.ctx().request_repaint();
+            }
         }
         if response.hovered() {
             let (scroll, pinch) = ui.input(|i| (i.smooth_scroll_delta.y, i.zoom_delta()));

@@ -1155,3 +1155,32 @@ fn amg_splats_are_drawn_and_the_level_moves_live() {
         "one domain per face at the coarsest level"
     );
 }
+
+/// Fly mode: W walks the eye forward through the scene, the view direction
+/// kept; the camera never orbits the target while flying.
+#[test]
+fn fly_mode_walks_through_the_scene() {
+    let mut harness = studio(None);
+    wait_for_load(&mut harness);
+    harness.get_by_label("Fly").click();
+    harness.run();
+    assert!(harness.state().viewport().fly);
+    let before = harness.state().viewport().core_view();
+    harness.key_down(egui::Key::W);
+    for _ in 0..10 {
+        harness.step();
+    }
+    harness.key_up(egui::Key::W);
+    harness.step();
+    let after = harness.state().viewport().core_view();
+    let moved = after.eye - before.eye;
+    assert!(moved.length() > 0.0, "the eye moved");
+    assert!(
+        moved.normalize().dot(before.forward()) > 0.99,
+        "straight ahead"
+    );
+    assert!(
+        (after.forward() - before.forward()).length() < 1e-4,
+        "still looking the same way"
+    );
+}
