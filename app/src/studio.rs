@@ -12,6 +12,7 @@ use std::sync::mpsc::{self, Receiver, TryRecvError};
 use std::time::Duration;
 
 use lodstudio_core::builtins;
+use lodstudio_core::cut::Picked;
 use lodstudio_core::implicit::MeshSolid;
 use lodstudio_core::io::{LoadError, LoadOptions, Loaded, load};
 use lodstudio_core::progress::{Cancelled, Progress};
@@ -155,6 +156,8 @@ pub struct StudioApp {
     frame_ms: f32,
     /// What the running build has made so far (shown while it runs).
     preview: Option<Arc<Scene>>,
+    /// What the last click hit on the live cut.
+    picked: Option<String>,
     /// A build asked for but not started yet.
     build_at: Option<BuildRequest>,
     /// Why the last build request failed, shown under the Build button.
@@ -212,6 +215,7 @@ impl StudioApp {
             result: None,
             frame_ms: 0.0,
             preview: None,
+            picked: None,
             build_at: None,
             build_note: None,
             view: View::Simplified,
@@ -332,6 +336,7 @@ impl StudioApp {
             self.update_cut();
             self.sync_view();
             self.viewport.show(ui);
+            self.pick();
         });
         self.frame_ms = ctx.input(|i| i.unstable_dt) * 1000.0;
 
@@ -709,6 +714,47 @@ impl StudioApp {
     fn build_failed(&mut self, message: String) {
         self.error(message.clone());
         self.build_note = Some(message);
+    }
+
+    /// Inspects what a click in the viewport hit on the live cut.
+    fn pick(&mut self) {
+        let Some((origin, dir)) = self.viewport.take_click() else {
+            return;
+        };
+        let Some(live) = self.result.as_ref().and_then(|b| b.live.as_ref()) else {
+            return;
+        };
+        let diagonal = self
+            .current
+            .as_ref()
+            .map_or(1.0, |c| c.scene.bounds().diagonal())
+            .max(f32::MIN_POSITIVE);
+        let bound = |e: f32| format!("bound {} ({:.3} %)", build::length(e), 100.0 * e / diagonal);
+        self.picked = Some(match live.draw_set().pick(origin, dir) {
+            None => "nothing under the pointer".to_string(),
+            Some((_, Picked::Triangle { index, error })) => match error {
+                Some(e) => format!("triangle {index}, {}", bound(e)),
+                None => format!("triangle {index}"),
+            },
+            Some((
+                _,
+                Picked::Point {
+                    index,
+                    radius,
+                    error,
+                },
+            )) => {
+                format!(
+                    "point {index}, radius {}, {}",
+                    build::length(radius),
+                    bound(error)
+                )
+            }
+            Some((_, Picked::Splat { index, domain })) => format!("splat {index}, domain {domain}"),
+            Some((_, Picked::Layer { layer, isodensity })) => {
+                format!("voxel layer {layer}, isodensity {isodensity:.3}")
+            }
+        });
     }
 
     /// The latest intermediate state of the running build, as a scene.
@@ -1228,6 +1274,7 @@ impl StudioApp {
                             ("bound at target", format!("{pixels:.2} px"), "The cut's bound projected at the camera's target distance."),
                             ("cut time", format!("{:.2} ms", st.cut_ms), "Time of the last re-selection of the cut and its scene."),
                             ("frame time", format!("{:.1} ms", self.frame_ms), "Time between the last two frames of the studio."),
+                            ("picked", self.picked.clone().unwrap_or_else(|| "click the model".into()), "What the last click in the viewport hit on the cut: its type, index and error bound (or domain, layer)."),
                         ] {
                             ui.label(label).on_hover_text(hint);
                             ui.label(value);

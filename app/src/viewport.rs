@@ -536,6 +536,8 @@ pub struct Viewport {
     too_large: Arc<AtomicBool>,
     /// Pixel size of the last shown rect (what cuts are taken for).
     size_px: [u32; 2],
+    /// The ray (eye, direction) under the last click, until taken.
+    click: Option<(Vec3, Vec3)>,
     /// Fly mode: W/A/S/D/Q/E walk the camera through the scene and dragging
     /// looks around the eye instead of orbiting the target.
     pub fly: bool,
@@ -559,6 +561,7 @@ impl Viewport {
             has_wgpu: render_state.is_some(),
             too_large: Arc::new(AtomicBool::new(false)),
             size_px: [1024, 768],
+            click: None,
             fly: false,
         }
     }
@@ -749,6 +752,23 @@ impl Viewport {
         response
     }
 
+    /// The ray under the last click in the viewport (taken once).
+    pub fn take_click(&mut self) -> Option<(Vec3, Vec3)> {
+        self.click.take()
+    }
+
+    /// The ray through the point `pos` of the viewport `rect`.
+    fn ray(&self, pos: egui::Pos2, rect: egui::Rect) -> (Vec3, Vec3) {
+        let ndc = glam::Vec2::new(
+            (pos.x - rect.min.x) / rect.width().max(1.0) * 2.0 - 1.0,
+            1.0 - (pos.y - rect.min.y) / rect.height().max(1.0) * 2.0,
+        );
+        let inverse = self.view_proj(self.aspect).inverse();
+        let near = inverse.project_point3(ndc.extend(0.0));
+        let far = inverse.project_point3(ndc.extend(1.0));
+        (self.eye(), (far - near).normalize_or(Vec3::NEG_Z))
+    }
+
     /// Turns the view about the eye (fly mode's look), keeping the eye still.
     fn look(&mut self, delta: egui::Vec2) {
         let eye = self.eye();
@@ -809,6 +829,10 @@ impl Viewport {
         }
         if response.double_clicked() {
             self.frame_all();
+        } else if response.clicked()
+            && let Some(pos) = response.interact_pointer_pos()
+        {
+            self.click = Some(self.ray(pos, rect));
         }
     }
 }

@@ -978,6 +978,20 @@ fn merge_tree_refines_live_with_the_threshold_and_the_camera() {
     assert_eq!(drawn_triangles(&harness), Some(far.triangles));
     assert!(has_label(&harness, "cut triangles"));
 
+    // Clicking the model inspects the triangle under the pointer.
+    let center = harness.get_by_label("3D viewport").rect().center();
+    harness.hover_at(center);
+    press(&harness, center, egui::PointerButton::Primary, true);
+    press(&harness, center, egui::PointerButton::Primary, false);
+    harness.run();
+    assert!(
+        harness
+            .query_all_by_label_contains(", bound ")
+            .next()
+            .is_some(),
+        "the picked triangle and its bound are shown"
+    );
+
     // Criteria switch at run time: no rebuild.
     harness.get_by_label("back faces coarser").click();
     harness.run();
