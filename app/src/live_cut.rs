@@ -104,6 +104,8 @@ pub struct LiveCut {
     hierarchy: Box<dyn Hierarchy>,
     last: Option<(Option<u64>, View, Tolerance)>,
     runtime: serde_json::Value,
+    /// Colour triangles and points by their error bound (a heat map).
+    heat: bool,
     scene: Arc<Scene>,
     draw: DrawSet,
     pub stats: CutStats,
@@ -115,6 +117,7 @@ impl LiveCut {
             hierarchy,
             last: None,
             runtime: serde_json::Value::Null,
+            heat: false,
             scene: Arc::new(Scene::from_draw_set(&DrawSet::default(), None, &[])),
             draw: DrawSet::default(),
             stats: CutStats::default(),
@@ -125,6 +128,38 @@ impl LiveCut {
 
     pub fn method(&self) -> &'static str {
         self.hierarchy.method()
+    }
+
+    /// The scene of the current cut, heat-coloured by error when asked.
+    fn make_scene(&self) -> Scene {
+        let d = &self.draw;
+        if !self.heat {
+            return Scene::from_draw_set(d, None, &d.layer_order);
+        }
+        let max = d.error_bound.max(f32::MIN_POSITIVE);
+        let colors: Vec<glam::Vec3> = d
+            .triangle_errors
+            .iter()
+            .map(|e| crate::heatmap::linear(e / max))
+            .collect();
+        let mut heated = d.clone();
+        for p in &mut heated.points {
+            p.color = crate::heatmap::linear(p.error / max);
+        }
+        Scene::from_draw_set(&heated, Some(&colors), &d.layer_order)
+    }
+
+    /// Whether the cut carries error bounds per triangle or point to colour by.
+    pub fn has_errors(&self) -> bool {
+        !self.draw.triangle_errors.is_empty() || !self.draw.points.is_empty()
+    }
+
+    /// Switches the heat map on or off (rebuilds the scene only, not the cut).
+    pub fn set_heat(&mut self, heat: bool) {
+        if heat != self.heat {
+            self.heat = heat;
+            self.scene = Arc::new(self.make_scene());
+        }
     }
 
     /// Hands the hierarchy new run-time parameters (when they differ), and

@@ -776,7 +776,9 @@ impl StudioApp {
     /// Re-selects a live cut for the camera and the threshold (only when the
     /// hierarchy says they change it).
     fn update_cut(&mut self) {
+        let heat = self.heat && self.view == View::Simplified;
         if let Some(live) = self.result.as_mut().and_then(|b| b.live.as_mut()) {
+            live.set_heat(heat);
             let mut view = self.viewport.core_view();
             let mt = &self.methods.merge_tree;
             if let Some(light) = mt.light() {
@@ -1156,7 +1158,10 @@ impl StudioApp {
     /// Original / simplified toggle and the heat-map switch above the viewport.
     fn view_bar(&mut self, ui: &mut egui::Ui) {
         let has_result = self.result.is_some();
-        let has_heat = self.result.as_ref().is_some_and(|r| r.heat.is_some());
+        let has_heat = self
+            .result
+            .as_ref()
+            .is_some_and(|r| r.heat.is_some() || r.live.as_ref().is_some_and(|l| l.has_errors()));
         // Without a result the original is what is shown, whatever was chosen.
         let mut shown = if has_result {
             self.view
@@ -1180,11 +1185,13 @@ impl StudioApp {
                             egui::Checkbox::new(&mut heat, "Colour by certified bound"),
                         )
                         .on_hover_text(
-                            "Colour each simplified triangle by its certified Hausdorff \
-                             bound, from dark (near 0) to yellow (the largest).",
+                            "Colour each simplified triangle (and each point of a hybrid cut) \
+                             by its guaranteed error bound, from dark (near 0) to yellow (the \
+                             largest).",
                         )
                         .on_disabled_hover_text(
-                            "Only edge collapse certifies a bound per triangle.",
+                            "Only edge collapse, hybrid and merge-tree cuts carry a bound per \
+                             primitive.",
                         );
                     });
                     ui.separator();
@@ -1289,6 +1296,13 @@ impl StudioApp {
                     ui.add_space(4.0);
                     ui.label("certified bound per triangle");
                     heatmap::legend(ui, &build::length(heat.max));
+                } else if let Some(live) = built.live.as_ref().filter(|l| l.has_errors())
+                    && self.heat
+                    && self.view == View::Simplified
+                {
+                    ui.add_space(4.0);
+                    ui.label("error bound per primitive");
+                    heatmap::legend(ui, &build::length(live.stats.error_bound));
                 }
             }
         });

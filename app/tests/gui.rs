@@ -1083,6 +1083,14 @@ fn hybrid_cut_mixes_triangles_and_points_live() {
     assert!(coarse.triangles + coarse.points < fine.triangles + fine.points);
     let (covered, _) = viewport_pixels(&mut harness, "studio_hybrid");
     assert!(covered > 0.02, "{:.1}%", covered * 100.0);
+    // The heat map colours the cut by its bounds without re-cutting it.
+    let (_, plain) = viewport_pixels(&mut harness, "studio_hybrid_plain");
+    harness.get_by_label("Colour by certified bound").click();
+    harness.run();
+    assert!(has_label(&harness, "error bound per primitive"), "a legend");
+    assert_eq!(cut_stats(&harness).cuts, coarse.cuts);
+    let (_, heated) = viewport_pixels(&mut harness, "studio_hybrid_heat");
+    assert_ne!(plain, heated, "the colours changed");
     // Object-space cuts ignore the camera: orbiting re-cuts nothing.
     harness.state_mut().viewport_mut().yaw += 1.0;
     harness.run();
