@@ -182,6 +182,24 @@ pub fn build_observed(
             tri_producer[*t as usize] = node;
         }
         collapses.push((node, c.removed, c.added));
+        if collapses.len().is_multiple_of(256) && progress.wants_preview() {
+            // Watching the build: the triangles left and the points made so far.
+            progress.publish(crate::cut::DrawSet {
+                mesh: col.mesh().0,
+                points: mrg
+                    .points
+                    .iter()
+                    .map(|p| crate::cut::CutPoint {
+                        center: p.center,
+                        radius: p.radius,
+                        color: p.color,
+                        normal: p.normal,
+                        error: p.center_error,
+                    })
+                    .collect(),
+                ..Default::default()
+            });
+        }
         if collapses.len().is_multiple_of(1024) {
             progress.set_fraction((n - col.triangle_count()) as f32 / n.max(1) as f32);
             progress.check()?;
@@ -576,5 +594,27 @@ pub(crate) mod tests {
             )
             .is_err()
         );
+    }
+}
+
+#[cfg(test)]
+mod watched {
+    use super::*;
+
+    /// A watched build publishes its primitives as they appear.
+    #[test]
+    fn watched_builds_publish_triangles_and_points() {
+        let mesh = crate::builtins::torus(1.0, 0.3, 48, 24);
+        let progress = Progress::new();
+        progress.watch();
+        let opts = HybridOptions {
+            kappa: 8.0,
+            tau: 5.0,
+            ..Default::default()
+        };
+        build(&mesh, &opts, &progress).unwrap();
+        let state = progress.take_preview().expect("an intermediate state");
+        let n = state.mesh.triangles.len();
+        assert!(n > 0 && n < mesh.triangles.len(), "{n}");
     }
 }
