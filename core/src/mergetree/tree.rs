@@ -158,6 +158,20 @@ pub(crate) fn build_levels(
         progress.check()?;
         progress.set_fraction(1.0 - present as f32 / n.max(1) as f32);
         out.levels.push(present);
+        if progress.wants_preview() {
+            // Watching the build: this level's mesh (vertices keep their
+            // positions; merged children simply leave the triangles).
+            let mut alive: Vec<u32> = b.vtris.iter().flatten().copied().collect();
+            alive.sort_unstable();
+            alive.dedup();
+            progress.publish(crate::cut::DrawSet {
+                mesh: TriMesh::new(
+                    mesh.positions.clone(),
+                    alive.iter().map(|&t| b.tris[t as usize]).collect(),
+                ),
+                ..Default::default()
+            });
+        }
         if present <= opts.min_vertices {
             break;
         }
@@ -255,4 +269,23 @@ pub(crate) fn build_levels(
     out.triangles = b.tris;
     out.origin = b.origin;
     Ok(out)
+}
+
+#[cfg(test)]
+mod watched {
+    use super::*;
+
+    /// A watched build publishes a level's mesh: the input's vertices, and
+    /// no more triangles than the input.
+    #[test]
+    fn watched_builds_publish_a_level() {
+        let mesh = crate::builtins::torus(1.0, 0.3, 32, 16);
+        let progress = Progress::new();
+        progress.watch();
+        crate::mergetree::build(&mesh, &Default::default(), &progress).unwrap();
+        let state = progress.take_preview().expect("a level");
+        assert_eq!(state.mesh.positions, mesh.positions);
+        let n = state.mesh.triangles.len();
+        assert!(n > 0 && n <= mesh.triangles.len(), "{n}");
+    }
 }
