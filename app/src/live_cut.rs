@@ -84,6 +84,19 @@ impl Threshold {
     }
 }
 
+/// How a cut is drawn: coloured by its error bounds (a heat map, first) or by
+/// primitive type, and with splat outlines (AMG paper Fig. 12).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct CutStyle {
+    pub heat: bool,
+    pub by_type: bool,
+    pub outlines: bool,
+}
+
+/// Colours of the primitive types (linear RGB); splats keep their textures.
+const TRIANGLE_COLOR: glam::Vec3 = glam::Vec3::new(0.85, 0.55, 0.25);
+const POINT_COLOR: glam::Vec3 = glam::Vec3::new(0.25, 0.55, 0.95);
+
 /// What the last cut drew and what it cost.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct CutStats {
@@ -104,8 +117,8 @@ pub struct LiveCut {
     hierarchy: Box<dyn Hierarchy>,
     last: Option<(Option<u64>, View, Tolerance)>,
     runtime: serde_json::Value,
-    /// Colour triangles and points by their error bound (a heat map).
-    heat: bool,
+    /// How the cut is coloured and outlined.
+    style: CutStyle,
     scene: Arc<Scene>,
     draw: DrawSet,
     pub stats: CutStats,
@@ -117,8 +130,8 @@ impl LiveCut {
             hierarchy,
             last: None,
             runtime: serde_json::Value::Null,
-            heat: false,
-            scene: Arc::new(Scene::from_draw_set(&DrawSet::default(), None, &[])),
+            style: CutStyle::default(),
+            scene: Arc::new(Scene::from_draw_set(&DrawSet::default(), None, &[], false)),
             draw: DrawSet::default(),
             stats: CutStats::default(),
         };
@@ -130,23 +143,31 @@ impl LiveCut {
         self.hierarchy.method()
     }
 
-    /// The scene of the current cut, heat-coloured by error when asked.
+    /// The scene of the current cut in the current style.
     fn make_scene(&self) -> Scene {
         let d = &self.draw;
-        if !self.heat {
-            return Scene::from_draw_set(d, None, &d.layer_order);
+        let outlines = self.style.outlines;
+        if !self.style.heat && !self.style.by_type {
+            return Scene::from_draw_set(d, None, &d.layer_order, outlines);
         }
         let max = d.error_bound.max(f32::MIN_POSITIVE);
-        let colors: Vec<glam::Vec3> = d
-            .triangle_errors
-            .iter()
-            .map(|e| crate::heatmap::linear(e / max))
-            .collect();
-        let mut heated = d.clone();
-        for p in &mut heated.points {
-            p.color = crate::heatmap::linear(p.error / max);
+        let colors: Vec<glam::Vec3> = if self.style.heat {
+            d.triangle_errors
+                .iter()
+                .map(|e| crate::heatmap::linear(e / max))
+                .collect()
+        } else {
+            vec![TRIANGLE_COLOR; d.mesh.triangles.len()]
+        };
+        let mut styled = d.clone();
+        for p in &mut styled.points {
+            p.color = if self.style.heat {
+                crate::heatmap::linear(p.error / max)
+            } else {
+                POINT_COLOR
+            };
         }
-        Scene::from_draw_set(&heated, Some(&colors), &d.layer_order)
+        Scene::from_draw_set(&styled, Some(&colors), &d.layer_order, outlines)
     }
 
     /// Whether the cut carries error bounds per triangle or point to colour by.
@@ -154,10 +175,10 @@ impl LiveCut {
         !self.draw.triangle_errors.is_empty() || !self.draw.points.is_empty()
     }
 
-    /// Switches the heat map on or off (rebuilds the scene only, not the cut).
-    pub fn set_heat(&mut self, heat: bool) {
-        if heat != self.heat {
-            self.heat = heat;
+    /// Changes how the cut is drawn (rebuilds the scene only, not the cut).
+    pub fn set_style(&mut self, style: CutStyle) {
+        if style != self.style {
+            self.style = style;
             self.scene = Arc::new(self.make_scene());
         }
     }
@@ -184,11 +205,7 @@ impl LiveCut {
         }
         let start = Instant::now();
         self.draw = self.hierarchy.select(view, tolerance);
-        self.scene = Arc::new(Scene::from_draw_set(
-            &self.draw,
-            None,
-            &self.draw.layer_order,
-        ));
+        self.scene = Arc::new(self.make_scene());
         let d = &self.draw;
         self.stats = CutStats {
             triangles: d.mesh.triangles.len(),

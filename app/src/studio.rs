@@ -22,6 +22,7 @@ use crate::build::{self, Built};
 use crate::export::{self, Saved};
 use crate::heatmap;
 use crate::job::{Job, Poll};
+use crate::live_cut::CutStyle;
 use crate::panels::voxel::VolumeGrid;
 use crate::panels::{BuildParams, Method, MethodSettings};
 use crate::viewport::{Scene, Viewport};
@@ -158,6 +159,9 @@ pub struct StudioApp {
     preview: Option<Arc<Scene>>,
     /// What the last click hit on the live cut.
     picked: Option<String>,
+    /// Live cuts coloured by primitive type, and splats outlined.
+    by_type: bool,
+    outlines: bool,
     /// A build asked for but not started yet.
     build_at: Option<BuildRequest>,
     /// Why the last build request failed, shown under the Build button.
@@ -216,6 +220,8 @@ impl StudioApp {
             frame_ms: 0.0,
             preview: None,
             picked: None,
+            by_type: false,
+            outlines: false,
             build_at: None,
             build_note: None,
             view: View::Simplified,
@@ -766,6 +772,7 @@ impl StudioApp {
                         &state,
                         None,
                         &state.layer_order,
+                        false,
                     )));
                 }
             }
@@ -778,7 +785,11 @@ impl StudioApp {
     fn update_cut(&mut self) {
         let heat = self.heat && self.view == View::Simplified;
         if let Some(live) = self.result.as_mut().and_then(|b| b.live.as_mut()) {
-            live.set_heat(heat);
+            live.set_style(CutStyle {
+                heat,
+                by_type: self.by_type && self.view == View::Simplified,
+                outlines: self.outlines,
+            });
             let mut view = self.viewport.core_view();
             let mt = &self.methods.merge_tree;
             if let Some(light) = mt.light() {
@@ -1194,6 +1205,20 @@ impl StudioApp {
                              primitive.",
                         );
                     });
+                    ui.separator();
+                    let live = self.result.as_ref().is_some_and(|b| b.live.is_some());
+                    ui.add_enabled(
+                        live,
+                        egui::Checkbox::new(&mut self.by_type, "Colour by type"),
+                    )
+                    .on_hover_text("Triangles orange, points blue; splats keep their textures.")
+                    .on_disabled_hover_text("Build a hierarchy first.");
+                    ui.add_enabled(
+                        live,
+                        egui::Checkbox::new(&mut self.outlines, "Splat outlines"),
+                    )
+                    .on_hover_text("Outline every domain primitive (AMG paper, Fig. 12).")
+                    .on_disabled_hover_text("Build a hierarchy first.");
                     ui.separator();
                     ui.checkbox(&mut self.viewport.fly, "Fly").on_hover_text(
                         "Walk through the scene: W/S forward and back, A/D sideways, Q/E down \

@@ -26,6 +26,8 @@ const CLAY: Vec3 = Vec3::new(0.62, 0.56, 0.50);
 /// Colour of points without colours and of volume bounding boxes (linear RGB).
 const POINT_COLOR: Vec3 = Vec3::new(0.45, 0.62, 0.80);
 const BOX_COLOR: Vec3 = Vec3::new(0.80, 0.80, 0.80);
+/// Colour of splat outlines (linear RGB).
+const OUTLINE_COLOR: Vec3 = Vec3::new(0.05, 0.05, 0.05);
 /// Colour of translucent voxel layers (linear RGB; alpha from eq. 4).
 const LAYER_COLOR: Vec3 = Vec3::new(0.70, 0.62, 0.52);
 /// Background of the viewport (linear RGB).
@@ -284,6 +286,7 @@ impl Scene {
         set: &DrawSet,
         triangle_colors: Option<&[Vec3]>,
         layer_order: &[[u32; 2]],
+        splat_outlines: bool,
     ) -> Scene {
         let mut parts = Vec::new();
         let mut bounds = Aabb::EMPTY;
@@ -328,6 +331,29 @@ impl Scene {
                 indices: splats.1,
                 atlas: splats.2,
             });
+            if splat_outlines {
+                // Each quad's border (AMG paper Fig. 12).
+                let lines = set
+                    .splats
+                    .iter()
+                    .flat_map(|s| {
+                        let [a, b] = s.axes;
+                        let c = [
+                            s.center - a - b,
+                            s.center + a - b,
+                            s.center + a + b,
+                            s.center - a + b,
+                        ];
+                        (0..4).flat_map(move |i| [c[i], c[(i + 1) % 4]])
+                    })
+                    .map(|p| MeshVertex {
+                        position: p.to_array(),
+                        normal: [0.0; 3],
+                        color: OUTLINE_COLOR.to_array(),
+                    })
+                    .collect();
+                parts.push(Geometry::Lines(lines));
+            }
         }
         Scene { parts, bounds }
     }

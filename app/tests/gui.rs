@@ -1083,8 +1083,16 @@ fn hybrid_cut_mixes_triangles_and_points_live() {
     assert!(coarse.triangles + coarse.points < fine.triangles + fine.points);
     let (covered, _) = viewport_pixels(&mut harness, "studio_hybrid");
     assert!(covered > 0.02, "{:.1}%", covered * 100.0);
-    // The heat map colours the cut by its bounds without re-cutting it.
+    // Colour by type: triangles and points in two colours, no re-cut.
     let (_, plain) = viewport_pixels(&mut harness, "studio_hybrid_plain");
+    harness.get_by_label("Colour by type").click();
+    harness.run();
+    let (_, typed) = viewport_pixels(&mut harness, "studio_hybrid_types");
+    assert_ne!(plain, typed);
+    assert_eq!(cut_stats(&harness).cuts, coarse.cuts);
+    harness.get_by_label("Colour by type").click();
+    harness.run();
+    // The heat map colours the cut by its bounds without re-cutting it.
     harness.get_by_label("Colour by certified bound").click();
     harness.run();
     assert!(has_label(&harness, "error bound per primitive"), "a legend");
@@ -1165,6 +1173,12 @@ fn amg_splats_are_drawn_and_the_level_moves_live() {
     let (covered, shades) = viewport_pixels(&mut harness, "studio_splats");
     assert!(covered > 0.05, "splats drawn: {:.1}%", covered * 100.0);
     assert!(shades > 8, "textured, blended colours: {shades}");
+    // Outlines (Fig. 12) and colours by type redraw the same cut.
+    harness.get_by_label("Splat outlines").click();
+    harness.run();
+    let (_, outlined) = viewport_pixels(&mut harness, "studio_splat_outlines");
+    assert_ne!(outlined, shades, "outlines drawn");
+    assert_eq!(cut_stats(&harness).cuts, fine.cuts, "no re-cut");
     let last = result_row(&harness, "AMG levels").parse::<usize>().unwrap() - 1;
     harness
         .get_by_role_and_label(egui::Role::Slider, "AMG level")
