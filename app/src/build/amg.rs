@@ -1,16 +1,13 @@
 //! Building the AMG multiscale of a point set on a worker (AMG paper §2) and
 //! handing it to the studio as a live cut of domain primitives (§3–4).
 
-use std::sync::Arc;
 use std::time::Instant;
 
 use lodstudio_core::amg::{self, AmgError, AmgHierarchy, AmgOptions};
 use lodstudio_core::io::Model;
 use lodstudio_core::progress::{Cancelled, Progress};
-use lodstudio_core::view::{Tolerance, View};
 
-use super::{Built, Lod, Plot, Row};
-use crate::live_cut::LiveCut;
+use super::{Built, Plot, Row};
 use crate::panels::BuildParams;
 use crate::panels::amg::AmgSettings;
 
@@ -86,19 +83,14 @@ pub fn run(
         },
     ];
     progress.stage("domain primitives");
-    let bounds = points.bounds();
-    let view = View::orbit(bounds.center(), bounds.diagonal(), 0.6, 0.4);
     let mut hierarchy = AmgHierarchy::new(ms, texel);
     hierarchy.set_level(Some(settings.level));
-    let live = LiveCut::new(Box::new(hierarchy), &view, Tolerance::Pixels(1.0));
-    Ok(Ok(Built {
-        lod: Lod::Cut,
-        params: BuildParams::Amg(settings),
+    Ok(Ok(Built::live(
+        Box::new(hierarchy),
+        points.bounds(),
+        BuildParams::Amg(settings),
         seconds,
-        scene: Arc::clone(live.scene()),
-        heat: None,
         rows,
-        plots: vec![plot],
-        live: Some(live),
-    }))
+        vec![plot],
+    )))
 }

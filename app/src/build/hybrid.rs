@@ -8,10 +8,8 @@ use std::time::Instant;
 use lodstudio_core::hybrid::{self, HybridCut, NodeKind};
 use lodstudio_core::io::Model;
 use lodstudio_core::progress::{Cancelled, Progress};
-use lodstudio_core::view::{Tolerance, View};
 
-use super::{Built, Lod, Plot, Row, mesh_of};
-use crate::live_cut::LiveCut;
+use super::{Built, Plot, Row, mesh_of};
 use crate::panels::BuildParams;
 use crate::panels::hybrid::HybridSettings;
 
@@ -94,17 +92,12 @@ pub fn run(
         },
     ];
     progress.stage("first cut");
-    let bounds = mesh.bounds();
-    let view = View::orbit(bounds.center(), bounds.diagonal(), 0.6, 0.4);
-    let live = LiveCut::new(Box::new(HybridCut::new(mrg)), &view, Tolerance::Pixels(1.0));
-    Ok(Ok(Built {
-        lod: Lod::Cut,
-        params: BuildParams::Hybrid(settings.sanitized()),
+    Ok(Ok(Built::live(
+        Box::new(HybridCut::new(mrg)),
+        mesh.bounds(),
+        BuildParams::Hybrid(settings.sanitized()),
         seconds,
-        scene: Arc::clone(live.scene()),
-        heat: None,
         rows,
-        plots: vec![plot],
-        live: Some(live),
-    }))
+        vec![plot],
+    )))
 }

@@ -7,10 +7,8 @@ use std::time::Instant;
 use lodstudio_core::io::Model;
 use lodstudio_core::mergetree::{self, MergeTreeView};
 use lodstudio_core::progress::{Cancelled, Progress};
-use lodstudio_core::view::{Tolerance, View};
 
-use super::{Built, Lod, Plot, Row, mesh_of};
-use crate::live_cut::LiveCut;
+use super::{Built, Plot, Row, mesh_of};
 use crate::panels::BuildParams;
 use crate::panels::mergetree::MergeTreeSettings;
 
@@ -36,13 +34,6 @@ pub fn run(
     let levels = tree.levels().to_vec();
     let dependencies = tree.dependency_count();
     let merges = tree.merges().len();
-    let bounds = mesh.bounds();
-    let view = View::orbit(bounds.center(), bounds.diagonal(), 0.6, 0.4);
-    let live = LiveCut::new(
-        Box::new(MergeTreeView::new(tree, settings.criteria())),
-        &view,
-        Tolerance::Pixels(1.0),
-    );
     let rows = vec![
         Row {
             label: "tree levels",
@@ -81,14 +72,12 @@ pub fn run(
                 .collect(),
         )],
     };
-    Ok(Ok(Built {
-        lod: Lod::Cut,
-        params: BuildParams::MergeTree(settings.options()),
+    Ok(Ok(Built::live(
+        Box::new(MergeTreeView::new(tree, settings.criteria())),
+        mesh.bounds(),
+        BuildParams::MergeTree(settings.options()),
         seconds,
-        scene: Arc::clone(live.scene()),
-        heat: None,
         rows,
-        plots: vec![plot],
-        live: Some(live),
-    }))
+        vec![plot],
+    )))
 }

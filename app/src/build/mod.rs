@@ -99,6 +99,34 @@ pub struct Built {
 }
 
 impl Built {
+    /// A finished hierarchy build, cut live from a first view of `bounds`
+    /// (the studio re-cuts it for its own camera at the next frame).
+    pub fn live(
+        hierarchy: Box<dyn lodstudio_core::cut::Hierarchy>,
+        bounds: lodstudio_core::Aabb,
+        params: BuildParams,
+        seconds: f32,
+        rows: Vec<Row>,
+        plots: Vec<Plot>,
+    ) -> Built {
+        let view = lodstudio_core::view::View::orbit(bounds.center(), bounds.diagonal(), 0.6, 0.4);
+        let live = LiveCut::new(
+            hierarchy,
+            &view,
+            lodstudio_core::view::Tolerance::Pixels(1.0),
+        );
+        Built {
+            lod: Lod::Cut,
+            params,
+            seconds,
+            scene: Arc::clone(live.scene()),
+            heat: None,
+            rows,
+            plots,
+            live: Some(live),
+        }
+    }
+
     pub fn method(&self) -> Method {
         self.params.method()
     }
