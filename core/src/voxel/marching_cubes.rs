@@ -22,12 +22,8 @@ use crate::progress::{Cancelled, Progress};
 /// The iso value for densities in 0..=1 (§4: "an isodensity of 0.5").
 pub const DENSITY_ISO: f32 = 0.5;
 
-/// Cube corner `i` sits at offset `(i & 1, i >> 1 & 1, i >> 2 & 1)`.
-fn corner_offset(i: usize) -> [usize; 3] {
-    [i & 1, (i >> 1) & 1, (i >> 2) & 1]
-}
-
 /// The 12 cube edges as (lower corner, axis); the upper corner is `lower + 1 << axis`.
+/// Cube corner `i` sits at offset `(i & 1, i >> 1 & 1, i >> 2 & 1)`.
 const EDGES: [(usize, usize); 12] = [
     (0, 0),
     (2, 0),
@@ -188,6 +184,8 @@ fn build_entry(case: usize, joined: u8) -> CaseEntry {
 /// ambiguous faces only (other bits are masked off before lookup).
 struct CaseTable {
     ambiguous: [u8; 256],
+    /// Bit e: cube edge e joins an inside and an outside corner.
+    crossings: [u16; 256],
     entries: Vec<CaseEntry>,
 }
 
@@ -204,15 +202,74 @@ fn table() -> &'static CaseTable {
                 }
             }
         }
-        CaseTable { ambiguous, entries }
+        let crossings = std::array::from_fn(|case| {
+            EDGES.iter().enumerate().fold(0, |m, (e, &(lo, axis))| {
+                let crosses = (case >> lo & 1) != (case >> (lo | 1 << axis) & 1);
+                m | (crosses as u16) << e
+            })
+        });
+        CaseTable {
+            ambiguous,
+            crossings,
+            entries,
+        }
     })
 }
 
+/// Side bits of a row of samples: some sample inside (≥ iso), some outside.
+const INSIDE: u8 = 1;
+const OUTSIDE: u8 = 2;
+const MIXED: u8 = INSIDE | OUTSIDE;
+
+/// Corner `i` of a cell reads sample row `i >> 1` of its four rows (y, z offsets
+/// (0,0), (1,0), (0,1), (1,1)); `SPREAD` moves the four rows' bits at one x to the
+/// even case bits, so `SPREAD[col(x)] | SPREAD[col(x + 1)] << 1` is the case.
+const SPREAD: [u8; 16] = {
+    let mut t = [0u8; 16];
+    let mut c = 0;
+    while c < 16 {
+        t[c] = (c & 1 | (c & 2) << 1 | (c & 4) << 2 | (c & 8) << 3) as u8;
+        c += 1;
+    }
+    t
+};
+
 /// Edge crossings of one grid plane z = k: x- and y-edges in the plane and z-edges
-/// from it to the next, sorted by key `(y * nx + x) * 3 + axis`.
+/// from it to the next, with keys `(y * nx + x) * 3 + axis` in increasing order and
+/// a sentinel key after the last. Row y's crossings start at `row_start[y]`, so a
+/// cell finds its crossings with a forward-only cursor instead of a search.
 struct PlaneCrossings {
+    row_start: Vec<u32>,
     keys: Vec<u64>,
     positions: Vec<Vec3>,
+}
+
+/// A forward-only reader of one row's crossings, advanced as cells move along x.
+struct RowCursor<'a> {
+    /// The plane's keys and positions from the row's first crossing on.
+    keys: &'a [u64],
+    positions: &'a [Vec3],
+    /// Global vertex index of `keys[0]`.
+    base: u32,
+    at: usize,
+}
+
+impl RowCursor<'_> {
+    /// The vertex and position of the crossing `key` of the cell whose keys start
+    /// at `floor`. Keys below `floor` are passed for good, so cells are visited in
+    /// increasing x; a cell's up to six keys on the row follow one another.
+    fn find(&mut self, floor: u64, key: u64) -> (u32, Vec3) {
+        while self.keys[self.at] < floor {
+            self.at += 1;
+        }
+        let i = self.at
+            + self.keys[self.at..]
+                .iter()
+                .take(6)
+                .position(|&k| k == key)
+                .expect("a crossing of this cell");
+        (self.base + i as u32, self.positions[i])
+    }
 }
 
 /// Triangles of one layer of cells; indices with `CENTRE` set point into `centres`.
@@ -227,7 +284,8 @@ const CENTRE: u32 = 1 << 31;
 /// inside). Normals point towards lower values; a volume whose border samples are
 /// all below `iso` gives a closed, edge-manifold mesh. Runs in parallel over z
 /// slabs; vertices are numbered by plane and grid-edge order, so the result is
-/// deterministic.
+/// deterministic. Rows of samples entirely on one side are classified once and
+/// skipped, so empty space costs one comparison per sample.
 pub fn marching_cubes(
     volume: &Volume,
     iso: f32,
@@ -240,7 +298,7 @@ pub fn marching_cubes(
     progress.stage("marching cubes");
     let table = table();
     let data = &volume.data;
-    let at = |x: usize, y: usize, z: usize| data[x + nx * (y + ny * z)];
+    let row = |r: usize| &data[r * nx..(r + 1) * nx];
     let point = |x: usize, y: usize, z: usize| {
         volume.origin + volume.spacing * Vec3::new(x as f32, y as f32, z as f32)
     };
@@ -251,42 +309,73 @@ pub fn marching_cubes(
         progress.set_fraction(d as f32 / total);
     };
 
+    // Row r = y + ny * z: which sides of the iso level its samples lie on.
+    let sides: Vec<u8> = data
+        .par_chunks(nx)
+        .map(|samples| {
+            samples
+                .iter()
+                .fold(0, |s, &v| s | if v >= iso { INSIDE } else { OUTSIDE })
+        })
+        .collect();
+
     let planes: Vec<PlaneCrossings> = (0..nz)
         .into_par_iter()
         .map(|z| {
             progress.check()?;
-            let mut keys = Vec::new();
-            let mut positions = Vec::new();
+            let mut plane = PlaneCrossings {
+                row_start: Vec::with_capacity(ny + 1),
+                keys: Vec::new(),
+                positions: Vec::new(),
+            };
             for y in 0..ny {
+                plane.row_start.push(plane.keys.len() as u32);
+                let r = y + ny * z;
+                let row_key = (y * nx * 3) as u64;
+                // A grid edge can cross only between rows that are not all on one side.
+                let along = [
+                    (sides[r] == MIXED).then_some(r),
+                    (y + 1 < ny && sides[r] | sides[r + 1] == MIXED).then_some(r + 1),
+                    (z + 1 < nz && sides[r] | sides[r + ny] == MIXED).then_some(r + ny),
+                ];
+                if along.iter().all(Option::is_none) {
+                    continue;
+                }
+                let here = row(r);
                 for x in 0..nx {
-                    let v0 = at(x, y, z);
-                    let p0 = point(x, y, z);
-                    let ends = [
-                        (x + 1 < nx).then(|| (x + 1, y, z)),
-                        (y + 1 < ny).then(|| (x, y + 1, z)),
-                        (z + 1 < nz).then(|| (x, y, z + 1)),
-                    ];
-                    for (axis, end) in ends.into_iter().enumerate() {
-                        let Some((x1, y1, z1)) = end else { continue };
-                        let v1 = at(x1, y1, z1);
+                    let v0 = here[x];
+                    for (axis, other) in along.iter().enumerate() {
+                        let Some(other) = *other else { continue };
+                        let (x1, y1, z1) = match axis {
+                            0 if x + 1 < nx => (x + 1, y, z),
+                            0 => continue,
+                            1 => (x, y + 1, z),
+                            _ => (x, y, z + 1),
+                        };
+                        let v1 = row(other)[x1];
                         if (v0 >= iso) != (v1 >= iso) {
                             // Clamped so vertices of different edges stay apart when
                             // a sample equals the iso value exactly.
                             let t = ((iso - v0) / (v1 - v0)).clamp(1e-4, 1.0 - 1e-4);
-                            keys.push(((y * nx + x) * 3 + axis) as u64);
-                            positions.push(p0.lerp(point(x1, y1, z1), t));
+                            plane.keys.push(row_key + (x * 3 + axis) as u64);
+                            plane
+                                .positions
+                                .push(point(x, y, z).lerp(point(x1, y1, z1), t));
                         }
                     }
                 }
             }
+            plane.row_start.push(plane.keys.len() as u32);
+            // Above every key, so a cursor stops at the end of the plane.
+            plane.keys.push(u64::MAX);
             tick();
-            Ok(PlaneCrossings { keys, positions })
+            Ok(plane)
         })
         .collect::<Result<_, Cancelled>>()?;
     let mut plane_offset = Vec::with_capacity(nz + 1);
     plane_offset.push(0u32);
     for p in &planes {
-        plane_offset.push(plane_offset.last().unwrap() + p.keys.len() as u32);
+        plane_offset.push(plane_offset.last().unwrap() + p.positions.len() as u32);
     }
 
     let layers: Vec<LayerTriangles> = (0..nz - 1)
@@ -298,48 +387,64 @@ pub fn marching_cubes(
                 centres: Vec::new(),
             };
             let mut slots = [0u32; 12];
+            let mut slot_positions = [Vec3::ZERO; 12];
+            let row_key = |r: usize| ((r % ny) * nx * 3) as u64;
             for y in 0..ny - 1 {
+                // The cell row's four sample rows, in corner order (i >> 1).
+                let r = y + ny * z;
+                let rows = [r, r + 1, r + ny, r + ny + 1];
+                if rows.iter().fold(0, |s, &r| s | sides[r]) != MIXED {
+                    continue;
+                }
+                let samples = rows.map(row);
+                let mut cursors = rows.map(|r| {
+                    let plane = &planes[r / ny];
+                    let start = plane.row_start[r % ny] as usize;
+                    RowCursor {
+                        keys: &plane.keys[start..],
+                        positions: &plane.positions[start..],
+                        base: plane_offset[r / ny] + start as u32,
+                        at: 0,
+                    }
+                });
+                let column =
+                    |x: usize| (0..4).fold(0, |c, j| c | ((samples[j][x] >= iso) as usize) << j);
+                let mut left = column(0);
                 for x in 0..nx - 1 {
-                    let values: [f32; 8] = std::array::from_fn(|i| {
-                        let [ox, oy, oz] = corner_offset(i);
-                        at(x + ox, y + oy, z + oz)
-                    });
-                    let case = (0..8).fold(0, |c, i| c | ((values[i] >= iso) as usize) << i);
+                    let right = column(x + 1);
+                    let case = (SPREAD[left] | SPREAD[right] << 1) as usize;
+                    left = right;
                     if case == 0 || case == 255 {
                         continue;
                     }
                     let amb = table.ambiguous[case];
                     let mut joined = 0u8;
-                    for f in 0..6 {
-                        if amb >> f & 1 == 1 {
-                            let [a, b, c, d] = face_corners(f).map(|i| values[i]);
-                            // Asymptotic decider: the bilinear saddle of the face.
-                            let saddle = (a * c - b * d) / (a + c - b - d);
-                            joined |= ((saddle >= iso) as u8) << f;
+                    if amb != 0 {
+                        let values: [f32; 8] =
+                            std::array::from_fn(|i| samples[i >> 1][x + (i & 1)]);
+                        for f in 0..6 {
+                            if amb >> f & 1 == 1 {
+                                let [a, b, c, d] = face_corners(f).map(|i| values[i]);
+                                // Asymptotic decider: the bilinear saddle of the face.
+                                let saddle = (a * c - b * d) / (a + c - b - d);
+                                joined |= ((saddle >= iso) as u8) << f;
+                            }
                         }
                     }
                     let entry = &table.entries[case | (joined as usize) << 8];
-                    for (e, &(lo, axis)) in EDGES.iter().enumerate() {
-                        let [ox, oy, oz] = corner_offset(lo);
-                        let plane = &planes[z + oz];
-                        let key = (((y + oy) * nx + x + ox) * 3 + axis) as u64;
-                        if let Ok(i) = plane.keys.binary_search(&key) {
-                            slots[e] = plane_offset[z + oz] + i as u32;
-                        }
+                    let mut crossing = table.crossings[case];
+                    while crossing != 0 {
+                        let e = crossing.trailing_zeros() as usize;
+                        crossing &= crossing - 1;
+                        let (lo, axis) = EDGES[e];
+                        let j = lo >> 1;
+                        let key = row_key(rows[j]) + ((x + (lo & 1)) * 3 + axis) as u64;
+                        (slots[e], slot_positions[e]) =
+                            cursors[j].find(row_key(rows[j]) + (x * 3) as u64, key);
                     }
                     let centre_base = out.centres.len() as u32;
                     for ring in &entry.centres {
-                        let sum: Vec3 = ring
-                            .iter()
-                            .map(|&e| {
-                                let (lo, axis) = EDGES[e as usize];
-                                let [ox, oy, oz] = corner_offset(lo);
-                                let plane = &planes[z + oz];
-                                let key = (((y + oy) * nx + x + ox) * 3 + axis) as u64;
-                                let i = plane.keys.binary_search(&key).expect("crossing");
-                                plane.positions[i]
-                            })
-                            .sum();
+                        let sum: Vec3 = ring.iter().map(|&e| slot_positions[e as usize]).sum();
                         out.centres.push(sum / ring.len() as f32);
                     }
                     for t in &entry.triangles {
@@ -359,7 +464,9 @@ pub fn marching_cubes(
         .collect::<Result<_, Cancelled>>()?;
 
     let edge_vertices = *plane_offset.last().unwrap();
-    let mut positions = Vec::with_capacity(edge_vertices as usize);
+    let mut positions = Vec::with_capacity(
+        edge_vertices as usize + layers.iter().map(|l| l.centres.len()).sum::<usize>(),
+    );
     for p in planes {
         positions.extend(p.positions);
     }
@@ -466,6 +573,7 @@ mod tests {
                     (case >> lo & 1) != (case >> (lo | 1 << axis) & 1)
                 };
                 for k in 0..12 {
+                    assert_eq!(t.crossings[case] >> k & 1 == 1, crossing(k));
                     let used = e.triangles.iter().any(|tri| tri.contains(&(k as u8)));
                     assert_eq!(used, crossing(k), "case {case:#b} edge {k}");
                 }
