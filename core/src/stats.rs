@@ -14,6 +14,9 @@ pub struct ModelSummary {
     pub triangles: usize,
     pub points: usize,
     pub parts: u32,
+    /// Distinct materials of the input (0 when it had none), textured ones apart.
+    pub materials: usize,
+    pub textured_materials: usize,
     pub components: usize,
     pub boundary_loops: usize,
     pub non_manifold_edges: usize,
@@ -35,6 +38,8 @@ impl ModelSummary {
             triangles: 0,
             points: 0,
             parts: 0,
+            materials: 0,
+            textured_materials: 0,
             components: 0,
             boundary_loops: 0,
             non_manifold_edges: 0,
@@ -51,6 +56,14 @@ impl ModelSummary {
                 s.vertices = t.vertices;
                 s.triangles = t.triangles;
                 s.parts = m.part_count();
+                if let Some(ms) = &m.materials {
+                    s.materials = ms.table.len();
+                    s.textured_materials = ms
+                        .table
+                        .iter()
+                        .filter(|m| m.base_color_texture.is_some())
+                        .count();
+                }
                 s.components = t.components.len();
                 s.boundary_loops = t.boundary_loops;
                 s.non_manifold_edges = t.non_manifold_edges;
@@ -84,6 +97,8 @@ impl ModelSummary {
             "kind": self.kind,
             "format": self.format.name(),
             "parts": self.parts,
+            "materials": self.materials,
+            "textured_materials": self.textured_materials,
             "boundary_loops": self.boundary_loops,
             "non_manifold_edges": self.non_manifold_edges,
         });
@@ -121,6 +136,12 @@ impl ModelSummary {
                 out.push(("vertices".into(), self.vertices.to_string()));
                 out.push(("triangles".into(), self.triangles.to_string()));
                 out.push(("parts".into(), self.parts.to_string()));
+                if self.materials > 0 {
+                    out.push((
+                        "materials".into(),
+                        format!("{} ({} textured)", self.materials, self.textured_materials),
+                    ));
+                }
                 out.push(("components".into(), self.components.to_string()));
                 out.push(("boundary loops".into(), self.boundary_loops.to_string()));
                 out.push(("genus".into(), self.genus.to_string()));

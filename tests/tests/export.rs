@@ -120,28 +120,33 @@ fn check_chain(out: &Path, report: &Value) -> Vec<Value> {
         let mesh = doc["nodes"][*node as usize]["mesh"].as_u64().unwrap() as usize;
         let prims = doc["meshes"][mesh]["primitives"].as_array().unwrap();
         let of_mode = |m: u64| prims.iter().find(|p| p["mode"] == m);
-        // Textured quads are the splats; the other triangles the surface.
-        let textured = |p: &&Value| {
+        // Unlit textured quads are the splats; the other triangles the surface,
+        // one primitive per material of the input's.
+        let splat = |p: &&Value| {
             let m = p["material"].as_u64().unwrap_or(u64::MAX) as usize;
-            doc["materials"][m]["pbrMetallicRoughness"]["baseColorTexture"].is_object()
+            doc["materials"][m]["extensions"]["KHR_materials_unlit"].is_object()
         };
         assert_eq!(
-            prims.iter().filter(textured).count() as u64,
+            prims.iter().filter(splat).count() as u64,
             splats[i],
             "lod{i} splats"
         );
-        if let Some(prim) = of_mode(4).filter(|p| !textured(p)) {
-            let acc = prim["indices"].as_u64().unwrap() as usize;
-            assert_eq!(
-                doc["accessors"][acc]["count"].as_u64().unwrap(),
-                3 * triangles[i],
-                "lod{i}"
-            );
+        let surface: Vec<&Value> = prims
+            .iter()
+            .filter(|p| p["mode"] == 4 && !splat(p))
+            .collect();
+        let indices: u64 = surface
+            .iter()
+            .map(|p| {
+                let acc = p["indices"].as_u64().unwrap() as usize;
+                doc["accessors"][acc]["count"].as_u64().unwrap()
+            })
+            .sum();
+        assert_eq!(indices, 3 * triangles[i], "lod{i}");
+        for prim in surface {
             for attr in ["POSITION", "NORMAL"] {
                 assert!(prim["attributes"][attr].is_u64(), "lod{i} has {attr}");
             }
-        } else {
-            assert_eq!(triangles[i], 0, "lod{i}");
         }
         if let Some(prim) = of_mode(0) {
             let acc = prim["attributes"]["POSITION"].as_u64().unwrap() as usize;
@@ -423,5 +428,72 @@ fn hybrid_mergetree_and_voxel_chains_round_trip() {
                 "points in the chain"
             );
         }
+    }
+}
+
+/// The input's materials reach every LOD: the milk truck's four materials (two
+/// sharing one texture atlas) come out with their factors and the very same
+/// image bytes, embedded once, one primitive per material per LOD.
+#[test]
+fn original_materials_and_textures_are_carried_into_every_lod() {
+    let truck = shared_model("CesiumMilkTruck.glb");
+    let input = std::fs::read(&truck).unwrap();
+    let original = gltf::read(&input, None).unwrap();
+    let materials = original.materials.clone().expect("the truck has materials");
+    assert_eq!(materials.table.len(), 4);
+    let atlas = materials.table[0]
+        .base_color_texture
+        .clone()
+        .expect("textured");
+    for method in ["simplify", "mergetree"] {
+        let out = temp(&format!("truck-{method}.glb"));
+        let report = lodstudio_json(&[
+            "export",
+            truck.to_str().unwrap(),
+            "--method",
+            method,
+            "--lods",
+            "0.5%,2%,8%",
+            "-o",
+            out.to_str().unwrap(),
+        ]);
+        let lods = check_chain(&out, &report);
+        let glb = std::fs::read(&out).unwrap();
+        let doc = glb_json(&glb);
+        let names: Vec<&str> = doc["materials"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|m| m["name"].as_str().unwrap())
+            .collect();
+        assert_eq!(
+            names,
+            ["truck", "glass", "window_trim", "wheels"],
+            "{method}"
+        );
+        assert_eq!(doc["images"].as_array().unwrap().len(), 1, "one atlas");
+        for (l, lod) in lods.iter().enumerate() {
+            let prims = doc["meshes"][l]["primitives"].as_array().unwrap();
+            assert!((2..=4).contains(&prims.len()), "{method} LOD {l}: {lod}");
+            let materials: Vec<u64> = prims
+                .iter()
+                .map(|p| p["material"].as_u64().unwrap())
+                .collect();
+            assert!(
+                materials.windows(2).all(|w| w[0] < w[1]),
+                "one primitive per material"
+            );
+            for p in prims {
+                let m = &doc["materials"][p["material"].as_u64().unwrap() as usize];
+                if m["pbrMetallicRoughness"].get("baseColorTexture").is_some() {
+                    assert!(p["attributes"]["TEXCOORD_0"].is_u64(), "textured needs UVs");
+                }
+            }
+        }
+        // LOD0 read back wears the input's materials, image bytes included.
+        let back = gltf::read(&glb, None).unwrap();
+        let got = back.materials.expect("materials read back");
+        assert_eq!(got.table, materials.table, "{method}");
+        assert_eq!(got.table[0].base_color_texture.as_ref(), Some(&atlas));
     }
 }

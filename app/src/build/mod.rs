@@ -39,6 +39,7 @@ static EMPTY: TriMesh = TriMesh {
     colors: None,
     uvs: None,
     parts: None,
+    materials: None,
 };
 
 /// One inspector row, with what it means when hovered.

@@ -59,6 +59,10 @@ pub struct ExportArgs {
     /// Border, seam and non-manifold vertices never move.
     #[arg(long)]
     lock_borders: bool,
+    /// Keep UV/normal seams (textured materials map exactly): vertices are not
+    /// welded across attribute seams, and seam and border vertices never move.
+    #[arg(long, conflicts_with_all = ["weld_tolerance", "no_weld"])]
+    keep_seams: bool,
     /// Hybrid: points per triangle's rendering time (κ).
     #[arg(long, default_value_t = 3.0)]
     kappa: f32,
@@ -120,7 +124,9 @@ fn parse_lods(list: &str) -> Result<Vec<(String, LodTolerance)>, CliError> {
     Ok(out)
 }
 
-pub fn run(args: ExportArgs) -> Result<(), CliError> {
+pub fn run(mut args: ExportArgs) -> Result<(), CliError> {
+    args.input.no_weld |= args.keep_seams;
+    args.lock_borders |= args.keep_seams;
     let items = parse_lods(&args.lods)?;
     for (name, v) in [
         ("--pixels", args.pixels),

@@ -2,12 +2,14 @@
 //! (components, boundary loops, genus) and load-time repair.
 
 pub mod adjacency;
+pub mod material;
 pub mod repair;
 pub mod topology;
 
 use glam::{Vec2, Vec3};
 
 pub use adjacency::Adjacency;
+pub use material::{AlphaMode, Image, Material, Materials};
 pub use repair::{RepairOptions, RepairReport, Weld};
 pub use topology::{ComponentTopology, Topology};
 
@@ -83,6 +85,8 @@ pub struct TriMesh {
     pub uvs: Option<Vec<Vec2>>,
     /// One id per triangle; `None` means a single part.
     pub parts: Option<Vec<u32>>,
+    /// The input's materials, one per part; `None` when it had none.
+    pub materials: Option<Materials>,
 }
 
 impl TriMesh {
@@ -168,6 +172,15 @@ impl TriMesh {
             other.positions.len(),
             Vec2::ZERO,
         );
+        if self.materials.is_some() || other.materials.is_some() {
+            let mut m = self.materials.take().unwrap_or_else(|| {
+                let mut m = Materials::default();
+                m.append(0, None, part_base);
+                m
+            });
+            m.append(part_base, other.materials.as_ref(), other.part_count());
+            self.materials = Some(m);
+        }
         if self.parts.is_some() || other.parts.is_some() || n_self_t > 0 {
             let parts = self.parts.get_or_insert_with(|| vec![0; n_self_t]);
             parts.extend((0..other.triangles.len()).map(|t| part_base + other.part(t)));
@@ -175,6 +188,38 @@ impl TriMesh {
         self.positions.extend_from_slice(&other.positions);
         self.triangles
             .extend(other.triangles.iter().map(|t| t.map(|v| v + base)));
+    }
+
+    /// The triangles `keep` (in that order) with only the vertices they use, and
+    /// their attributes; a single part, no materials.
+    pub fn subset(&self, keep: &[u32]) -> TriMesh {
+        let mut remap = vec![u32::MAX; self.positions.len()];
+        let mut order = Vec::new();
+        let triangles = keep
+            .iter()
+            .map(|&t| {
+                self.triangles[t as usize].map(|v| {
+                    if remap[v as usize] == u32::MAX {
+                        remap[v as usize] = order.len() as u32;
+                        order.push(v as usize);
+                    }
+                    remap[v as usize]
+                })
+            })
+            .collect();
+        let gather = |a: &[_]| order.iter().map(|&v| a[v]).collect::<Vec<_>>();
+        TriMesh {
+            positions: gather(&self.positions),
+            triangles,
+            normals: self.normals.as_deref().map(gather),
+            colors: self.colors.as_deref().map(gather),
+            uvs: self
+                .uvs
+                .as_ref()
+                .map(|u| order.iter().map(|&v| u[v]).collect()),
+            parts: None,
+            materials: None,
+        }
     }
 
     /// Number of distinct part ids (max + 1).

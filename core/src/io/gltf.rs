@@ -1,6 +1,8 @@
-//! glTF 2.0 (`.gltf` + `.bin`, `.glb`) through the gltf crate. Every mesh
-//! instance of the scene graph becomes a part with its node transform applied;
-//! a material's base colour becomes a vertex colour when the primitive has none.
+//! glTF 2.0 (`.gltf` + `.bin`, `.glb`) through the gltf crate. Every material
+//! of every mesh instance of the scene graph becomes a part, with its node
+//! transform applied. Materials are kept (factors and the base-colour texture,
+//! its image bytes as stored) for the exports; for display, the vertex colour is
+//! the base-colour factor times `COLOR_0`.
 //!
 //! Accessor ranges are checked against the buffers before any read (the crate's
 //! readers assume valid data), so hostile files give an error instead of a panic.
@@ -10,7 +12,7 @@ use std::path::Path;
 use glam::{Mat3, Mat4, Vec2, Vec3};
 
 use super::error::{ParseError, ParseResult};
-use crate::geom::TriMesh;
+use crate::geom::{AlphaMode, Image, Material, Materials, TriMesh};
 
 pub fn read(data: &[u8], base: Option<&Path>) -> ParseResult<TriMesh> {
     let g = gltf::Gltf::from_slice(data)
@@ -45,13 +47,29 @@ pub fn read(data: &[u8], base: Option<&Path>) -> ParseResult<TriMesh> {
         }
         if let Some(m) = node.mesh() {
             let mut instance = TriMesh::default();
+            // Primitives of one material make one part, whatever their count.
+            let mut keys: Vec<Option<usize>> = Vec::new();
+            let mut materials = Materials::default();
+            let mut parts = Vec::new();
             for prim in m.primitives() {
                 if let Some(piece) = read_primitive(&prim, &buffers, world)? {
+                    let key = prim.material().index();
+                    let part = match keys.iter().position(|k| *k == key) {
+                        Some(p) => p,
+                        None => {
+                            let material = read_material(&prim.material(), &buffers, base)?;
+                            let i = materials.intern(&material);
+                            materials.of_part.push(i);
+                            keys.push(key);
+                            keys.len() - 1
+                        }
+                    };
+                    parts.extend(std::iter::repeat_n(part as u32, piece.triangles.len()));
                     instance.append(&piece);
                 }
             }
-            // One part per mesh instance, whatever its primitive count.
-            instance.parts = None;
+            instance.parts = (keys.len() > 1).then_some(parts);
+            instance.materials = Some(materials);
             if !instance.triangles.is_empty() {
                 mesh.append(&instance);
             }
@@ -208,12 +226,11 @@ fn read_primitive(
     let colors: Option<Vec<Vec3>> = reader
         .read_colors(0)
         .map(|c| c.into_rgb_f32().map(Vec3::from_array).collect());
+    let [r, g, b, _] = prim.material().pbr_metallic_roughness().base_color_factor();
+    let factor = Vec3::new(r, g, b);
     mesh.colors = match colors {
-        Some(c) if c.len() == n => Some(c),
-        _ => {
-            let [r, g, b, _] = prim.material().pbr_metallic_roughness().base_color_factor();
-            Some(vec![Vec3::new(r, g, b); n])
-        }
+        Some(c) if c.len() == n => Some(c.into_iter().map(|c| c * factor).collect()),
+        _ => Some(vec![factor; n]),
     };
     // A mirroring transform flips the winding; flip it back to keep normals outward.
     if world.determinant() < 0.0 {
@@ -222,6 +239,83 @@ fn read_primitive(
         }
     }
     Ok(Some(mesh))
+}
+
+/// The material of a primitive, its base-colour texture's image included (bytes
+/// as stored: a buffer view, a data URI or a file next to the glTF).
+fn read_material(
+    m: &gltf::Material,
+    buffers: &[gltf::buffer::Data],
+    base: Option<&Path>,
+) -> ParseResult<Material> {
+    let pbr = m.pbr_metallic_roughness();
+    let what = || {
+        format!(
+            "material {}",
+            m.index().map_or("default".into(), |i| i.to_string())
+        )
+    };
+    let texture = match pbr.base_color_texture() {
+        // Only TEXCOORD_0 is carried, so textures on other sets are left out.
+        Some(info) if info.tex_coord() == 0 => {
+            let tex = info.texture();
+            let (bytes, mime_type) = match tex.source().source() {
+                gltf::image::Source::View { view, mime_type } => {
+                    let data = buffers
+                        .get(view.buffer().index())
+                        .map_or(&[][..], |d| &d.0[..]);
+                    let bytes = view
+                        .offset()
+                        .checked_add(view.length())
+                        .and_then(|end| data.get(view.offset()..end))
+                        .ok_or_else(|| {
+                            ParseError::item(what(), "expected its image inside its buffer")
+                        })?;
+                    (bytes.to_vec(), mime_type.to_string())
+                }
+                gltf::image::Source::Uri { uri, mime_type } => {
+                    let data =
+                        gltf::buffer::Data::from_source(gltf::buffer::Source::Uri(uri), base)
+                            .map_err(|e| {
+                                ParseError::item(what(), format!("expected a readable image ({e})"))
+                            })?;
+                    let mime = mime_type.map(str::to_string).unwrap_or_else(|| {
+                        if data.0.starts_with(b"\x89PNG") {
+                            "image/png"
+                        } else {
+                            "image/jpeg"
+                        }
+                        .into()
+                    });
+                    (data.0, mime)
+                }
+            };
+            let sampler = tex.sampler();
+            Some(Image {
+                mime_type,
+                bytes,
+                mag_filter: sampler.mag_filter().map(|f| f.as_gl_enum()),
+                min_filter: sampler.min_filter().map(|f| f.as_gl_enum()),
+                wrap_s: sampler.wrap_s().as_gl_enum(),
+                wrap_t: sampler.wrap_t().as_gl_enum(),
+            })
+        }
+        _ => None,
+    };
+    Ok(Material {
+        name: m.name().map(str::to_string),
+        base_color: pbr.base_color_factor(),
+        metallic: pbr.metallic_factor(),
+        roughness: pbr.roughness_factor(),
+        emissive: m.emissive_factor(),
+        alpha_mode: match m.alpha_mode() {
+            gltf::material::AlphaMode::Opaque => AlphaMode::Opaque,
+            gltf::material::AlphaMode::Mask => AlphaMode::Mask(m.alpha_cutoff().unwrap_or(0.5)),
+            gltf::material::AlphaMode::Blend => AlphaMode::Blend,
+        },
+        double_sided: m.double_sided(),
+        base_color_texture: texture,
+    })
 }
 
 /// Writes one mesh as a binary glTF (GLB): positions, normals (area-weighted
@@ -347,6 +441,76 @@ mod tests {
         assert_eq!(back.positions, m.positions);
         assert!(back.normals.is_some() && back.uvs.is_some());
         assert_eq!(back.colors.as_ref().unwrap()[3], Vec3::new(0.2, 0.5, 0.9));
+    }
+
+    #[test]
+    fn materials_round_trip_one_primitive_per_material_with_their_images() {
+        use crate::geom::{AlphaMode, Image, Material, Materials};
+        let png = super::super::gltf_writer::encode_png(&crate::cut::Texture {
+            width: 2,
+            height: 1,
+            rgba: vec![[255, 0, 0, 255], [0, 0, 255, 128]],
+        });
+        let textured = Material {
+            name: Some("paint".into()),
+            base_color: [1.0, 1.0, 1.0, 1.0],
+            metallic: 0.25,
+            roughness: 0.5,
+            emissive: [0.0, 0.1, 0.0],
+            alpha_mode: AlphaMode::Mask(0.3),
+            double_sided: true,
+            base_color_texture: Some(Image {
+                mime_type: "image/png".into(),
+                bytes: png,
+                mag_filter: Some(9729),
+                min_filter: None,
+                wrap_s: 10497,
+                wrap_t: 33648,
+            }),
+        };
+        let glass = Material {
+            name: Some("glass".into()),
+            base_color: [0.5, 0.25, 0.0, 0.4],
+            alpha_mode: AlphaMode::Blend,
+            ..Material::default()
+        };
+        let mut a = crate::builtins::torus(1.0, 0.3, 16, 8);
+        a.materials = Some(Materials::single(textured));
+        let mut b = crate::builtins::torus(2.0, 0.2, 12, 6);
+        // Display colours are base colour × COLOR_0.
+        b.colors = Some(
+            (0..b.positions.len())
+                .map(|i| Vec3::new(0.5, 0.25, 0.0) * (i % 3) as f32 / 2.0)
+                .collect(),
+        );
+        b.materials = Some(Materials::single(glass));
+        let mut m = a.clone();
+        m.append(&b);
+        assert_eq!(m.part_count(), 2);
+        let glb = write_glb(&m);
+        let doc = glb_json(&glb);
+        assert_eq!(doc["meshes"][0]["primitives"].as_array().unwrap().len(), 2);
+        assert_eq!(doc["materials"].as_array().unwrap().len(), 2);
+        assert_eq!(
+            doc["samplers"][0],
+            serde_json::json!({"magFilter": 9729, "wrapS": 10497, "wrapT": 33648})
+        );
+        let back = read(&glb, None).unwrap();
+        assert_eq!(back.materials, m.materials);
+        assert_eq!(back.triangles.len(), m.triangles.len());
+        assert_eq!(back.part_count(), 2);
+        // The textured part's vertex colour is white: no COLOR_0 was written for it.
+        let first = &doc["meshes"][0]["primitives"][0]["attributes"];
+        assert!(first.get("COLOR_0").is_none() && first.get("TEXCOORD_0").is_some());
+        let (want, got) = (m.colors.clone().unwrap(), back.colors.clone().unwrap());
+        for t in 0..m.triangles.len() {
+            let p = m.part(t);
+            assert_eq!(back.part(t), p);
+            for (&v, &w) in m.triangles[t].iter().zip(&back.triangles[t]) {
+                let (c, d) = (want[v as usize], got[w as usize]);
+                assert!(c.abs_diff_eq(d, 1e-3), "part {p}: {c} vs {d}");
+            }
+        }
     }
 
     #[test]

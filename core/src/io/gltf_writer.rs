@@ -3,7 +3,9 @@
 //! primitive per kind, and LOD chains stack such nodes under `MSFT_lod`.
 //!
 //! - triangles: positions, normals (area-weighted when the mesh has none),
-//!   `COLOR_0` and `TEXCOORD_0` when present, 32-bit indices;
+//!   `COLOR_0` and `TEXCOORD_0` when present, 32-bit indices; a mesh with the
+//!   input's materials gets one primitive per material, wearing it (factors and
+//!   the embedded base-colour image), `COLOR_0` divided back by the base colour;
 //! - points (hybrid paper §5.3): mode POINTS with `COLOR_0` and the custom
 //!   attribute `_RADIUS` (object space);
 //! - splats (AMG paper §3): textured quads, one alpha-blended unlit material
@@ -17,7 +19,7 @@ use glam::Vec3;
 use serde_json::{Value, json};
 
 use crate::cut::{DrawSet, Texture};
-use crate::geom::{Aabb, TriMesh};
+use crate::geom::{Aabb, AlphaMode, Material, TriMesh};
 
 const ARRAY_BUFFER: u32 = 34962;
 const ELEMENT_ARRAY_BUFFER: u32 = 34963;
@@ -35,9 +37,12 @@ pub struct GltfWriter {
     materials: Vec<Value>,
     images: Vec<Value>,
     textures: Vec<Value>,
+    samplers: Vec<Value>,
     extensions: BTreeSet<&'static str>,
     /// The shared opaque surface material, once made.
     surface: Option<usize>,
+    /// The input's materials written so far, with their glTF indices.
+    originals: Vec<(Material, usize)>,
 }
 
 fn le(data: &[f32]) -> Vec<u8> {
@@ -94,6 +99,72 @@ impl GltfWriter {
     fn material(&mut self, m: Value) -> usize {
         self.materials.push(m);
         self.materials.len() - 1
+    }
+
+    /// The glTF material of one of the input's materials (each written once).
+    fn original_material(&mut self, m: &Material) -> usize {
+        if let Some((_, i)) = self.originals.iter().find(|(o, _)| o == m) {
+            return *i;
+        }
+        let mut pbr = json!({"baseColorFactor": m.base_color, "metallicFactor": m.metallic, "roughnessFactor": m.roughness});
+        if let Some(img) = &m.base_color_texture {
+            let sampler = self.sampler(json!({
+                "magFilter": img.mag_filter, "minFilter": img.min_filter,
+                "wrapS": img.wrap_s, "wrapT": img.wrap_t,
+            }));
+            let texture = self.image(&img.bytes, &img.mime_type, sampler);
+            pbr["baseColorTexture"] = json!({"index": texture});
+        }
+        let mut v = json!({"pbrMetallicRoughness": pbr, "emissiveFactor": m.emissive, "doubleSided": m.double_sided});
+        match m.alpha_mode {
+            AlphaMode::Opaque => {}
+            AlphaMode::Mask(cutoff) => {
+                v["alphaMode"] = json!("MASK");
+                v["alphaCutoff"] = json!(cutoff);
+            }
+            AlphaMode::Blend => v["alphaMode"] = json!("BLEND"),
+        }
+        if let Some(name) = &m.name {
+            v["name"] = json!(name);
+        }
+        let i = self.material(v);
+        self.originals.push((m.clone(), i));
+        i
+    }
+
+    /// The triangle primitives of a cut's surface: one with the shared surface
+    /// material, or one per material of the input's that it wears.
+    fn surface_primitives(&mut self, mesh: &TriMesh) -> Vec<Value> {
+        let Some(materials) = &mesh.materials else {
+            let m = self.surface_material();
+            return self.triangles(mesh, m).into_iter().collect();
+        };
+        let mut groups: Vec<Vec<u32>> = vec![Vec::new(); materials.table.len()];
+        for t in 0..mesh.triangles.len() {
+            let m = (materials.of(mesh.part(t)) as usize).min(groups.len() - 1);
+            groups[m].push(t as u32);
+        }
+        let mut out = Vec::new();
+        for (m, tris) in materials.table.iter().zip(groups) {
+            if tris.is_empty() {
+                continue;
+            }
+            let mut piece = mesh.subset(&tris);
+            // Display colours are base colour × COLOR_0 (see io::gltf): divide
+            // the factor back out, and leave out a COLOR_0 that is white.
+            let factor = Vec3::from_slice(&m.base_color[..3]);
+            if let Some(c) = &mut piece.colors {
+                for v in c.iter_mut() {
+                    *v = Vec3::select(factor.cmpgt(Vec3::splat(1e-6)), *v / factor, Vec3::ONE);
+                }
+                if c.iter().all(|v| v.abs_diff_eq(Vec3::ONE, 1.0 / 512.0)) {
+                    piece.colors = None;
+                }
+            }
+            let material = self.original_material(m);
+            out.extend(self.triangles(&piece, material));
+        }
+        out
     }
 
     fn surface_material(&mut self) -> usize {
@@ -204,12 +275,53 @@ impl GltfWriter {
 
     /// Embeds `tex` as a PNG image and returns its texture index.
     fn texture(&mut self, tex: &Texture) -> usize {
-        let view = self.view(&encode_png(tex), None);
-        self.images
-            .push(json!({"bufferView": view, "mimeType": "image/png"}));
-        self.textures
-            .push(json!({"source": self.images.len() - 1, "sampler": 0}));
-        self.textures.len() - 1
+        // Splat textures end at their domain's border: clamp, never repeat.
+        let sampler = self
+            .sampler(json!({"magFilter": 9729, "minFilter": 9729, "wrapS": 33071, "wrapT": 33071}));
+        self.image(&encode_png(tex), "image/png", sampler)
+    }
+
+    /// The index of sampler `s`, added when new (`null` fields left out).
+    fn sampler(&mut self, mut s: Value) -> usize {
+        if let Some(o) = s.as_object_mut() {
+            o.retain(|_, v| !v.is_null());
+        }
+        match self.samplers.iter().position(|t| *t == s) {
+            Some(i) => i,
+            None => {
+                self.samplers.push(s);
+                self.samplers.len() - 1
+            }
+        }
+    }
+
+    /// The index of a texture sampling encoded image `bytes` with `sampler`; an
+    /// image already embedded (materials sharing one atlas) is not embedded again.
+    fn image(&mut self, bytes: &[u8], mime_type: &str, sampler: usize) -> usize {
+        let embedded = |w: &Self, image: &Value| {
+            let view = &w.views[image["bufferView"].as_u64().unwrap_or(0) as usize];
+            let at = view["byteOffset"].as_u64().unwrap_or(0) as usize;
+            w.bin
+                .get(at..at + view["byteLength"].as_u64().unwrap_or(0) as usize)
+                == Some(bytes)
+        };
+        let source = match self.images.iter().position(|i| embedded(self, i)) {
+            Some(i) => i,
+            None => {
+                let view = self.view(bytes, None);
+                self.images
+                    .push(json!({"bufferView": view, "mimeType": mime_type}));
+                self.images.len() - 1
+            }
+        };
+        let texture = json!({"source": source, "sampler": sampler});
+        match self.textures.iter().position(|t| *t == texture) {
+            Some(i) => i,
+            None => {
+                self.textures.push(texture);
+                self.textures.len() - 1
+            }
+        }
     }
 
     /// One child node per translucent layer (a separate mesh each, as
@@ -239,13 +351,10 @@ impl GltfWriter {
         // The node's id first: its layers' child nodes come after it.
         let id = self.nodes.len();
         self.nodes.push(json!({"name": name}));
-        let surface = if set.mesh.triangles.is_empty() {
-            0
-        } else {
-            self.surface_material()
-        };
         let mut primitives: Vec<Value> = Vec::new();
-        primitives.extend(self.triangles(&set.mesh, surface));
+        if !set.mesh.triangles.is_empty() {
+            primitives.extend(self.surface_primitives(&set.mesh));
+        }
         primitives.extend(self.points(set));
         primitives.extend(self.splats(set));
         let layers = self.layers(set);
@@ -280,8 +389,7 @@ impl GltfWriter {
         if !self.images.is_empty() {
             doc["images"] = json!(self.images);
             doc["textures"] = json!(self.textures);
-            doc["samplers"] =
-                json!([{"magFilter": 9729, "minFilter": 9729, "wrapS": 33071, "wrapT": 33071}]);
+            doc["samplers"] = json!(self.samplers);
         }
         if !self.extensions.is_empty() {
             doc["extensionsUsed"] = json!(self.extensions.iter().collect::<Vec<_>>());
@@ -340,7 +448,7 @@ pub fn write_lod_chain(lods: &[DrawSet], coverages: &[f32]) -> Vec<u8> {
 }
 
 /// An RGBA8 texture as PNG.
-fn encode_png(tex: &Texture) -> Vec<u8> {
+pub(crate) fn encode_png(tex: &Texture) -> Vec<u8> {
     let (w, h) = (tex.width.max(1), tex.height.max(1));
     let mut data: Vec<u8> = tex.rgba.concat();
     data.resize((w * h * 4) as usize, 0);

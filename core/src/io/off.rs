@@ -293,6 +293,7 @@ pub fn read(data: &[u8], progress: &Progress) -> ParseResult<Model> {
             colors,
             uvs,
             parts: None,
+            materials: None,
         })
     })
 }

@@ -302,6 +302,7 @@ impl MergeTreeView {
                     .map(|t| p[tree.origin[*t as usize] as usize])
                     .collect()
             }),
+            materials: src.materials.clone(),
             triangles,
         };
         DrawSet {

@@ -16,7 +16,7 @@ use std::collections::BinaryHeap;
 use glam::{Vec2, Vec3};
 
 use super::quadric::Quadric;
-use crate::geom::{Adjacency, TriMesh};
+use crate::geom::{Adjacency, Materials, TriMesh};
 
 /// Legality rules for collapses.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -107,6 +107,8 @@ pub struct EdgeCollapser {
     normals: Option<Vec<Vec3>>,
     colors: Option<Vec<Vec3>>,
     uvs: Option<Vec<Vec2>>,
+    /// Parts keep their materials: collapses never join parts.
+    materials: Option<Materials>,
     tris: Vec<[u32; 3]>,
     tri_part: Vec<u32>,
     tri_alive: Vec<bool>,
@@ -311,6 +313,7 @@ impl EdgeCollapser {
             pos: mesh.positions.clone(),
             normals: mesh.normals.clone(),
             colors: mesh.colors.clone(),
+            materials: mesh.materials.clone(),
             uvs: mesh.uvs.clone(),
             tris: mesh.triangles.clone(),
             tri_part,
@@ -676,6 +679,7 @@ impl EdgeCollapser {
         if parts.iter().any(|p| *p != 0) {
             out.parts = Some(parts);
         }
+        out.materials = self.materials.clone();
         (out, ids)
     }
 }

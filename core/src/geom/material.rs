@@ -1,0 +1,106 @@
+//! Surface materials carried from the input to the exports: glTF 2.0's
+//! metallic–roughness model with its base-colour texture. A mesh keeps one
+//! material per part (a part never mixes materials: readers split parts by
+//! material), so every method that keeps parts apart keeps its materials.
+
+use serde::{Deserialize, Serialize};
+
+/// How a material's alpha is used (glTF `alphaMode`).
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+pub enum AlphaMode {
+    #[default]
+    Opaque,
+    /// Fragments with alpha below the cutoff are discarded.
+    Mask(f32),
+    Blend,
+}
+
+/// An encoded image (PNG or JPEG bytes as the input stored them) and how it is sampled.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Image {
+    pub mime_type: String,
+    pub bytes: Vec<u8>,
+    /// glTF sampler enums (`magFilter`, `minFilter`, `wrapS`, `wrapT`); `None`: the default.
+    pub mag_filter: Option<u32>,
+    pub min_filter: Option<u32>,
+    pub wrap_s: u32,
+    pub wrap_t: u32,
+}
+
+/// A metallic–roughness material (glTF 2.0 §3.9.2).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Material {
+    pub name: Option<String>,
+    /// Linear RGBA; it multiplies the texture and the vertex colours.
+    pub base_color: [f32; 4],
+    pub metallic: f32,
+    pub roughness: f32,
+    pub emissive: [f32; 3],
+    pub alpha_mode: AlphaMode,
+    pub double_sided: bool,
+    /// Sampled with `TEXCOORD_0`.
+    pub base_color_texture: Option<Image>,
+}
+
+impl Default for Material {
+    /// The look of a mesh that came without materials: matte white clay.
+    fn default() -> Self {
+        Self {
+            name: None,
+            base_color: [1.0; 4],
+            metallic: 0.0,
+            roughness: 0.8,
+            emissive: [0.0; 3],
+            alpha_mode: AlphaMode::Opaque,
+            double_sided: false,
+            base_color_texture: None,
+        }
+    }
+}
+
+/// The materials of a mesh's parts: part `p` wears `table[of_part[p]]`.
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+pub struct Materials {
+    pub table: Vec<Material>,
+    pub of_part: Vec<u32>,
+}
+
+impl Materials {
+    /// One material for a mesh of one part.
+    pub fn single(m: Material) -> Self {
+        Self {
+            table: vec![m],
+            of_part: vec![0],
+        }
+    }
+
+    /// The material index of part `p` (parts past the list wear the first).
+    pub fn of(&self, part: u32) -> u32 {
+        self.of_part.get(part as usize).copied().unwrap_or(0)
+    }
+
+    /// Index of `m` in the table, adding it when new (tables stay free of copies).
+    pub fn intern(&mut self, m: &Material) -> u32 {
+        match self.table.iter().position(|t| t == m) {
+            Some(i) => i as u32,
+            None => {
+                self.table.push(m.clone());
+                self.table.len() as u32 - 1
+            }
+        }
+    }
+
+    /// Appends the parts of a mesh with `parts` parts wearing `theirs` (or the
+    /// default material when it has none), after our `ours` parts.
+    pub fn append(&mut self, ours: u32, theirs: Option<&Materials>, parts: u32) {
+        self.of_part.resize(ours as usize, 0);
+        for p in 0..parts {
+            let m = match theirs {
+                Some(t) => t.table[t.of(p) as usize].clone(),
+                None => Material::default(),
+            };
+            let i = self.intern(&m);
+            self.of_part.push(i);
+        }
+    }
+}
