@@ -1,6 +1,8 @@
-//! The colour scale for per-triangle values (certified error bounds): a
-//! perceptually ordered dark-blue → teal → yellow ramp, so "hotter" always
-//! reads as "larger", and a legend bar that explains it.
+//! The colour scales of the inspector: for per-triangle values (certified
+//! error bounds, hierarchy levels) a perceptually ordered dark-blue → teal →
+//! yellow ramp, so "hotter" always reads as "larger", with a legend bar that
+//! explains it; for regions without an order (AMG domains, voxel layers)
+//! well-separated hues.
 
 use glam::Vec3;
 
@@ -28,6 +30,25 @@ pub fn color32(t: f32) -> egui::Color32 {
 pub fn linear(t: f32) -> Vec3 {
     let [r, g, b, _] = egui::Rgba::from(color32(t)).to_array();
     Vec3::new(r, g, b)
+}
+
+/// A distinct colour for region `id` (linear RGB): hues a golden angle apart,
+/// so neighbouring ids never look alike.
+pub fn categorical(id: usize) -> Vec3 {
+    let hue = (id as f32 * 0.618_034).fract() * 6.0;
+    let x = 1.0 - (hue % 2.0 - 1.0).abs();
+    let [r, g, b] = match hue as u32 {
+        0 => [1.0, x, 0.0],
+        1 => [x, 1.0, 0.0],
+        2 => [0.0, 1.0, x],
+        3 => [0.0, x, 1.0],
+        4 => [x, 0.0, 1.0],
+        _ => [1.0, 0.0, x],
+    };
+    // Saturation 0.65, value 0.9: bright enough to shade, never white.
+    Vec3::new(r, g, b)
+        .map(|c| 0.9 * (0.35 + 0.65 * c))
+        .powf(2.2)
 }
 
 /// A horizontal bar of the ramp labelled with the value range `0 ..= max`.
@@ -61,6 +82,15 @@ pub fn legend(ui: &mut egui::Ui, max_label: &str) {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn categorical_colours_of_neighbouring_ids_differ() {
+        for id in 0..64 {
+            let (a, b) = (categorical(id), categorical(id + 1));
+            assert!(a.distance(b) > 0.2, "{id}: {a} vs {b}");
+            assert!(a.max_element() <= 1.0 && a.min_element() >= 0.0);
+        }
+    }
 
     #[test]
     fn ramp_is_ordered_and_clamped() {

@@ -9,7 +9,7 @@ use lodstudio_core::cut::{DrawSet, Hierarchy};
 use lodstudio_core::view::{Tolerance, View};
 use serde::{Deserialize, Serialize};
 
-use crate::viewport::Scene;
+use crate::viewport::{Scene, SceneStyle};
 
 /// The error threshold of a cut, as the slider sets it.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -84,13 +84,25 @@ impl Threshold {
     }
 }
 
-/// How a cut is drawn: coloured by its error bounds (a heat map, first) or by
-/// primitive type, and with splat outlines (AMG paper Fig. 12).
+/// How a cut is drawn: coloured by its error bounds (a heat map, first), by
+/// primitive type, or by the hierarchy's regions (merge-tree levels, AMG
+/// domains, voxel layers), and with splat outlines (AMG paper Fig. 12).
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct CutStyle {
     pub heat: bool,
     pub by_type: bool,
+    pub regions: bool,
     pub outlines: bool,
+}
+
+/// What "colour by region" means for each method's cuts, if anything.
+pub fn region_name(method: &str) -> Option<&'static str> {
+    match method {
+        "mergetree" => Some("merge-tree level"),
+        "amg" => Some("AMG domain"),
+        "voxel layers" => Some("voxel layer"),
+        _ => None,
+    }
 }
 
 /// Colours of the primitive types (linear RGB); splats keep their textures.
@@ -131,7 +143,10 @@ impl LiveCut {
             last: None,
             runtime: serde_json::Value::Null,
             style: CutStyle::default(),
-            scene: Arc::new(Scene::from_draw_set(&DrawSet::default(), None, &[], false)),
+            scene: Arc::new(Scene::from_draw_set(
+                &DrawSet::default(),
+                &SceneStyle::default(),
+            )),
             draw: DrawSet::default(),
             stats: CutStats::default(),
         };
@@ -146,9 +161,15 @@ impl LiveCut {
     /// The scene of the current cut in the current style.
     fn make_scene(&self) -> Scene {
         let d = &self.draw;
-        let outlines = self.style.outlines;
+        let plain = SceneStyle {
+            splat_outlines: self.style.outlines,
+            ..SceneStyle::default()
+        };
         if !self.style.heat && !self.style.by_type {
-            return Scene::from_draw_set(d, None, &d.layer_order, outlines);
+            return match self.style.regions {
+                true => self.region_scene(plain),
+                false => Scene::from_draw_set(d, &plain),
+            };
         }
         let max = d.error_bound.max(f32::MIN_POSITIVE);
         let colors: Vec<glam::Vec3> = if self.style.heat {
@@ -167,7 +188,52 @@ impl LiveCut {
                 POINT_COLOR
             };
         }
-        Scene::from_draw_set(&styled, Some(&colors), &d.layer_order, outlines)
+        Scene::from_draw_set(
+            &styled,
+            &SceneStyle {
+                triangle_colors: Some(&colors),
+                ..plain
+            },
+        )
+    }
+
+    /// The cut coloured by region: triangles by level (the ramp, coarsest
+    /// hottest), splats by AMG domain (the texture's Ψ kept as alpha), layers
+    /// each in a hue of its own.
+    fn region_scene(&self, plain: SceneStyle) -> Scene {
+        let d = &self.draw;
+        let top = d.triangle_levels.iter().copied().max().unwrap_or(0).max(1) as f32;
+        let levels: Vec<glam::Vec3> = d
+            .triangle_levels
+            .iter()
+            .map(|&l| crate::heatmap::linear(l as f32 / top))
+            .collect();
+        let layers: Vec<glam::Vec3> = (0..d.layers.len())
+            .map(crate::heatmap::categorical)
+            .collect();
+        let mut styled = d.clone();
+        for s in &d.splats {
+            let rgb = crate::heatmap::categorical(s.domain).map(|c| c.powf(1.0 / 2.2) * 255.0);
+            if let Some(t) = styled.textures.get_mut(s.texture) {
+                for texel in &mut t.rgba {
+                    texel[..3].copy_from_slice(&rgb.to_array().map(|c| c as u8));
+                }
+            }
+        }
+        Scene::from_draw_set(
+            &styled,
+            &SceneStyle {
+                triangle_colors: (!levels.is_empty()).then_some(&levels[..]),
+                layer_colors: Some(&layers),
+                ..plain
+            },
+        )
+    }
+
+    /// Whether the cut has regions to colour by (levels, domains or layers).
+    pub fn has_regions(&self) -> bool {
+        let d = &self.draw;
+        !d.triangle_levels.is_empty() || !d.splats.is_empty() || !d.layers.is_empty()
     }
 
     /// Whether the cut carries error bounds per triangle or point to colour by.

@@ -22,10 +22,10 @@ use crate::build::{self, Built};
 use crate::export::{self, Saved};
 use crate::heatmap;
 use crate::job::{Job, Poll};
-use crate::live_cut::CutStyle;
+use crate::live_cut::{self, CutStyle};
 use crate::panels::voxel::VolumeGrid;
 use crate::panels::{BuildParams, Method, MethodSettings};
-use crate::viewport::{Scene, Viewport};
+use crate::viewport::{Scene, SceneStyle, Viewport};
 
 /// Storage key of the recent-files list (JSON array of paths).
 const RECENT_KEY: &str = "lodstudio.recent";
@@ -159,8 +159,9 @@ pub struct StudioApp {
     preview: Option<Arc<Scene>>,
     /// What the last click hit on the live cut.
     picked: Option<String>,
-    /// Live cuts coloured by primitive type, and splats outlined.
+    /// Live cuts coloured by primitive type or by region, and splats outlined.
     by_type: bool,
+    regions: bool,
     outlines: bool,
     /// A build asked for but not started yet.
     build_at: Option<BuildRequest>,
@@ -221,6 +222,7 @@ impl StudioApp {
             preview: None,
             picked: None,
             by_type: false,
+            regions: false,
             outlines: false,
             build_at: None,
             build_note: None,
@@ -770,9 +772,7 @@ impl StudioApp {
                 if let Some(state) = job.progress().take_preview() {
                     self.preview = Some(Arc::new(Scene::from_draw_set(
                         &state,
-                        None,
-                        &state.layer_order,
-                        false,
+                        &SceneStyle::default(),
                     )));
                 }
             }
@@ -788,6 +788,7 @@ impl StudioApp {
             live.set_style(CutStyle {
                 heat,
                 by_type: self.by_type && self.view == View::Simplified,
+                regions: self.regions && self.view == View::Simplified,
                 outlines: self.outlines,
             });
             let mut view = self.viewport.core_view();
@@ -1213,6 +1214,26 @@ impl StudioApp {
                     )
                     .on_hover_text("Triangles orange, points blue; splats keep their textures.")
                     .on_disabled_hover_text("Build a hierarchy first.");
+                    let region = self.result.as_ref().and_then(|b| {
+                        let live = b.live.as_ref()?;
+                        live_cut::region_name(live.method()).filter(|_| live.has_regions())
+                    });
+                    ui.add_enabled(
+                        region.is_some(),
+                        egui::Checkbox::new(
+                            &mut self.regions,
+                            format!("Colour by {}", region.unwrap_or("region")),
+                        ),
+                    )
+                    .on_hover_text(
+                        "Merge tree: each triangle by the highest tree level among its display \
+                         vertices (dark: original, yellow: the coarsest). AMG: each domain \
+                         primitive in a hue of its own. Voxel: each translucent layer in a hue \
+                         of its own.",
+                    )
+                    .on_disabled_hover_text(
+                        "Merge-tree cuts, AMG splats and layered voxel cuts have regions.",
+                    );
                     ui.add_enabled(
                         live,
                         egui::Checkbox::new(&mut self.outlines, "Splat outlines"),

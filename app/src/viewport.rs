@@ -282,16 +282,11 @@ impl Scene {
     /// `triangle_colors` is given), its points as discs of their radius, its
     /// splats as textured quads, and its translucent layers in `layer_order`
     /// ((layer, triangle), back to front; all layers in order when empty).
-    pub fn from_draw_set(
-        set: &DrawSet,
-        triangle_colors: Option<&[Vec3]>,
-        layer_order: &[[u32; 2]],
-        splat_outlines: bool,
-    ) -> Scene {
+    pub fn from_draw_set(set: &DrawSet, style: &SceneStyle) -> Scene {
         let mut parts = Vec::new();
         let mut bounds = Aabb::EMPTY;
         if !set.mesh.triangles.is_empty() {
-            let scene = Scene::mesh(&set.mesh, triangle_colors);
+            let scene = Scene::mesh(&set.mesh, style.triangle_colors);
             bounds = bounds.union(scene.bounds);
             parts.extend(scene.parts);
         }
@@ -315,7 +310,8 @@ impl Scene {
             parts.push(Geometry::Points(instances));
         }
         if !set.layers.is_empty() {
-            let (vertices, indices) = translucent_layers(&set.layers, layer_order);
+            let (vertices, indices) =
+                translucent_layers(&set.layers, &set.layer_order, style.layer_colors);
             for v in &vertices {
                 bounds = bounds.grow(Vec3::from_array(v.position));
             }
@@ -331,7 +327,7 @@ impl Scene {
                 indices: splats.1,
                 atlas: splats.2,
             });
-            if splat_outlines {
+            if style.splat_outlines {
                 // Each quad's border (AMG paper Fig. 12).
                 let lines = set
                     .splats
@@ -360,14 +356,23 @@ impl Scene {
 }
 
 /// The layers' triangles as one alpha-blended list in `order` (each layer's
-/// mesh keeps its vertices; normals are area-weighted).
-fn translucent_layers(layers: &[Layer], order: &[[u32; 2]]) -> (Vec<BlendVertex>, Vec<u32>) {
+/// mesh keeps its vertices; normals are area-weighted), tinted `colors[layer]`
+/// when given.
+fn translucent_layers(
+    layers: &[Layer],
+    order: &[[u32; 2]],
+    colors: Option<&[Vec3]>,
+) -> (Vec<BlendVertex>, Vec<u32>) {
     let mut vertices = Vec::new();
     let mut base = Vec::with_capacity(layers.len());
-    for layer in layers {
+    for (l, layer) in layers.iter().enumerate() {
         base.push(vertices.len() as u32);
         let normals = layer.mesh.vertex_normals();
-        let tint = LAYER_COLOR.extend(layer.alpha.clamp(0.0, 1.0));
+        let color = colors
+            .and_then(|c| c.get(l))
+            .copied()
+            .unwrap_or(LAYER_COLOR);
+        let tint = color.extend(layer.alpha.clamp(0.0, 1.0));
         vertices.extend(
             layer
                 .mesh
@@ -540,6 +545,17 @@ fn crease_split(
         }
     }
     (vertices, indices)
+}
+
+/// How a cut's scene is coloured beyond its own attributes.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct SceneStyle<'a> {
+    /// One colour per triangle of the cut's mesh.
+    pub triangle_colors: Option<&'a [Vec3]>,
+    /// One tint per translucent layer.
+    pub layer_colors: Option<&'a [Vec3]>,
+    /// Each splat's border (AMG paper Fig. 12).
+    pub splat_outlines: bool,
 }
 
 /// The 3D view of one scene with an orbit camera.

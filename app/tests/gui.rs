@@ -939,6 +939,22 @@ fn cut_stats(harness: &Harness<'_, StudioApp>) -> lodstudio::live_cut::CutStats 
         .stats
 }
 
+/// Colouring the live cut by its regions (`label`) redraws it differently
+/// without re-cutting; clicking again restores the plain colours.
+fn colour_by_region_redraws(harness: &mut Harness<'_, StudioApp>, label: &str, name: &str) {
+    let cuts = cut_stats(harness).cuts;
+    let (_, plain) = viewport_pixels(harness, &format!("{name}_plain"));
+    harness.get_by_label(label).click();
+    harness.run();
+    let (covered, regions) = viewport_pixels(harness, &format!("{name}_regions"));
+    assert!(covered > 0.02, "{label}: drawn");
+    assert_ne!(plain, regions, "{label}: the colours changed");
+    assert_eq!(cut_stats(harness).cuts, cuts, "{label}: no re-cut");
+    harness.get_by_label(label).click();
+    harness.run();
+    assert_eq!(viewport_pixels(harness, &format!("{name}_again")).1, plain);
+}
+
 #[test]
 fn merge_tree_refines_live_with_the_threshold_and_the_camera() {
     let mut harness = studio(None);
@@ -967,6 +983,11 @@ fn merge_tree_refines_live_with_the_threshold_and_the_camera() {
     assert!(!harness.state().is_building(), "no rebuild for a threshold");
     let coarse = cut_stats(&harness);
     assert!(coarse.triangles < fine.triangles, "{coarse:?} vs {fine:?}");
+    colour_by_region_redraws(
+        &mut harness,
+        "Colour by merge-tree level",
+        "studio_tree_levels",
+    );
 
     // Moving the camera away coarsens further; every move re-cuts.
     let distance = harness.state().viewport().distance;
@@ -1023,6 +1044,11 @@ fn voxel_layers_and_the_pyramid_are_shown_live() {
         covered > 0.02,
         "translucent layers drawn: {:.1}%",
         covered * 100.0
+    );
+    colour_by_region_redraws(
+        &mut harness,
+        "Colour by voxel layer",
+        "studio_voxel_layer_hues",
     );
     // Turning the camera to another slicing axis re-orders them.
     harness.state_mut().viewport_mut().yaw += std::f32::consts::FRAC_PI_2;
@@ -1179,6 +1205,9 @@ fn amg_splats_are_drawn_and_the_level_moves_live() {
     let (_, outlined) = viewport_pixels(&mut harness, "studio_splat_outlines");
     assert_ne!(outlined, shades, "outlines drawn");
     assert_eq!(cut_stats(&harness).cuts, fine.cuts, "no re-cut");
+    harness.get_by_label("Splat outlines").click();
+    harness.run();
+    colour_by_region_redraws(&mut harness, "Colour by AMG domain", "studio_splat_domains");
     let last = result_row(&harness, "AMG levels").parse::<usize>().unwrap() - 1;
     harness
         .get_by_role_and_label(egui::Role::Slider, "AMG level")

@@ -56,6 +56,10 @@ pub struct DrawSet {
     pub mesh: TriMesh,
     /// Per-triangle error bound of `mesh` (object space), when the method has one.
     pub triangle_errors: Vec<f32>,
+    /// Per-triangle hierarchy level of `mesh`, for inspection, when the method
+    /// has levels (merge tree: the highest tree level among the nodes of its
+    /// display vertices, 0 for original vertices only).
+    pub triangle_levels: Vec<u32>,
     pub points: Vec<CutPoint>,
     pub splats: Vec<Splat>,
     pub textures: Vec<Texture>,

@@ -272,13 +272,20 @@ impl MergeTreeView {
         let mut order: Vec<u32> = Vec::new();
         let mut triangles = Vec::with_capacity(self.display.items.len());
         let mut errors = Vec::with_capacity(self.display.items.len());
+        let mut levels = Vec::with_capacity(self.display.items.len());
         let error = |v: u32| match self.node[v as usize] {
             NONE => 0.0,
             k => tree.nodes[k as usize].downswitch,
         };
+        // Node k stands for merge k, made at its tree level (leaves: level 0).
+        let level = |v: u32| match self.node[v as usize] {
+            NONE => 0,
+            k => tree.merges[k as usize].level + 1,
+        };
         for &t in &self.display.items {
             let tri = tree.triangles[t as usize];
             errors.push(tri.iter().map(|v| error(*v)).fold(0.0, f32::max));
+            levels.push(tri.iter().map(|v| level(*v)).max().unwrap_or(0));
             triangles.push(tri.map(|v| {
                 if self.remap[v as usize] == NONE {
                     self.remap[v as usize] = order.len() as u32;
@@ -309,6 +316,7 @@ impl MergeTreeView {
             mesh,
             error_bound: errors.iter().copied().fold(0.0, f32::max),
             triangle_errors: errors,
+            triangle_levels: levels,
             ..DrawSet::default()
         }
     }
