@@ -107,6 +107,15 @@ pub enum View {
     Original,
     /// The last build's result (the original while there is none).
     Simplified,
+    /// The original on the left, the result on the right, through one camera.
+    SideBySide,
+}
+
+impl View {
+    /// Whether the result (the LOD) is on screen.
+    pub fn shows_lod(self) -> bool {
+        self != View::Original
+    }
 }
 
 /// What a load worker hands back.
@@ -132,6 +141,8 @@ struct LogLine {
 /// The lodstudio GUI.
 pub struct StudioApp {
     viewport: Viewport,
+    /// The original beside the result (View::SideBySide).
+    compare: Viewport,
     current: Option<Current>,
     job: Option<LoadJob>,
     /// Requested by [`StudioApp::open`]; started at the next frame, which has a context.
@@ -207,6 +218,7 @@ impl StudioApp {
     ) -> Self {
         StudioApp {
             viewport: Viewport::new(render_state),
+            compare: Viewport::second(render_state, "original viewport"),
             current: None,
             job: None,
             pending: Some(initial.unwrap_or_else(default_model)),
@@ -343,7 +355,11 @@ impl StudioApp {
             self.view_bar(ui);
             self.update_cut();
             self.sync_view();
-            self.viewport.show(ui);
+            if self.view == View::SideBySide && self.result.is_some() && self.preview.is_none() {
+                self.show_side_by_side(ui);
+            } else {
+                self.viewport.show(ui);
+            }
             self.pick();
         });
         self.frame_ms = ctx.input(|i| i.unstable_dt) * 1000.0;
@@ -540,7 +556,7 @@ impl StudioApp {
                         built.method().name()
                     ));
                     self.result = Some(built);
-                    self.view = View::Simplified;
+                    self.show_result();
                 }
             }
             Err(e) => self.load_failed(e.to_string()),
@@ -701,7 +717,7 @@ impl StudioApp {
             Ok(built) => {
                 self.info(format!("{}: {}", job.label(), built.report()));
                 self.result = Some(built);
-                self.view = View::Simplified;
+                self.show_result();
             }
             Err(message) => self.build_failed(format!("{}: {message}", job.label())),
         }
@@ -783,12 +799,12 @@ impl StudioApp {
     /// Re-selects a live cut for the camera and the threshold (only when the
     /// hierarchy says they change it).
     fn update_cut(&mut self) {
-        let heat = self.heat && self.view == View::Simplified;
+        let heat = self.heat && self.view.shows_lod();
         if let Some(live) = self.result.as_mut().and_then(|b| b.live.as_mut()) {
             live.set_style(CutStyle {
                 heat,
-                by_type: self.by_type && self.view == View::Simplified,
-                regions: self.regions && self.view == View::Simplified,
+                by_type: self.by_type && self.view.shows_lod(),
+                regions: self.regions && self.view.shows_lod(),
                 outlines: self.outlines,
             });
             let mut view = self.viewport.core_view();
@@ -818,14 +834,45 @@ impl StudioApp {
             return;
         }
         let scene = match (&self.result, self.view) {
-            (Some(built), View::Simplified) => match (&built.heat, &built.live) {
-                (Some(heat), _) if self.heat => &heat.scene,
-                (_, Some(live)) => live.scene(),
-                _ => &built.scene,
-            },
+            (Some(built), View::Simplified | View::SideBySide) => {
+                match (&built.heat, &built.live) {
+                    (Some(heat), _) if self.heat => &heat.scene,
+                    (_, Some(live)) => live.scene(),
+                    _ => &built.scene,
+                }
+            }
             _ => &current.scene,
         };
         self.viewport.swap_scene(scene);
+    }
+
+    /// Shows a new result, side by side with the original if that is the view.
+    fn show_result(&mut self) {
+        if self.view == View::Original {
+            self.view = View::Simplified;
+        }
+    }
+
+    /// Compares the original (left) with the result (right, the main viewport:
+    /// cuts are taken and picked there) through one camera.
+    fn show_side_by_side(&mut self, ui: &mut egui::Ui) {
+        let Some(current) = &self.current else {
+            return;
+        };
+        self.compare.swap_scene(&current.scene);
+        self.compare.follow(&self.viewport);
+        let full = ui.available_rect_before_wrap();
+        let (left, right) = full.split_left_right_at_fraction(0.5);
+        let gap = egui::vec2(1.0, 0.0);
+        ui.scope_builder(egui::UiBuilder::new().max_rect(left.shrink2(gap)), |ui| {
+            self.compare.show(ui);
+        });
+        if !self.compare.same_camera(&self.viewport) {
+            self.viewport.follow(&self.compare);
+        }
+        ui.scope_builder(egui::UiBuilder::new().max_rect(right.shrink2(gap)), |ui| {
+            self.viewport.show(ui);
+        });
     }
 
     /// Runs `write` (which may show a dialog) on the last result, on a worker.
@@ -1191,9 +1238,15 @@ impl StudioApp {
                         ui.selectable_value(&mut shown, View::Simplified, "Simplified")
                             .on_hover_text("Show the last build's result.")
                             .on_disabled_hover_text("Build a LOD first.");
+                        ui.selectable_value(&mut shown, View::SideBySide, "Side by side")
+                            .on_hover_text(
+                                "The original on the left, the result on the right, seen through \
+                                 one camera: orbiting either turns both.",
+                            )
+                            .on_disabled_hover_text("Build a LOD first.");
                         ui.separator();
                         ui.add_enabled(
-                            shown == View::Simplified && has_heat,
+                            shown.shows_lod() && has_heat,
                             egui::Checkbox::new(&mut heat, "Colour by certified bound"),
                         )
                         .on_hover_text(
@@ -1337,14 +1390,14 @@ impl StudioApp {
                 }
                 if let Some(heat) = &built.heat
                     && self.heat
-                    && self.view == View::Simplified
+                    && self.view.shows_lod()
                 {
                     ui.add_space(4.0);
                     ui.label("certified bound per triangle");
                     heatmap::legend(ui, &build::length(heat.max));
                 } else if let Some(live) = built.live.as_ref().filter(|l| l.has_errors())
                     && self.heat
-                    && self.view == View::Simplified
+                    && self.view.shows_lod()
                 {
                     ui.add_space(4.0);
                     ui.label("error bound per primitive");

@@ -583,7 +583,14 @@ pub struct Viewport {
     /// Fly mode: W/A/S/D/Q/E walk the camera through the scene and dragging
     /// looks around the eye instead of orbiting the target.
     pub fly: bool,
+    /// Which of the [`SLOTS`] GPU resource sets draws this viewport.
+    slot: usize,
+    /// Its accessibility label.
+    label: &'static str,
 }
+
+/// Viewports that can be on screen at once (the side-by-side compare).
+const SLOTS: usize = 2;
 
 impl Viewport {
     /// A viewport drawing with `render_state` (after [`init`] on it), or a
@@ -605,7 +612,34 @@ impl Viewport {
             size_px: [1024, 768],
             click: None,
             fly: false,
+            slot: 0,
+            label: "3D viewport",
         }
+    }
+
+    /// A second viewport drawing beside the first (after [`Viewport::new`]
+    /// made the GPU resources), with its own label and resources.
+    pub fn second(render_state: Option<&egui_wgpu::RenderState>, label: &'static str) -> Self {
+        let mut v = Viewport::new(None);
+        v.has_wgpu = render_state.is_some();
+        v.slot = 1;
+        v.label = label;
+        v
+    }
+
+    /// Takes `other`'s camera (target, distance, orbit angles and fly mode).
+    pub fn follow(&mut self, other: &Viewport) {
+        self.target = other.target;
+        self.distance = other.distance;
+        self.yaw = other.yaw;
+        self.pitch = other.pitch;
+        self.fly = other.fly;
+    }
+
+    /// Whether both viewports look from the same camera.
+    pub fn same_camera(&self, other: &Viewport) -> bool {
+        (self.target, self.distance, self.yaw, self.pitch)
+            == (other.target, other.distance, other.yaw, other.pitch)
     }
 
     /// Shows `scene` from the default direction, framed to fit.
@@ -743,7 +777,8 @@ impl Viewport {
     pub fn show(&mut self, ui: &mut egui::Ui) -> egui::Response {
         let size = ui.available_size().max(egui::vec2(1.0, 1.0));
         let (rect, response) = ui.allocate_exact_size(size, egui::Sense::click_and_drag());
-        response.widget_info(|| egui::WidgetInfo::labeled(egui::Role::Canvas, true, "3D viewport"));
+        let label = self.label;
+        response.widget_info(|| egui::WidgetInfo::labeled(egui::Role::Canvas, true, label));
         self.aspect = rect.width() / rect.height().max(1.0);
 
         if !self.has_wgpu {
@@ -775,6 +810,7 @@ impl Viewport {
         ui.painter().add(egui_wgpu::Callback::new_paint_callback(
             rect,
             ViewportCallback {
+                slot: self.slot,
                 uniforms,
                 scene: self.scene.clone(),
                 version: self.version,
@@ -879,18 +915,26 @@ impl Viewport {
     }
 }
 
-/// Creates the viewport's pipelines in `render_state`; call once at start-up.
+/// The GPU resources of each viewport slot.
+struct Slots(Vec<ViewportResources>);
+
+/// Creates the viewports' pipelines in `render_state`; call once at start-up.
 pub fn init(render_state: &egui_wgpu::RenderState) {
-    let resources = ViewportResources::new(render_state);
+    let slots = Slots(
+        (0..SLOTS)
+            .map(|_| ViewportResources::new(render_state))
+            .collect(),
+    );
     render_state
         .renderer
         .write()
         .callback_resources
-        .insert(resources);
+        .insert(slots);
 }
 
 /// What one frame of the viewport needs on the GPU side.
 struct ViewportCallback {
+    slot: usize,
     uniforms: FrameUniforms,
     scene: Option<Arc<Scene>>,
     version: u64,
@@ -907,7 +951,10 @@ impl CallbackTrait for ViewportCallback {
         egui_encoder: &mut wgpu::CommandEncoder,
         callback_resources: &mut CallbackResources,
     ) -> Vec<wgpu::CommandBuffer> {
-        if let Some(res) = callback_resources.get_mut::<ViewportResources>() {
+        if let Some(res) = callback_resources
+            .get_mut::<Slots>()
+            .and_then(|s| s.0.get_mut(self.slot))
+        {
             res.ensure_target(device, self.size_px);
             if res.uploaded_version != Some(self.version) {
                 let fits = res.upload(device, queue, self.scene.as_deref());
@@ -926,7 +973,10 @@ impl CallbackTrait for ViewportCallback {
         render_pass: &mut wgpu::RenderPass<'static>,
         callback_resources: &CallbackResources,
     ) {
-        let Some(res) = callback_resources.get::<ViewportResources>() else {
+        let Some(res) = callback_resources
+            .get::<Slots>()
+            .and_then(|s| s.0.get(self.slot))
+        else {
             return;
         };
         let Some(target) = &res.target else {

@@ -131,7 +131,12 @@ fn save_ppm(width: u32, height: u32, rgba: &[u8], name: &str) -> PathBuf {
 /// the fraction of its pixels that differ from the background (its corner)
 /// and how many distinct colours those have.
 fn viewport_pixels(harness: &mut Harness<'_, StudioApp>, name: &str) -> (f32, usize) {
-    let rect = harness.get_by_label("3D viewport").rect();
+    canvas_pixels(harness, "3D viewport", name)
+}
+
+/// Like [`viewport_pixels`], for the canvas labelled `label`.
+fn canvas_pixels(harness: &mut Harness<'_, StudioApp>, label: &str, name: &str) -> (f32, usize) {
+    let rect = harness.get_by_label(label).rect();
     let image = harness.render().expect("render the studio");
     let path = save_ppm(image.width(), image.height(), image.as_raw(), name);
     eprintln!("rendered the studio to {}", path.display());
@@ -1248,4 +1253,65 @@ fn fly_mode_walks_through_the_scene() {
         (after.forward() - before.forward()).length() < 1e-4,
         "still looking the same way"
     );
+}
+
+/// Compare: the original on the left and the LOD on the right, both drawn,
+/// through one camera (orbiting the original turns the LOD too).
+#[test]
+fn side_by_side_compares_the_original_with_the_lod_through_one_camera() {
+    use egui::PointerButton::Primary;
+    let mut harness = studio(None);
+    wait_for_load(&mut harness);
+    let mut methods = *harness.state().methods();
+    methods.method = Method::EdgeCollapse;
+    methods.edge_collapse.mode = TargetMode::Ratio;
+    methods.edge_collapse.ratio = 0.05;
+    harness.state_mut().set_methods(methods);
+    harness.step();
+    wait_for_build(&mut harness);
+    let lod = harness
+        .state()
+        .result()
+        .expect("a LOD")
+        .mesh()
+        .triangles
+        .len();
+    assert!(lod < 3714 / 10, "{lod}");
+    let single = harness.get_by_label("3D viewport").rect();
+    harness.get_by_label("Side by side").click();
+    harness.run();
+    let (left, right) = (
+        harness.get_by_label("original viewport").rect(),
+        harness.get_by_label("3D viewport").rect(),
+    );
+    assert!(left.max.x <= right.min.x + 1.0, "original left of the LOD");
+    assert!(right.width() < 0.6 * single.width());
+    // The LOD side draws the result, the other the original: different images.
+    assert_eq!(drawn_triangles(&harness), Some(lod));
+    let (covered_left, shades_left) =
+        canvas_pixels(&mut harness, "original viewport", "studio_compare_left");
+    let (covered_right, shades_right) = viewport_pixels(&mut harness, "studio_compare_right");
+    assert!(
+        covered_left > 0.02 && covered_right > 0.02,
+        "{covered_left} {covered_right}"
+    );
+    assert_ne!(shades_left, shades_right, "original and LOD differ");
+    // Orbiting the original's side turns the LOD's camera with it.
+    let (yaw0, pitch0, _, _) = camera(&harness);
+    let center = left.center();
+    harness.hover_at(center);
+    press(&harness, center, Primary, true);
+    harness.hover_at(center + egui::vec2(30.0, 15.0));
+    harness.hover_at(center + egui::vec2(60.0, 30.0));
+    press(&harness, center + egui::vec2(60.0, 30.0), Primary, false);
+    harness.run();
+    let (yaw1, pitch1, _, _) = camera(&harness);
+    assert!(
+        yaw1 < yaw0 && pitch1 > pitch0,
+        "{yaw0},{pitch0} -> {yaw1},{pitch1}"
+    );
+    // Back to one viewport.
+    harness.get_by_label("Simplified").click();
+    harness.run();
+    assert!(harness.query_by_label("original viewport").is_none());
 }

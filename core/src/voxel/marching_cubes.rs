@@ -341,9 +341,7 @@ pub fn marching_cubes(
                 if along.iter().all(Option::is_none) {
                     continue;
                 }
-                let here = row(r);
-                for x in 0..nx {
-                    let v0 = here[x];
+                for (x, &v0) in row(r).iter().enumerate() {
                     for (axis, other) in along.iter().enumerate() {
                         let Some(other) = *other else { continue };
                         let (x1, y1, z1) = match axis {
