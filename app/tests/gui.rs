@@ -3,35 +3,16 @@
 
 use std::io::Write as _;
 use std::path::PathBuf;
-use std::time::{Duration, Instant};
 
+mod common;
+
+use common::{studio, wait_while};
 use egui_kittest::Harness;
 use egui_kittest::kittest::Queryable as _;
-use egui_kittest::wgpu::{WgpuTestRenderer, create_render_state, default_wgpu_setup};
 use lodstudio::panels::Method;
 use lodstudio::panels::simplify::TargetMode;
 use lodstudio::panels::voxel::FilterKind;
 use lodstudio::studio::StudioApp;
-
-const MAX_LOAD_FRAMES: usize = 600;
-const MAX_LOAD_TIME: Duration = Duration::from_secs(60);
-
-/// A harness whose renderer shares its wgpu state with the studio's viewport,
-/// so the paint callback finds its pipelines.
-fn studio(initial: Option<PathBuf>) -> Harness<'static, StudioApp> {
-    let render_state = create_render_state(
-        default_wgpu_setup(),
-        egui_wgpu::RendererOptions::PREDICTABLE,
-    );
-    let app = StudioApp::with_render_state(Some(&render_state), initial);
-    Harness::builder()
-        .with_size([1280.0, 800.0])
-        // Real-time-like frames, so two clicks make a double-click.
-        .with_step_dt(1.0 / 60.0)
-        .with_max_steps(120)
-        .renderer(WgpuTestRenderer::from_render_state(render_state))
-        .build_ui_state(|ui, app: &mut StudioApp| app.show(ui), app)
-}
 
 /// Steps frames until the studio has no load running (bounded), then settles.
 fn wait_for_load(harness: &mut Harness<'_, StudioApp>) {
@@ -94,23 +75,6 @@ fn export_and_reload(harness: &mut Harness<'_, StudioApp>, out: &std::path::Path
 }
 
 /// Steps frames while `busy` holds (bounded in frames and time), then settles.
-fn wait_while(harness: &mut Harness<'_, StudioApp>, what: &str, busy: fn(&StudioApp) -> bool) {
-    let start = Instant::now();
-    for _ in 0..MAX_LOAD_FRAMES {
-        harness.step();
-        if !busy(harness.state()) {
-            harness.run();
-            return;
-        }
-        assert!(
-            start.elapsed() < MAX_LOAD_TIME,
-            "still {what} after {MAX_LOAD_TIME:?}"
-        );
-        std::thread::sleep(Duration::from_millis(20));
-    }
-    panic!("still {what} after {MAX_LOAD_FRAMES} frames");
-}
-
 fn has_label(harness: &Harness<'_, StudioApp>, label: &str) -> bool {
     harness.query_all_by_label(label).next().is_some()
 }

@@ -1,0 +1,156 @@
+//! Issue 8's performance figures, measured on the studio itself: headless
+//! (egui_kittest on wgpu, lavapipe on a machine without a GPU) at 1280×800,
+//! with a real model loaded, for each method:
+//!
+//! - the frame time (UI step, and step + render) while the build runs on its
+//!   worker — the UI must keep its frame rate (goal: under 50 ms);
+//! - the live cut's time and the frame time while the error threshold is
+//!   dragged across its range, and while the camera orbits (view-dependent
+//!   cuts re-select every frame) — the cut must follow within one frame.
+//!
+//! Run with `cargo bench -p lodstudio --bench studio` (horse, engine, dragon)
+//! or name models: `cargo bench -p lodstudio --bench studio -- horse.ply`.
+//! Prints a Markdown table.
+
+#[path = "../tests/common/mod.rs"]
+mod common;
+
+use std::path::PathBuf;
+use std::time::Instant;
+
+use common::{studio, wait_while};
+use egui_kittest::Harness;
+use egui_kittest::kittest::Queryable as _;
+use lodstudio::panels::Method;
+use lodstudio::studio::StudioApp;
+
+/// Milliseconds of one UI step, and of the step plus rendering the frame.
+fn frame(h: &mut Harness<'_, StudioApp>) -> (f64, f64) {
+    let t = Instant::now();
+    h.step();
+    let step = t.elapsed().as_secs_f64() * 1e3;
+    h.render().expect("render the studio");
+    (step, t.elapsed().as_secs_f64() * 1e3)
+}
+
+/// Median and maximum.
+fn spread(v: &[f64]) -> String {
+    if v.is_empty() {
+        return "-".into();
+    }
+    let mut s = v.to_vec();
+    s.sort_by(f64::total_cmp);
+    format!("{:.1} / {:.1}", s[s.len() / 2], s[s.len() - 1])
+}
+
+fn cut_ms(h: &Harness<'_, StudioApp>) -> Option<(f64, u64)> {
+    let live = h.state().result()?.live.as_ref()?;
+    Some((live.stats.cut_ms as f64, live.stats.cuts))
+}
+
+/// Runs one method on the loaded model and prints its row.
+fn method_row(h: &mut Harness<'_, StudioApp>, model: &str, method: Method) {
+    let mut m = *h.state().methods();
+    m.method = method;
+    m.auto_rebuild = false;
+    m.threshold.in_pixels = true;
+    m.threshold.pixels = 2.0;
+    m.voxel.resolution = 64;
+    m.voxel.pyramid = true;
+    m.amg.auto_level = true;
+    h.state_mut().set_methods(m);
+    h.step();
+    let start = Instant::now();
+    h.state_mut().build();
+    let (mut steps, mut frames) = (Vec::new(), Vec::new());
+    while h.state().is_building() {
+        let (s, f) = frame(h);
+        steps.push(s);
+        frames.push(f);
+    }
+    let build_s = start.elapsed().as_secs_f64();
+    h.run();
+    let (mut drag_cut, mut drag_frame, mut orbit_cut, mut orbit_frame) =
+        (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+    if h.state().result().is_some_and(|b| b.live.is_some()) {
+        // Drag the threshold over its range, one value a frame.
+        for i in 0..24 {
+            let px = 0.5 * 2f64.powf(i as f64 * 7.0 / 23.0);
+            h.get_by_role_and_label(egui::Role::Slider, "error threshold")
+                .set_value_accesskit(px);
+            let before = cut_ms(h).map(|c| c.1);
+            let (_, f) = frame(h);
+            drag_frame.push(f);
+            if let Some((ms, cuts)) = cut_ms(h)
+                && Some(cuts) != before
+            {
+                drag_cut.push(ms);
+            }
+        }
+        // Orbit at a mid threshold: view-dependent cuts re-select.
+        h.get_by_role_and_label(egui::Role::Slider, "error threshold")
+            .set_value_accesskit(4.0);
+        h.run();
+        for _ in 0..24 {
+            h.state_mut().viewport_mut().yaw += 0.05;
+            let before = cut_ms(h).map(|c| c.1);
+            let (_, f) = frame(h);
+            orbit_frame.push(f);
+            if let Some((ms, cuts)) = cut_ms(h)
+                && Some(cuts) != before
+            {
+                orbit_cut.push(ms);
+            }
+        }
+    }
+    println!(
+        "| {model} | {} | {build_s:.1} | {} | {} | {} | {} | {} | {} | {} |",
+        method.name(),
+        frames.len(),
+        spread(&steps),
+        spread(&frames),
+        spread(&drag_cut),
+        spread(&drag_frame),
+        spread(&orbit_cut),
+        spread(&orbit_frame),
+    );
+}
+
+fn main() {
+    let shared = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../shared/models");
+    let args: Vec<String> = std::env::args()
+        .skip(1)
+        .filter(|a| !a.starts_with('-'))
+        .collect();
+    let models: Vec<String> = if args.is_empty() {
+        ["horse.ply", "2CylinderEngine.gltf", "dragon_vrip.ply.gz"]
+            .map(String::from)
+            .to_vec()
+    } else {
+        args
+    };
+    println!(
+        "| model | method | build s | frames during build | UI step ms (median / max) | frame ms | threshold drag: cut ms | frame ms | orbit: cut ms | frame ms |"
+    );
+    println!("|---|---|---|---|---|---|---|---|---|---|");
+    for model in models {
+        let mut h = studio(Some(shared.join(&model)));
+        wait_while(&mut h, "loading", StudioApp::is_loading);
+        // The dragon: the view-dependent merge tree (the other methods' builds
+        // on 871k triangles are benchmarked in core's benches).
+        let methods: &[Method] = if model.starts_with("dragon") {
+            &[Method::MergeTree]
+        } else {
+            &[
+                Method::EdgeCollapse,
+                Method::Hybrid,
+                Method::MergeTree,
+                Method::Voxel,
+                Method::Amg,
+            ]
+        };
+        for &method in methods {
+            method_row(&mut h, &model, method);
+        }
+    }
+}
