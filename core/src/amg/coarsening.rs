@@ -345,6 +345,17 @@ pub fn coarsen(
     opts: &RugeStuben,
     progress: &Progress,
 ) -> Result<Coarsening, Cancelled> {
+    coarsen_watched(a, opts, progress, |_| {})
+}
+
+/// [`coarsen`], calling `level_made` with each level's C/F split as it is made
+/// (level l + 1's unknowns are level l's C points, in index order).
+pub fn coarsen_watched(
+    a: CsMat<f64>,
+    opts: &RugeStuben,
+    progress: &Progress,
+    mut level_made: impl FnMut(&[bool]),
+) -> Result<Coarsening, Cancelled> {
     let mut operators = vec![a];
     let mut prolongations = Vec::new();
     while operators.len() < opts.max_levels {
@@ -365,6 +376,7 @@ pub fn coarsen(
         let ac = galerkin(a, &p);
         prolongations.push(p);
         operators.push(ac);
+        level_made(&is_c);
         progress.set_fraction(operators.len() as f32 / opts.max_levels as f32);
     }
     Ok(Coarsening {

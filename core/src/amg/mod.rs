@@ -190,7 +190,20 @@ pub fn decompose(
     progress.stage("stiffness matrix");
     let a = stiffness::stiffness(pos, &nb, &class, opts.contrast, progress)?;
     progress.stage("AMG coarsening");
-    let coarsening = coarsening::coarsen(a, &opts.coarsening, progress)?;
+    // Watching the build: each new level's unknowns, drawn at the points they
+    // stand for (a C point keeps its fine point), as they are made.
+    let mut kept: Vec<u32> = (0..pos.len() as u32).collect();
+    let diagonal = points.bounds().diagonal();
+    let coarsening = coarsening::coarsen_watched(a, &opts.coarsening, progress, |is_c| {
+        kept = kept
+            .iter()
+            .zip(is_c)
+            .filter_map(|(&p, &c)| c.then_some(p))
+            .collect();
+        if progress.wants_preview() {
+            progress.publish(level_preview(points, &kept, diagonal));
+        }
+    })?;
     // §3.2's point radius: at least the distance to the 6th nearest neighbour,
     // so randomly sampled flat regions are not cut by the concavity test.
     let radii = nb
@@ -212,6 +225,31 @@ pub fn decompose(
         coarsening,
         options: *opts,
     })
+}
+
+/// One AMG level as points: `kept` (the points its unknowns stand for) as
+/// discs about as wide as their spacing on a surface of the set's extent.
+fn level_preview(points: &PointSet, kept: &[u32], diagonal: f32) -> crate::cut::DrawSet {
+    let radius = 0.5 * diagonal / (kept.len().max(1) as f32).sqrt();
+    crate::cut::DrawSet {
+        points: kept
+            .iter()
+            .map(|&i| crate::cut::CutPoint {
+                center: points.positions[i as usize],
+                radius,
+                color: points
+                    .colors
+                    .as_ref()
+                    .map_or(Vec3::splat(0.8), |c| c[i as usize]),
+                normal: points
+                    .normals
+                    .as_ref()
+                    .map_or(Vec3::ZERO, |n| n[i as usize]),
+                error: 0.0,
+            })
+            .collect(),
+        ..Default::default()
+    }
 }
 
 /// The centre of a point set's bounds, towards which normals of sets without
@@ -471,6 +509,26 @@ mod tests {
                     "neighbours are symmetric"
                 );
             }
+        }
+    }
+
+    /// A watched build publishes an AMG level as it is made: as many points as
+    /// that level has unknowns, each at an input point.
+    #[test]
+    fn watched_builds_publish_each_new_level() {
+        let pts = octahedron_points(2_000, 3);
+        let progress = Progress::new();
+        progress.watch();
+        let ms = decompose(&pts, &AmgOptions::default(), &progress).unwrap();
+        let state = progress.take_preview().expect("a level");
+        let n = state.points.len();
+        assert!(
+            ms.level_sizes()[1..].contains(&n),
+            "{n} of {:?}",
+            ms.level_sizes()
+        );
+        for p in &state.points {
+            assert!(pts.positions.contains(&p.center));
         }
     }
 
