@@ -18,7 +18,7 @@ mod common;
 use std::path::PathBuf;
 use std::time::Instant;
 
-use common::{studio, wait_while};
+use common::{save_ppm, studio, wait_while};
 use egui_kittest::Harness;
 use egui_kittest::kittest::Queryable as _;
 use lodstudio::panels::Method;
@@ -103,6 +103,14 @@ fn method_row(h: &mut Harness<'_, StudioApp>, model: &str, method: Method) {
             }
         }
     }
+    let image = h.render().expect("render the studio");
+    let shot = save_ppm(
+        image.width(),
+        image.height(),
+        image.as_raw(),
+        &format!("bench-{model}-{}", method.name()).replace([' ', '(', ')', '+'], ""),
+    );
+    eprintln!("{model}, {}: {}", method.name(), shot.display());
     println!(
         "| {model} | {} | {build_s:.1} | {} | {} | {} | {} | {} | {} | {} |",
         method.name(),

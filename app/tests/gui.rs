@@ -1,12 +1,11 @@
 //! The studio driven headlessly through egui_kittest with a real wgpu renderer
 //! (llvmpipe or lavapipe on machines without a GPU).
 
-use std::io::Write as _;
 use std::path::PathBuf;
 
 mod common;
 
-use common::{studio, wait_while};
+use common::{save_ppm, studio, wait_while};
 use egui_kittest::Harness;
 use egui_kittest::kittest::Queryable as _;
 use lodstudio::panels::Method;
@@ -77,18 +76,6 @@ fn export_and_reload(harness: &mut Harness<'_, StudioApp>, out: &std::path::Path
 /// Steps frames while `busy` holds (bounded in frames and time), then settles.
 fn has_label(harness: &Harness<'_, StudioApp>, label: &str) -> bool {
     harness.query_all_by_label(label).next().is_some()
-}
-
-/// Writes `image` as a binary PPM (no image codec needed) for a human to look at.
-fn save_ppm(width: u32, height: u32, rgba: &[u8], name: &str) -> PathBuf {
-    let path = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(format!("{name}.ppm"));
-    let mut bytes = format!("P6\n{width} {height}\n255\n").into_bytes();
-    for px in rgba.chunks_exact(4) {
-        bytes.extend_from_slice(&px[..3]);
-    }
-    let mut file = std::fs::File::create(&path).expect("create snapshot file");
-    file.write_all(&bytes).expect("write snapshot file");
-    path
 }
 
 /// Renders the studio, saves the image as `name`, and measures the viewport:

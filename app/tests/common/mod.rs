@@ -2,6 +2,7 @@
 //! lavapipe on machines without a GPU), shared by the GUI tests and the
 //! studio benchmark (`benches/studio.rs` includes this file).
 
+use std::io::Write as _;
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
@@ -45,4 +46,16 @@ pub fn wait_while(harness: &mut Harness<'_, StudioApp>, what: &str, busy: fn(&St
         std::thread::sleep(Duration::from_millis(20));
     }
     panic!("still {what} after {MAX_WAIT_FRAMES} frames");
+}
+
+/// Writes `image` as a binary PPM (no image codec needed) for a human to look at.
+pub fn save_ppm(width: u32, height: u32, rgba: &[u8], name: &str) -> PathBuf {
+    let path = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(format!("{name}.ppm"));
+    let mut bytes = format!("P6\n{width} {height}\n255\n").into_bytes();
+    for px in rgba.chunks_exact(4) {
+        bytes.extend_from_slice(&px[..3]);
+    }
+    let mut file = std::fs::File::create(&path).expect("create snapshot file");
+    file.write_all(&bytes).expect("write snapshot file");
+    path
 }
