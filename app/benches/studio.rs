@@ -48,6 +48,17 @@ fn cut_ms(h: &Harness<'_, StudioApp>) -> Option<(f64, u64)> {
     Some((live.stats.cut_ms as f64, live.stats.cuts))
 }
 
+/// One frame after a change: its time, and the cut's when it re-selected.
+fn cut_frame(h: &mut Harness<'_, StudioApp>, cuts: &mut Vec<f64>, frames: &mut Vec<f64>) {
+    let before = cut_ms(h).map(|c| c.1);
+    frames.push(frame(h).1);
+    if let Some((ms, n)) = cut_ms(h)
+        && Some(n) != before
+    {
+        cuts.push(ms);
+    }
+}
+
 /// Runs one method on the loaded model and prints its row.
 fn method_row(h: &mut Harness<'_, StudioApp>, model: &str, method: Method) {
     let mut m = *h.state().methods();
@@ -78,14 +89,7 @@ fn method_row(h: &mut Harness<'_, StudioApp>, model: &str, method: Method) {
             let px = 0.5 * 2f64.powf(i as f64 * 7.0 / 23.0);
             h.get_by_role_and_label(egui::Role::Slider, "error threshold")
                 .set_value_accesskit(px);
-            let before = cut_ms(h).map(|c| c.1);
-            let (_, f) = frame(h);
-            drag_frame.push(f);
-            if let Some((ms, cuts)) = cut_ms(h)
-                && Some(cuts) != before
-            {
-                drag_cut.push(ms);
-            }
+            cut_frame(h, &mut drag_cut, &mut drag_frame);
         }
         // Orbit at a mid threshold: view-dependent cuts re-select.
         h.get_by_role_and_label(egui::Role::Slider, "error threshold")
@@ -93,14 +97,7 @@ fn method_row(h: &mut Harness<'_, StudioApp>, model: &str, method: Method) {
         h.run();
         for _ in 0..24 {
             h.state_mut().viewport_mut().yaw += 0.05;
-            let before = cut_ms(h).map(|c| c.1);
-            let (_, f) = frame(h);
-            orbit_frame.push(f);
-            if let Some((ms, cuts)) = cut_ms(h)
-                && Some(cuts) != before
-            {
-                orbit_cut.push(ms);
-            }
+            cut_frame(h, &mut orbit_cut, &mut orbit_frame);
         }
     }
     let image = h.render().expect("render the studio");

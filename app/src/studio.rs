@@ -1231,7 +1231,7 @@ impl StudioApp {
         egui::Frame::new()
             .inner_margin(egui::Margin::symmetric(6, 3))
             .show(ui, |ui| {
-                ui.horizontal(|ui| {
+                ui.horizontal_wrapped(|ui| {
                     ui.add_enabled_ui(has_result, |ui| {
                         ui.selectable_value(&mut shown, View::Original, "Original")
                             .on_hover_text("Show the model as opened.");

@@ -961,8 +961,19 @@ impl CallbackTrait for ViewportCallback {
                 self.too_large.store(!fits, Ordering::Relaxed);
                 res.uploaded_version = Some(self.version);
             }
-            queue.write_buffer(&res.uniform_buffer, 0, bytemuck::bytes_of(&self.uniforms));
-            res.render(egui_encoder);
+            // The same scene through the same camera into the same target: the
+            // last image stands (frames that only change the panels, such as a
+            // build's progress, cost no 3D rendering).
+            let frame = (self.uniforms, self.version, self.size_px);
+            let unchanged = res.rendered.is_some_and(|(u, v, s)| {
+                bytemuck::bytes_of(&u) == bytemuck::bytes_of(&frame.0)
+                    && (v, s) == (frame.1, frame.2)
+            });
+            if !unchanged {
+                queue.write_buffer(&res.uniform_buffer, 0, bytemuck::bytes_of(&self.uniforms));
+                res.render(egui_encoder);
+                res.rendered = Some(frame);
+            }
         }
         Vec::new()
     }
@@ -1092,6 +1103,8 @@ struct ViewportResources {
     frame_bind_group: wgpu::BindGroup,
     parts: Vec<PartGpu>,
     uploaded_version: Option<u64>,
+    /// What the target holds: the uniforms, scene version and size it was drawn with.
+    rendered: Option<(FrameUniforms, u64, [u32; 2])>,
     sample_count: u32,
     target: Option<Target>,
 }
@@ -1099,11 +1112,15 @@ struct ViewportResources {
 impl ViewportResources {
     fn new(rs: &egui_wgpu::RenderState) -> Self {
         let device = &rs.device;
-        let sample_count = if supports_4x(rs, COLOR_FORMAT) && supports_4x(rs, DEPTH_FORMAT) {
-            4
-        } else {
-            1
-        };
+        // 4× MSAA where the GPU has it; a software renderer (lavapipe,
+        // llvmpipe) would spend most of a frame on it, so it draws single-sampled.
+        let software = rs.adapter.get_info().device_type == wgpu::DeviceType::Cpu;
+        let sample_count =
+            if !software && supports_4x(rs, COLOR_FORMAT) && supports_4x(rs, DEPTH_FORMAT) {
+                4
+            } else {
+                1
+            };
         let scene_module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("viewport scene"),
             source: wgpu::ShaderSource::Wgsl(format!("{SCENE_SHADER}{BLEND_SHADER}").into()),
@@ -1402,6 +1419,7 @@ impl ViewportResources {
             frame_bind_group,
             parts: Vec::new(),
             uploaded_version: None,
+            rendered: None,
             sample_count,
             target: None,
         }

@@ -81,12 +81,16 @@ fn has_label(harness: &Harness<'_, StudioApp>, label: &str) -> bool {
 /// Renders the studio, saves the image as `name`, and measures the viewport:
 /// the fraction of its pixels that differ from the background (its corner)
 /// and how many distinct colours those have.
-fn viewport_pixels(harness: &mut Harness<'_, StudioApp>, name: &str) -> (f32, usize) {
+fn viewport_pixels(harness: &mut Harness<'_, StudioApp>, name: &str) -> (f32, usize, u64) {
     canvas_pixels(harness, "3D viewport", name)
 }
 
 /// Like [`viewport_pixels`], for the canvas labelled `label`.
-fn canvas_pixels(harness: &mut Harness<'_, StudioApp>, label: &str, name: &str) -> (f32, usize) {
+fn canvas_pixels(
+    harness: &mut Harness<'_, StudioApp>,
+    label: &str,
+    name: &str,
+) -> (f32, usize, u64) {
     let rect = harness.get_by_label(label).rect();
     let image = harness.render().expect("render the studio");
     let path = save_ppm(image.width(), image.height(), image.as_raw(), name);
@@ -106,9 +110,16 @@ fn canvas_pixels(harness: &mut Harness<'_, StudioApp>, label: &str, name: &str) 
         }
     }
     let covered = model.len() as f32 / total.max(1) as f32;
+    // Any change of any pixel (not only of the set of colours) shows in the digest.
+    let digest = {
+        use std::hash::{Hash as _, Hasher as _};
+        let mut h = std::collections::hash_map::DefaultHasher::new();
+        model.hash(&mut h);
+        h.finish()
+    };
     model.sort_unstable();
     model.dedup();
-    (covered, model.len())
+    (covered, model.len(), digest)
 }
 
 #[test]
@@ -132,7 +143,7 @@ fn default_model_shows_counts_and_is_drawn() {
     let rect = harness.get_by_label("3D viewport").rect();
     assert!(rect.width() > 200.0 && rect.height() > 200.0, "{rect:?}");
 
-    let (covered, shades) = viewport_pixels(&mut harness, "studio_default");
+    let (covered, shades, _) = viewport_pixels(&mut harness, "studio_default");
     assert!(
         covered > 0.02,
         "only {:.1}% of the viewport differs from the background",
@@ -226,7 +237,7 @@ fn point_set_is_drawn() {
     let summary = harness.state().summary().expect("points loaded");
     assert!(summary.points > 0);
     assert!(has_label(&harness, &summary.points.to_string()));
-    let (covered, shades) = viewport_pixels(&mut harness, "studio_points");
+    let (covered, shades, _) = viewport_pixels(&mut harness, "studio_points");
     assert!(covered > 0.02, "points cover {:.1}%", covered * 100.0);
     assert!(shades > 4, "only {shades} shades");
 }
@@ -251,21 +262,25 @@ fn press(
     });
 }
 
+/// Drags with `button` from `from` by (60, 30) points, in two moves.
+fn drag(harness: &Harness<'_, StudioApp>, from: egui::Pos2, button: egui::PointerButton) {
+    harness.hover_at(from);
+    press(harness, from, button, true);
+    harness.hover_at(from + egui::vec2(30.0, 15.0));
+    harness.hover_at(from + egui::vec2(60.0, 30.0));
+    press(harness, from + egui::vec2(60.0, 30.0), button, false);
+}
+
 #[test]
 fn viewport_camera_follows_pointer() {
     use egui::PointerButton::{Primary, Secondary};
     let mut harness = studio(Some("builtin:torus".into()));
     wait_for_load(&mut harness);
     let center = harness.get_by_label("3D viewport").rect().center();
-    let moved = center + egui::vec2(60.0, 30.0);
     let (yaw0, pitch0, dist0, target0) = camera(&harness);
 
     // Left-drag orbits.
-    harness.hover_at(center);
-    press(&harness, center, Primary, true);
-    harness.hover_at(center + egui::vec2(30.0, 15.0));
-    harness.hover_at(moved);
-    press(&harness, moved, Primary, false);
+    drag(&harness, center, Primary);
     harness.run();
     let (yaw1, pitch1, dist1, target1) = camera(&harness);
     assert!(
@@ -275,11 +290,7 @@ fn viewport_camera_follows_pointer() {
     assert_eq!((dist1, target1), (dist0, target0));
 
     // Right-drag pans.
-    harness.hover_at(center);
-    press(&harness, center, Secondary, true);
-    harness.hover_at(center + egui::vec2(30.0, 15.0));
-    harness.hover_at(moved);
-    press(&harness, moved, Secondary, false);
+    drag(&harness, center, Secondary);
     harness.run();
     let (_, _, dist2, target2) = camera(&harness);
     assert!(target2.distance(target0) > 1e-3, "pan moved the target");
@@ -475,7 +486,7 @@ fn edge_collapse_builds_shows_certificate_and_exports() {
     harness.get_by_label("Colour by certified bound").click();
     harness.run();
     assert!(has_label(&harness, "certified bound per triangle"));
-    let (covered, shades) = viewport_pixels(&mut harness, "studio_heat");
+    let (covered, shades, _) = viewport_pixels(&mut harness, "studio_heat");
     assert!(covered > 0.02, "covers {:.1}%", covered * 100.0);
     assert!(shades > 20, "only {shades} shades");
 
@@ -695,7 +706,7 @@ fn voxel_method_closes_holes_as_the_filter_widens() {
     harness.get_by_label("Simplified").click();
     harness.run();
     assert_eq!(drawn_triangles(&harness), Some(triangles));
-    let (covered, shades) = viewport_pixels(&mut harness, "studio_voxel");
+    let (covered, shades, _) = viewport_pixels(&mut harness, "studio_voxel");
     assert!(covered > 0.02, "covers {:.1}%", covered * 100.0);
     assert!(shades > 20, "only {shades} shades");
 
@@ -899,16 +910,16 @@ fn cut_stats(harness: &Harness<'_, StudioApp>) -> lodstudio::live_cut::CutStats 
 /// without re-cutting; clicking again restores the plain colours.
 fn colour_by_region_redraws(harness: &mut Harness<'_, StudioApp>, label: &str, name: &str) {
     let cuts = cut_stats(harness).cuts;
-    let (_, plain) = viewport_pixels(harness, &format!("{name}_plain"));
+    let (_, _, plain) = viewport_pixels(harness, &format!("{name}_plain"));
     harness.get_by_label(label).click();
     harness.run();
-    let (covered, regions) = viewport_pixels(harness, &format!("{name}_regions"));
+    let (covered, _, regions) = viewport_pixels(harness, &format!("{name}_regions"));
     assert!(covered > 0.02, "{label}: drawn");
     assert_ne!(plain, regions, "{label}: the colours changed");
     assert_eq!(cut_stats(harness).cuts, cuts, "{label}: no re-cut");
     harness.get_by_label(label).click();
     harness.run();
-    assert_eq!(viewport_pixels(harness, &format!("{name}_again")).1, plain);
+    assert_eq!(viewport_pixels(harness, &format!("{name}_again")).2, plain);
 }
 
 #[test]
@@ -995,7 +1006,7 @@ fn voxel_layers_and_the_pyramid_are_shown_live() {
     let stats = cut_stats(&harness);
     assert!(stats.layer_triangles > 0 && stats.triangles == 0);
     assert_eq!(drawn_triangles(&harness), Some(stats.layer_triangles));
-    let (covered, _) = viewport_pixels(&mut harness, "studio_voxel_layers");
+    let (covered, _, _) = viewport_pixels(&mut harness, "studio_voxel_layers");
     assert!(
         covered > 0.02,
         "translucent layers drawn: {:.1}%",
@@ -1063,13 +1074,13 @@ fn hybrid_cut_mixes_triangles_and_points_live() {
     let coarse = cut_stats(&harness);
     assert!(coarse.points > 0, "{coarse:?}");
     assert!(coarse.triangles + coarse.points < fine.triangles + fine.points);
-    let (covered, _) = viewport_pixels(&mut harness, "studio_hybrid");
+    let (covered, _, _) = viewport_pixels(&mut harness, "studio_hybrid");
     assert!(covered > 0.02, "{:.1}%", covered * 100.0);
     // Colour by type: triangles and points in two colours, no re-cut.
-    let (_, plain) = viewport_pixels(&mut harness, "studio_hybrid_plain");
+    let (_, _, plain) = viewport_pixels(&mut harness, "studio_hybrid_plain");
     harness.get_by_label("Colour by type").click();
     harness.run();
-    let (_, typed) = viewport_pixels(&mut harness, "studio_hybrid_types");
+    let (_, _, typed) = viewport_pixels(&mut harness, "studio_hybrid_types");
     assert_ne!(plain, typed);
     assert_eq!(cut_stats(&harness).cuts, coarse.cuts);
     harness.get_by_label("Colour by type").click();
@@ -1079,7 +1090,7 @@ fn hybrid_cut_mixes_triangles_and_points_live() {
     harness.run();
     assert!(has_label(&harness, "error bound per primitive"), "a legend");
     assert_eq!(cut_stats(&harness).cuts, coarse.cuts);
-    let (_, heated) = viewport_pixels(&mut harness, "studio_hybrid_heat");
+    let (_, _, heated) = viewport_pixels(&mut harness, "studio_hybrid_heat");
     assert_ne!(plain, heated, "the colours changed");
     // Object-space cuts ignore the camera: orbiting re-cuts nothing.
     harness.state_mut().viewport_mut().yaw += 1.0;
@@ -1152,14 +1163,14 @@ fn amg_splats_are_drawn_and_the_level_moves_live() {
     assert!(has_label(&harness, "unknowns per AMG level"));
     let fine = cut_stats(&harness);
     assert!(fine.splats > 8, "{fine:?}");
-    let (covered, shades) = viewport_pixels(&mut harness, "studio_splats");
+    let (covered, shades, splats_look) = viewport_pixels(&mut harness, "studio_splats");
     assert!(covered > 0.05, "splats drawn: {:.1}%", covered * 100.0);
     assert!(shades > 8, "textured, blended colours: {shades}");
     // Outlines (Fig. 12) and colours by type redraw the same cut.
     harness.get_by_label("Splat outlines").click();
     harness.run();
-    let (_, outlined) = viewport_pixels(&mut harness, "studio_splat_outlines");
-    assert_ne!(outlined, shades, "outlines drawn");
+    let (_, _, outlined) = viewport_pixels(&mut harness, "studio_splat_outlines");
+    assert_ne!(outlined, splats_look, "outlines drawn");
     assert_eq!(cut_stats(&harness).cuts, fine.cuts, "no re-cut");
     harness.get_by_label("Splat outlines").click();
     harness.run();
@@ -1239,22 +1250,18 @@ fn side_by_side_compares_the_original_with_the_lod_through_one_camera() {
     assert!(right.width() < 0.6 * single.width());
     // The LOD side draws the result, the other the original: different images.
     assert_eq!(drawn_triangles(&harness), Some(lod));
-    let (covered_left, shades_left) =
+    let (covered_left, _, left_look) =
         canvas_pixels(&mut harness, "original viewport", "studio_compare_left");
-    let (covered_right, shades_right) = viewport_pixels(&mut harness, "studio_compare_right");
+    let (covered_right, _, right_look) = viewport_pixels(&mut harness, "studio_compare_right");
     assert!(
         covered_left > 0.02 && covered_right > 0.02,
         "{covered_left} {covered_right}"
     );
-    assert_ne!(shades_left, shades_right, "original and LOD differ");
+    assert_ne!(left_look, right_look, "original and LOD differ");
     // Orbiting the original's side turns the LOD's camera with it.
     let (yaw0, pitch0, _, _) = camera(&harness);
     let center = left.center();
-    harness.hover_at(center);
-    press(&harness, center, Primary, true);
-    harness.hover_at(center + egui::vec2(30.0, 15.0));
-    harness.hover_at(center + egui::vec2(60.0, 30.0));
-    press(&harness, center + egui::vec2(60.0, 30.0), Primary, false);
+    drag(&harness, center, Primary);
     harness.run();
     let (yaw1, pitch1, _, _) = camera(&harness);
     assert!(

@@ -26,6 +26,8 @@ pub fn run(
             "AMG simplification needs points: a point set or a mesh's vertices.".into(),
         ));
     };
+    // The level shown first: its primitives are built here, not by the first cut.
+    let shown = (!settings.auto_level).then_some(settings.level);
     let settings = settings.build_params();
     let opts = AmgOptions {
         k: settings.k,
@@ -82,9 +84,9 @@ pub fn run(
             hint: "Neighbourhoods, classifier, stiffness matrix and coarsening.",
         },
     ];
-    progress.stage("domain primitives");
     let mut hierarchy = AmgHierarchy::new(ms, texel);
-    hierarchy.set_level(Some(settings.level));
+    hierarchy.build_levels(shown, progress)?;
+    hierarchy.set_level(shown);
     Ok(Ok(Built::live(
         Box::new(hierarchy),
         points.bounds(),

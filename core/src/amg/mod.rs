@@ -287,6 +287,25 @@ impl AmgHierarchy {
         self.level = level.map(|l| l.min(self.multiscale.levels() - 1));
     }
 
+    /// Builds the primitives of every level the threshold can choose (1 and
+    /// up) and of `also`, so that cuts never build them (a studio worker calls
+    /// this, keeping the build's cost off the UI thread).
+    pub fn build_levels(
+        &mut self,
+        also: Option<usize>,
+        progress: &Progress,
+    ) -> Result<(), Cancelled> {
+        let levels = self.multiscale.levels();
+        for level in (1..levels).chain(also.filter(|&l| l < levels)) {
+            if !self.built.contains_key(&level) {
+                progress.set_fraction(level as f32 / levels as f32);
+                let p = primitives(&self.multiscale, level, self.texel, progress)?;
+                self.built.insert(level, p);
+            }
+        }
+        Ok(())
+    }
+
     /// The primitives of `level`, built once.
     pub fn primitives(&mut self, level: usize) -> &Primitives {
         let (ms, texel) = (&self.multiscale, self.texel);
