@@ -274,20 +274,14 @@ fn read_material(
                     (bytes.to_vec(), mime_type.to_string())
                 }
                 gltf::image::Source::Uri { uri, mime_type } => {
-                    let data =
-                        gltf::buffer::Data::from_source(gltf::buffer::Source::Uri(uri), base)
-                            .map_err(|e| {
-                                ParseError::item(what(), format!("expected a readable image ({e})"))
-                            })?;
-                    let mime = mime_type.map(str::to_string).unwrap_or_else(|| {
-                        if data.0.starts_with(b"\x89PNG") {
-                            "image/png"
-                        } else {
-                            "image/jpeg"
-                        }
-                        .into()
-                    });
-                    (data.0, mime)
+                    let bytes =
+                        read_image_uri(uri, base).map_err(|e| ParseError::item(what(), e))?;
+                    let png = bytes.starts_with(b"\x89PNG");
+                    let mime = mime_type.map_or(
+                        if png { "image/png" } else { "image/jpeg" }.to_string(),
+                        str::to_string,
+                    );
+                    (bytes, mime)
                 }
             };
             let sampler = tex.sampler();
@@ -316,6 +310,37 @@ fn read_material(
         double_sided: m.double_sided(),
         base_color_texture: texture,
     })
+}
+
+/// The largest image file a glTF may reference (a hostile file could name a
+/// device or a huge file).
+const MAX_IMAGE_BYTES: u64 = 256 << 20;
+
+/// The bytes of an image URI: a data URI, or a regular file beside the glTF.
+fn read_image_uri(uri: &str, base: Option<&Path>) -> Result<Vec<u8>, String> {
+    if uri.starts_with("data:") {
+        // The decoder pads buffers to 4 bytes; an image keeps its exact length.
+        let payload = uri.rsplit(',').next().unwrap_or("").trim_end_matches('=');
+        let exact = payload.len() * 3 / 4;
+        return gltf::buffer::Data::from_source(gltf::buffer::Source::Uri(uri), None)
+            .map(|d| d.0[..exact.min(d.0.len())].to_vec())
+            .map_err(|e| format!("expected a readable data URI ({e})"));
+    }
+    let Some(base) = base.filter(|_| !uri.contains(':')) else {
+        return Err(format!(
+            "expected a data URI or a file beside the glTF, found {uri:?}"
+        ));
+    };
+    let path = base.join(uri);
+    match std::fs::metadata(&path) {
+        Ok(m) if m.is_file() && m.len() <= MAX_IMAGE_BYTES => {
+            std::fs::read(&path).map_err(|e| format!("expected a readable image {uri:?} ({e})"))
+        }
+        Ok(_) => Err(format!(
+            "expected {uri:?} to be an image file of at most 256 MiB"
+        )),
+        Err(e) => Err(format!("expected the image file {uri:?} ({e})")),
+    }
 }
 
 /// Writes one mesh as a binary glTF (GLB): positions, normals (area-weighted
@@ -511,6 +536,33 @@ mod tests {
                 assert!(c.abs_diff_eq(d, 1e-3), "part {p}: {c} vs {d}");
             }
         }
+    }
+
+    /// Image URIs name data or regular files beside the glTF, never devices,
+    /// folders or other schemes.
+    #[test]
+    fn image_uris_are_data_or_files_beside_the_gltf() {
+        let here = Path::new(env!("CARGO_MANIFEST_DIR"));
+        assert_eq!(
+            read_image_uri("data:image/png;base64,AAEC", None),
+            Ok(vec![0, 1, 2])
+        );
+        assert_eq!(
+            read_image_uri("Cargo.toml", Some(here)).ok(),
+            std::fs::read(here.join("Cargo.toml")).ok()
+        );
+        for bad in [
+            "/dev/zero",
+            "src",
+            "http://example.invalid/a.png",
+            "missing.png",
+        ] {
+            assert!(read_image_uri(bad, Some(here)).is_err(), "{bad}");
+        }
+        assert!(
+            read_image_uri("Cargo.toml", None).is_err(),
+            "no folder for a GLB in memory"
+        );
     }
 
     #[test]
