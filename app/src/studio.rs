@@ -762,11 +762,18 @@ impl StudioApp {
             .map_or(1.0, |c| c.scene.bounds().diagonal())
             .max(f32::MIN_POSITIVE);
         let bound = |e: f32| format!("bound {} ({:.3} %)", build::length(e), 100.0 * e / diagonal);
-        self.picked = Some(match live.draw_set().pick(origin, dir) {
+        let set = live.draw_set();
+        // Merge-tree triangles also tell their tree level.
+        let level = |t: usize| {
+            set.triangle_levels
+                .get(t)
+                .map_or(String::new(), |l| format!(", level {l}"))
+        };
+        self.picked = Some(match set.pick(origin, dir) {
             None => "nothing under the pointer".to_string(),
             Some((_, Picked::Triangle { index, error })) => match error {
-                Some(e) => format!("triangle {index}, {}", bound(e)),
-                None => format!("triangle {index}"),
+                Some(e) => format!("triangle {index}, {}{}", bound(e), level(index)),
+                None => format!("triangle {index}{}", level(index)),
             },
             Some((
                 _,

@@ -974,10 +974,10 @@ fn merge_tree_refines_live_with_the_threshold_and_the_camera() {
     harness.run();
     assert!(
         harness
-            .query_all_by_label_contains(", bound ")
+            .query_all_by_label_contains(", level ")
             .next()
             .is_some(),
-        "the picked triangle and its bound are shown"
+        "the picked triangle, its bound and its tree level are shown"
     );
 
     // Criteria switch at run time: no rebuild.
