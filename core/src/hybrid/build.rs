@@ -213,14 +213,10 @@ pub fn build_observed(
     }
     progress.check()?;
     sync(&mut mrg, &col);
-    mrg.colors = (col.vertex_count() > 0)
-        .then(|| col.color(0))
-        .flatten()
-        .map(|_| {
-            (0..col.vertex_count() as u32)
-                .filter_map(|v| col.color(v))
-                .collect()
-        });
+    mrg.colors = vertex_attribute(&col, |v| col.color(v));
+    mrg.normals = vertex_attribute(&col, |v| col.normal(v));
+    mrg.uvs = vertex_attribute(&col, |v| col.uv(v));
+    mrg.materials = col.materials().cloned();
 
     // Guaranteed bounds (module doc): attribution of the original triangles,
     // then both directions per created triangle (in parallel), then node
@@ -399,6 +395,17 @@ fn sync(mrg: &mut Mrg, col: &EdgeCollapser) {
         .extend((v0..col.vertex_count() as u32).map(|v| col.position(v)));
     mrg.triangles
         .extend((t0..col.triangle_total() as u32).map(|t| col.triangle(t)));
+    mrg.parts
+        .extend((t0..col.triangle_total() as u32).map(|t| col.triangle_part(t)));
+}
+
+/// One vertex attribute of every vertex the collapser made, if it has it.
+fn vertex_attribute<T>(col: &EdgeCollapser, get: impl Fn(u32) -> Option<T>) -> Option<Vec<T>> {
+    if col.vertex_count() == 0 {
+        return None;
+    }
+    get(0)?;
+    (0..col.vertex_count() as u32).map(get).collect()
 }
 
 /// A node's sphere: its own primitives' balls and its non-drain children's spheres.

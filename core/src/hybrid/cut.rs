@@ -222,7 +222,9 @@ impl HybridCut {
         let mut out = DrawSet::default();
         let mut remap = std::collections::HashMap::new();
         let mut mesh = TriMesh::default();
-        let mut colors = Vec::new();
+        // The cut's vertices: the MRG's, each taken once.
+        let mut order = Vec::new();
+        let mut parts = Vec::new();
         for a in self.arcs() {
             let arc = &mrg.arcs[a as usize];
             let error = mrg.nodes[arc.producer as usize].error;
@@ -230,14 +232,12 @@ impl HybridCut {
             for t in &arc.triangles {
                 let tri = mrg.triangles[*t as usize].map(|v| {
                     *remap.entry(v).or_insert_with(|| {
-                        mesh.positions.push(mrg.positions[v as usize]);
-                        if let Some(c) = &mrg.colors {
-                            colors.push(c[v as usize]);
-                        }
-                        mesh.positions.len() as u32 - 1
+                        order.push(v as usize);
+                        order.len() as u32 - 1
                     })
                 });
                 mesh.triangles.push(tri);
+                parts.push(mrg.parts.get(*t as usize).copied().unwrap_or(0));
                 out.triangle_errors.push(error);
             }
             out.points.extend(arc.points.iter().map(|p| {
@@ -251,9 +251,16 @@ impl HybridCut {
                 }
             }));
         }
-        if mrg.colors.is_some() {
-            mesh.colors = Some(colors);
-        }
+        let gather = |a: &[_]| order.iter().map(|&v| a[v]).collect::<Vec<_>>();
+        mesh.positions = gather(&mrg.positions);
+        mesh.colors = mrg.colors.as_deref().map(gather);
+        mesh.normals = mrg.normals.as_deref().map(gather);
+        mesh.uvs = mrg
+            .uvs
+            .as_ref()
+            .map(|u| order.iter().map(|&v| u[v]).collect());
+        mesh.parts = parts.iter().any(|p| *p != 0).then_some(parts);
+        mesh.materials = mrg.materials.clone();
         out.mesh = mesh;
         out
     }

@@ -11,7 +11,9 @@
 //! test is monotone (a node that must be refined has parents that must be too)
 //! and incremental adaptation reaches the same cut as a fresh traversal.
 
-use glam::Vec3;
+use glam::{Vec2, Vec3};
+
+use crate::geom::Materials;
 
 /// A ball.
 #[derive(Debug, Clone, Copy, PartialEq, Default, serde::Serialize, serde::Deserialize)]
@@ -117,9 +119,14 @@ pub struct Mrg {
     /// Every vertex ever made (the collapser's ids).
     pub positions: Vec<Vec3>,
     pub colors: Option<Vec<Vec3>>,
+    pub normals: Option<Vec<Vec3>>,
+    pub uvs: Option<Vec<Vec2>>,
     /// Every triangle ever made (the collapser's ids); the first
     /// `input_triangles` are the original ones.
     pub triangles: Vec<[u32; 3]>,
+    /// The part of every triangle (parts keep the input's materials).
+    pub parts: Vec<u32>,
+    pub materials: Option<Materials>,
     pub points: Vec<Point>,
     pub nodes: Vec<Node>,
     pub arcs: Vec<Arc>,

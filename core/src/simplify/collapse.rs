@@ -366,6 +366,24 @@ impl EdgeCollapser {
         self.colors.as_ref().map(|c| c[v as usize])
     }
 
+    pub fn normal(&self, v: u32) -> Option<Vec3> {
+        self.normals.as_ref().map(|n| n[v as usize])
+    }
+
+    pub fn uv(&self, v: u32) -> Option<Vec2> {
+        self.uvs.as_ref().map(|u| u[v as usize])
+    }
+
+    /// The part of triangle `t` (collapses never join parts).
+    pub fn triangle_part(&self, t: u32) -> u32 {
+        self.tri_part[t as usize]
+    }
+
+    /// The input's materials, one per part.
+    pub fn materials(&self) -> Option<&Materials> {
+        self.materials.as_ref()
+    }
+
     /// The triangles a collapse of `edge` removes: every triangle around either end.
     pub fn star(&self, edge: [u32; 2]) -> Vec<u32> {
         let [a, b] = edge;
