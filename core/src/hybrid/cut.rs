@@ -251,8 +251,8 @@ impl HybridCut {
                 }
             }));
         }
-        let gather = |a: &[_]| order.iter().map(|&v| a[v]).collect::<Vec<_>>();
-        mesh.positions = gather(&mrg.positions);
+        let gather = |a: &[Vec3]| order.iter().map(|&v| a[v]).collect::<Vec<_>>();
+        mesh.positions = order.iter().map(|&v| mrg.positions[v]).collect();
         mesh.colors = mrg.colors.as_deref().map(gather);
         mesh.normals = mrg.normals.as_deref().map(gather);
         mesh.uvs = mrg
