@@ -3,6 +3,8 @@
 //! material per part (a part never mixes materials: readers split parts by
 //! material), so every method that keeps parts apart keeps its materials.
 
+use std::sync::Arc;
+
 use serde::{Deserialize, Serialize};
 
 /// How a material's alpha is used (glTF `alphaMode`).
@@ -19,7 +21,8 @@ pub enum AlphaMode {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Image {
     pub mime_type: String,
-    pub bytes: Vec<u8>,
+    /// Shared: every cut's mesh carries its materials, and copies cost nothing.
+    pub bytes: Arc<[u8]>,
     /// glTF sampler enums (`magFilter`, `minFilter`, `wrapS`, `wrapT`); `None`: the default.
     pub mag_filter: Option<u32>,
     pub min_filter: Option<u32>,

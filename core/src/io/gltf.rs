@@ -287,7 +287,7 @@ fn read_material(
             let sampler = tex.sampler();
             Some(Image {
                 mime_type,
-                bytes,
+                bytes: bytes.into(),
                 mag_filter: sampler.mag_filter().map(|f| f.as_gl_enum()),
                 min_filter: sampler.min_filter().map(|f| f.as_gl_enum()),
                 wrap_s: sampler.wrap_s().as_gl_enum(),
@@ -486,7 +486,7 @@ mod tests {
             double_sided: true,
             base_color_texture: Some(Image {
                 mime_type: "image/png".into(),
-                bytes: png,
+                bytes: png.into(),
                 mag_filter: Some(9729),
                 min_filter: None,
                 wrap_s: 10497,
