@@ -17,7 +17,7 @@ use super::{Csr, MergeTreeOptions};
 use crate::geom::{Adjacency, TriMesh};
 use crate::progress::{Cancelled, Progress};
 use crate::simplify::collapse::{
-    constrained_vertices, link_condition, quality, triangle_change_allowed,
+    border_vertices, constrained_vertices, link_condition, quality, triangle_change_allowed,
 };
 
 /// One parent-child relationship (Fig. 2): `child` merges into `parent`, which
@@ -53,6 +53,8 @@ struct Builder<'a> {
     opts: &'a MergeTreeOptions,
     tri_part: Vec<u32>,
     constrained: Vec<bool>,
+    /// On a border of the mesh itself: two such joined by an inner edge never merge.
+    border: Vec<bool>,
     tris: Vec<[u32; 3]>,
     origin: Vec<u32>,
     vtris: Vec<Vec<u32>>,
@@ -78,7 +80,10 @@ impl Builder<'_> {
             .copied()
             .filter(|t| self.tris[*t as usize].contains(&p))
             .collect();
-        if shared.is_empty() || shared.len() > 2 {
+        if shared.is_empty()
+            || shared.len() > 2
+            || shared.len() == 2 && self.border[c as usize] && self.border[p as usize]
+        {
             return None;
         }
         if self.constrained[c as usize] {
@@ -132,6 +137,7 @@ pub(crate) fn build_levels(
         mesh,
         opts,
         constrained: constrained_vertices(mesh, &adj, &tri_part),
+        border: border_vertices(mesh, &adj),
         tri_part,
         tris: mesh.triangles.clone(),
         origin: (0..nt as u32).collect(),
@@ -214,6 +220,8 @@ pub(crate) fn build_levels(
             let Some((_, c, p)) = best else { continue };
             b.busy[c as usize] = tag;
             b.busy[p as usize] = tag;
+            // p takes c's edges, its border edges among them.
+            b.border[p as usize] |= b.border[c as usize];
             ring.clear();
             let mut cone = NormalCone::EMPTY;
             for &t in b.vtris[c as usize].iter().chain(&b.vtris[p as usize]) {

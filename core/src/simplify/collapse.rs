@@ -115,6 +115,8 @@ pub struct EdgeCollapser {
     vtris: Vec<Vec<u32>>,
     v_alive: Vec<bool>,
     constrained: Vec<bool>,
+    /// On a border of the mesh itself (see [`border_vertices`]).
+    border: Vec<bool>,
     quadric: Vec<Quadric>,
     heap: BinaryHeap<Reverse<Entry>>,
     deferred: Vec<(u32, u32)>,
@@ -232,6 +234,15 @@ pub(crate) fn constrained_corner(adj: &Adjacency, tri_part: &[u32], c: usize) ->
     o == crate::geom::adjacency::NONE || tri_part[o as usize / 3] != tri_part[c / 3]
 }
 
+/// Vertices on the mesh's own borders (and non-manifold or mis-oriented
+/// edges), part seams left out. An edge between two of them that is no border
+/// edge must not collapse: it would pinch the surface (a seam edge may join two
+/// border vertices, so moving only along constrained edges is not enough).
+pub(crate) fn border_vertices(mesh: &TriMesh, adj: &Adjacency) -> Vec<bool> {
+    let no_parts = vec![0; mesh.triangles.len()];
+    constrained_vertices(mesh, adj, &no_parts)
+}
+
 /// Vertices on constrained edges: borders, part seams, non-manifold and
 /// mis-oriented edges. They move only along such edges, if at all.
 pub(crate) fn constrained_vertices(mesh: &TriMesh, adj: &Adjacency, tri_part: &[u32]) -> Vec<bool> {
@@ -321,6 +332,7 @@ impl EdgeCollapser {
             vtris,
             v_alive: vec![true; nv],
             constrained,
+            border: border_vertices(mesh, &adj),
             quadric,
             heap: BinaryHeap::with_capacity(adj.edges.len()),
             deferred: Vec::new(),
@@ -466,7 +478,13 @@ impl EdgeCollapser {
             n += 1;
         };
         match (ca, cb) {
-            (true, true) if self.opts.lock_borders || !self.is_constrained_edge(a, b) => {
+            (true, true)
+                if self.opts.lock_borders
+                    || !self.is_constrained_edge(a, b)
+                    || self.border[a as usize]
+                        && self.border[b as usize]
+                        && self.shared(a, b).count() == 2 =>
+            {
                 return None;
             }
             (true, false) => add(pa),
@@ -612,6 +630,8 @@ impl EdgeCollapser {
         self.quadric.push(q);
         self.constrained
             .push(self.constrained[a as usize] || self.constrained[b as usize]);
+        self.border
+            .push(self.border[a as usize] || self.border[b as usize]);
         self.v_alive.push(true);
         self.v_alive[a as usize] = false;
         self.v_alive[b as usize] = false;
