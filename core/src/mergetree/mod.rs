@@ -166,7 +166,12 @@ pub fn build(
     let (nodes, previous) = dependencies::nodes(mesh, &built.merges, &built.cones);
     progress.set_fraction(1.0);
     Ok(MergeTree {
-        mesh: mesh.clone(),
+        // Display vertices are input vertices: their input normals (area-weighted
+        // when the input has none) shade every cut without recomputing any.
+        mesh: TriMesh {
+            normals: Some(mesh.normals.clone().unwrap_or_else(|| mesh.vertex_normals())),
+            ..mesh.clone()
+        },
         triangles: built.triangles,
         origin: built.origin,
         merges: built.merges,
