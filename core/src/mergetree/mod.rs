@@ -169,7 +169,11 @@ pub fn build(
         // Display vertices are input vertices: their input normals (area-weighted
         // when the input has none) shade every cut without recomputing any.
         mesh: TriMesh {
-            normals: Some(mesh.normals.clone().unwrap_or_else(|| mesh.vertex_normals())),
+            normals: Some(
+                mesh.normals
+                    .clone()
+                    .unwrap_or_else(|| mesh.vertex_normals()),
+            ),
             ..mesh.clone()
         },
         triangles: built.triangles,
