@@ -43,8 +43,10 @@ fn main() {
     let Ok(files) = std::env::var("AMG_MATRICES") else {
         return;
     };
-    println!("\n| matrix | rows | level sizes | RS setup s (median of 5) |");
-    println!("|---|---|---|---|");
+    println!(
+        "\n| matrix | rows | level sizes | RS setup s (median of 5) | level sizes with PyAMG's zero rows |"
+    );
+    println!("|---|---|---|---|---|");
     for f in files.split(',') {
         let a: sprs::CsMat<f64> = sprs::io::read_matrix_market(f).unwrap().to_csr();
         let mut times = Vec::new();
@@ -55,6 +57,16 @@ fn main() {
             times.push(t.elapsed().as_secs_f64());
             sizes = c.level_sizes();
         }
-        println!("| {f} | {} | {sizes:?} | {:.3} |", a.rows(), median(times));
+        let zero = coarsening::RugeStuben {
+            orphans: coarsening::Orphans::Zero,
+            ..opts.coarsening
+        };
+        let pyamg_like = coarsening::coarsen(a.clone(), &zero, &Progress::new()).unwrap();
+        println!(
+            "| {f} | {} | {sizes:?} | {:.3} | {:?} |",
+            a.rows(),
+            median(times),
+            pyamg_like.level_sizes()
+        );
     }
 }

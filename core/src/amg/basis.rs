@@ -7,6 +7,7 @@ use std::collections::HashMap;
 use sprs::CsMat;
 
 use super::coarsening::Coarsening;
+use super::sparse::product;
 
 /// Entries below this are dropped from the products: far under any τ, and
 /// they move a row sum by less than 1e-9 per level.
@@ -18,26 +19,9 @@ pub fn basis(c: &Coarsening, level: usize) -> CsMat<f64> {
     let n = c.operators[0].rows();
     let mut psi = CsMat::<f64>::eye(n);
     for p in &c.prolongations[..level] {
-        psi = prune(&(&psi * p));
+        psi = product(&psi, p, PRUNE);
     }
     psi
-}
-
-/// Drops the entries of a CSR matrix at most [`PRUNE`] in magnitude.
-fn prune(m: &CsMat<f64>) -> CsMat<f64> {
-    let mut indptr = Vec::with_capacity(m.rows() + 1);
-    let (mut indices, mut data) = (Vec::new(), Vec::new());
-    indptr.push(0);
-    for row in m.outer_iterator() {
-        for (j, &v) in row.iter() {
-            if v.abs() > PRUNE {
-                indices.push(j);
-                data.push(v);
-            }
-        }
-        indptr.push(indices.len());
-    }
-    CsMat::new(m.shape(), indptr, indices, data)
 }
 
 /// The domain of every basis function: the points where it exceeds τ (eq. 8),

@@ -3,7 +3,9 @@
 //! A_c = Pᵀ A P — repeated until a handful of unknowns remain.
 
 use rayon::prelude::*;
-use sprs::{CsMat, TriMat};
+use sprs::CsMat;
+
+use super::sparse::galerkin;
 
 use crate::progress::{Cancelled, Progress};
 
@@ -17,6 +19,20 @@ pub struct RugeStuben {
     /// Stop once a level has at most this many unknowns.
     pub max_coarse: usize,
     pub max_levels: usize,
+    pub orphans: Orphans,
+}
+
+/// What P does for an F point without a strong C neighbour (one of weight 0
+/// in [`cf_splitting`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+pub enum Orphans {
+    /// Stüben's multi-pass interpolation through its strong neighbours, so
+    /// that Ψ stays a partition of unity (§2.3).
+    MultiPass,
+    /// A zero row, as PyAMG's direct interpolation: Ψ vanishes there, and the
+    /// levels are PyAMG's `ruge_stuben_solver`'s, unknown for unknown — the
+    /// cross-check of the splitting and the Galerkin product.
+    Zero,
 }
 
 impl Default for RugeStuben {
@@ -25,6 +41,7 @@ impl Default for RugeStuben {
             theta: 0.5,
             max_coarse: 8,
             max_levels: 30,
+            orphans: Orphans::MultiPass,
         }
     }
 }
@@ -273,12 +290,18 @@ fn weights(a: &CsMat<f64>, i: usize, from: impl Fn(usize) -> bool) -> Vec<(usize
 
 /// Direct interpolation (Stüben): an F point takes its strong C neighbours'
 /// values with the [`weights`] of row i. An F point without a strong C
-/// neighbour (one of weight 0, see [`cf_splitting`]) is interpolated in a
-/// second pass, as in Stüben's multi-pass interpolation, from its strong
-/// neighbours that have one, composing their interpolation: it stays inside
-/// the strong couplings (a face of the octahedron, not across a crease) where
-/// PyAMG gives it a zero row of P, and Ψ stays a partition of unity.
-pub fn direct_interpolation(a: &CsMat<f64>, s: &[Vec<u32>], is_c: &[bool]) -> CsMat<f64> {
+/// neighbour (one of weight 0, see [`cf_splitting`]) gets what `orphans`
+/// says: with [`Orphans::MultiPass`] it is interpolated in a second pass, as
+/// in Stüben's multi-pass interpolation, from its strong neighbours that have
+/// one, composing their interpolation: it stays inside the strong couplings (a
+/// face of the octahedron, not across a crease) where PyAMG gives it a zero
+/// row of P, and Ψ stays a partition of unity.
+pub fn direct_interpolation(
+    a: &CsMat<f64>,
+    s: &[Vec<u32>],
+    is_c: &[bool],
+    orphans: Orphans,
+) -> CsMat<f64> {
     let n = a.rows();
     let mut coarse = vec![u32::MAX; n];
     let mut nc = 0u32;
@@ -301,12 +324,10 @@ pub fn direct_interpolation(a: &CsMat<f64>, s: &[Vec<u32>], is_c: &[bool]) -> Cs
                 .collect()
         })
         .collect();
-    let rows: Vec<Vec<(u32, f64)>> = (0..n)
+    let second: Vec<(usize, Vec<(u32, f64)>)> = (0..n)
         .into_par_iter()
+        .filter(|&i| orphans == Orphans::MultiPass && !is_c[i] && !strong_c(s, is_c, i))
         .map(|i| {
-            if is_c[i] || strong_c(s, is_c, i) {
-                return direct[i].clone();
-            }
             let mut row: Vec<(u32, f64)> = weights(a, i, |j| strong(i, j) && strong_c(s, is_c, j))
                 .into_iter()
                 .flat_map(|(j, w)| direct[j].iter().map(move |&(c, v)| (c, w * v)))
@@ -319,23 +340,26 @@ pub fn direct_interpolation(a: &CsMat<f64>, s: &[Vec<u32>], is_c: &[bool]) -> Cs
                 }
                 same
             });
-            row
+            (i, row)
         })
         .collect();
-    let mut t = TriMat::new((n, nc as usize));
-    for (i, row) in rows.iter().enumerate() {
-        for &(j, w) in row {
-            t.add_triplet(i, j as usize, w);
-        }
+    let mut rows = direct;
+    for (i, row) in second {
+        rows[i] = row;
     }
-    t.to_csr()
-}
-
-/// The Galerkin coarse operator Pᵀ A P.
-pub fn galerkin(a: &CsMat<f64>, p: &CsMat<f64>) -> CsMat<f64> {
-    let pt: CsMat<f64> = p.transpose_view().to_csr();
-    let ap = a * p;
-    &pt * &ap
+    // Rows are in column order: A's rows are, and `coarse` is increasing.
+    let mut indptr = Vec::with_capacity(n + 1);
+    indptr.push(0);
+    let nnz = rows.iter().map(Vec::len).sum();
+    let (mut indices, mut data) = (Vec::with_capacity(nnz), Vec::with_capacity(nnz));
+    for row in &rows {
+        for &(j, w) in row {
+            indices.push(j as usize);
+            data.push(w);
+        }
+        indptr.push(indices.len());
+    }
+    CsMat::new((n, nc as usize), indptr, indices, data)
 }
 
 /// Coarsens A level by level until at most `max_coarse` unknowns remain, the
@@ -367,12 +391,14 @@ pub fn coarsen_watched(
         let mut s = strength(a, opts.theta);
         s.par_iter_mut().for_each(|r| r.sort_unstable());
         let mut is_c = cf_splitting(&s);
-        keep_interpolable(&s, &mut is_c);
+        if opts.orphans == Orphans::MultiPass {
+            keep_interpolable(&s, &mut is_c);
+        }
         let nc = is_c.iter().filter(|&&c| c).count();
         if nc == 0 || nc == a.rows() {
             break;
         }
-        let p = direct_interpolation(a, &s, &is_c);
+        let p = direct_interpolation(a, &s, &is_c, opts.orphans);
         let ac = galerkin(a, &p);
         prolongations.push(p);
         operators.push(ac);
@@ -388,6 +414,7 @@ pub fn coarsen_watched(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use sprs::TriMat;
 
     /// The 5-point Laplacian of an m×m grid (Neumann: zero row sums).
     fn grid_laplacian(m: usize) -> CsMat<f64> {
