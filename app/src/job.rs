@@ -7,8 +7,8 @@
 //! worker without extra bookkeeping, and a cancelled worker's answer is never
 //! read.
 
-use std::sync::Arc;
 use std::sync::mpsc::{self, Receiver, TryRecvError};
+use std::sync::{Arc, OnceLock};
 use std::time::{Duration, Instant};
 
 use lodstudio_core::Progress;
@@ -50,7 +50,12 @@ impl<T: Send + 'static> Job<T> {
         std::thread::Builder::new()
             .name(thread.into())
             .spawn(move || {
-                if let Ok(answer) = work(&worker_progress)
+                lower_priority();
+                let answer = match background_pool() {
+                    Some(pool) => pool.install(|| work(&worker_progress)),
+                    None => work(&worker_progress),
+                };
+                if let Ok(answer) = answer
                     && !worker_progress.is_cancelled()
                 {
                     // The receiver is gone if the job was dropped meanwhile.
@@ -64,6 +69,36 @@ impl<T: Send + 'static> Job<T> {
             started: Instant::now(),
             result: rx,
         })
+    }
+}
+
+/// The rayon pool jobs run their parallel work on, apart from the UI's: its
+/// threads yield to every other thread (see [`lower_priority`]). `None` if it
+/// could not start (jobs then use the global pool).
+fn background_pool() -> Option<&'static rayon::ThreadPool> {
+    static POOL: OnceLock<Option<rayon::ThreadPool>> = OnceLock::new();
+    POOL.get_or_init(|| {
+        rayon::ThreadPoolBuilder::new()
+            .thread_name(|i| format!("build {i}"))
+            .start_handler(|_| lower_priority())
+            .build()
+            .ok()
+    })
+    .as_ref()
+}
+
+/// Gives the calling thread the lowest CPU priority: Linux's SCHED_IDLE
+/// policy (per thread), so that while a build takes every core the UI thread
+/// and the software rasteriser's threads run the moment they want a core and
+/// the frame rate holds. Where that is refused, nice 19; elsewhere a no-op.
+fn lower_priority() {
+    #[cfg(target_os = "linux")]
+    // SAFETY: both calls only read their arguments; 0 is the calling thread.
+    unsafe {
+        let param = libc::sched_param { sched_priority: 0 };
+        if libc::sched_setscheduler(0, libc::SCHED_IDLE, &param) != 0 {
+            libc::setpriority(libc::PRIO_PROCESS, 0, 19);
+        }
     }
 }
 

@@ -20,6 +20,7 @@ use lodstudio_core::stats::ModelSummary;
 
 use crate::build::{self, Built};
 use crate::export::{self, Saved};
+use crate::frame_stats::FrameStats;
 use crate::heatmap;
 use crate::job::{Job, Poll};
 use crate::live_cut::{self, CutStyle};
@@ -169,6 +170,7 @@ pub struct StudioApp {
     /// CPU time of the last frame (layout, cuts, tessellation, submission), as
     /// eframe measures it; `None` outside eframe.
     cpu_ms: Option<f32>,
+    frame_stats: FrameStats,
     /// What the running build has made so far (shown while it runs).
     preview: Option<Arc<Scene>>,
     /// What the last click hit on the live cut.
@@ -235,6 +237,7 @@ impl StudioApp {
             result: None,
             frame_ms: 0.0,
             cpu_ms: None,
+            frame_stats: FrameStats::default(),
             preview: None,
             picked: None,
             by_type: false,
@@ -371,6 +374,12 @@ impl StudioApp {
             self.pick();
         });
         self.frame_ms = ctx.input(|i| i.unstable_dt) * 1000.0;
+        self.frame_stats.record(
+            ctx.input(|i| i.time),
+            self.frame_ms,
+            self.cpu_ms,
+            self.build.is_some(),
+        );
 
         self.error_window(&ctx);
         drop_hint(&ctx);
@@ -1394,7 +1403,7 @@ impl StudioApp {
                             ("cut bound", format!("{} ({:.3} %)", build::length(st.error_bound), 100.0 * st.error_bound / diagonal), "The cut's guaranteed object-space error bound (max over its elements)."),
                             ("bound at target", format!("{pixels:.2} px"), "The cut's bound projected at the camera's target distance."),
                             ("cut time", format!("{:.2} ms", st.cut_ms), "Time of the last re-selection of the cut and its scene."),
-                            ("frame time", self.frame_summary(), "Time between the last two frames of the studio, and the CPU time of the last one (layout, cut, tessellation and submitting the draw)."),
+                            ("frame time", self.frame_summary(), "Median time between frames of the studio over the last second, and the median CPU time of a frame (layout, cut, tessellation and submitting the draw)."),
                             ("picked", self.picked.clone().unwrap_or_else(|| "click the model".into()), "What the last click in the viewport hit on the cut: its type, index and error bound (or domain, layer)."),
                         ] {
                             ui.label(label).on_hover_text(hint);
@@ -1450,11 +1459,19 @@ impl StudioApp {
             });
     }
 
-    /// "frame 16.7 ms (CPU 3.2 ms)": the frame interval and, under eframe, its CPU time.
+    /// "16.7 ms (CPU 3.2 ms)": the median frame interval over the last second
+    /// and, under eframe, the median CPU time (the last frame's until a second
+    /// has passed).
     fn frame_summary(&self) -> String {
-        match self.cpu_ms {
-            Some(cpu) => format!("{:.1} ms (CPU {cpu:.1} ms)", self.frame_ms),
-            None => format!("{:.1} ms", self.frame_ms),
+        let stats = &self.frame_stats;
+        let (interval, cpu) = if stats.median_ms > 0.0 {
+            (stats.median_ms, stats.median_cpu_ms)
+        } else {
+            (self.frame_ms, self.cpu_ms)
+        };
+        match cpu {
+            Some(cpu) => format!("{interval:.1} ms (CPU {cpu:.1} ms)"),
+            None => format!("{interval:.1} ms"),
         }
     }
 
