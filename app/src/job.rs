@@ -89,8 +89,9 @@ fn background_pool() -> Option<&'static rayon::ThreadPool> {
 
 /// Gives the calling thread the lowest CPU priority: Linux's SCHED_IDLE
 /// policy (per thread), so that while a build takes every core the UI thread
-/// and the software rasteriser's threads run the moment they want a core and
-/// the frame rate holds. Where that is refused, nice 19; elsewhere a no-op.
+/// and a software rasteriser's threads run the moment they want a core
+/// (orbiting during a hybrid build on lavapipe: 112–134 → 94–115 ms a frame,
+/// `benchmarks/studio.md`). Where that is refused, nice 19; elsewhere a no-op.
 fn lower_priority() {
     #[cfg(target_os = "linux")]
     // SAFETY: both calls only read their arguments; 0 is the calling thread.
