@@ -83,13 +83,10 @@ fn replay(tree: &Arc<MergeTree>, criteria: Criteria, pixels: f32, frames: usize)
         cold.reset();
         cold.update(&view, tolerance);
         let scratch = t.elapsed().as_secs_f64() * 1e3;
-        let sorted = |v: &MergeTreeView| {
-            let mut t = v.display_triangles().to_vec();
-            t.sort_unstable();
-            t
-        };
-        let fresh = sorted(&cold);
-        assert!(sorted(&warm) == fresh, "frame {i}: cuts differ");
+        assert!(
+            warm.display_triangles().eq(cold.display_triangles()),
+            "frame {i}: cuts differ"
+        );
         let scale = view.pixels(1.0, center, 0.5 * diagonal);
         uniform.update(&view, Tolerance::Relative(pixels / scale / diagonal));
         if i == 0 {
@@ -99,8 +96,8 @@ fn replay(tree: &Arc<MergeTree>, criteria: Criteria, pixels: f32, frames: usize)
         scratches.push(scratch);
         r.evaluated += stats.evaluated as f64;
         r.changes += (stats.splits + stats.merges) as f64;
-        r.adaptive += warm.display_triangles().len() as f64;
-        r.uniform += uniform.display_triangles().len() as f64;
+        r.adaptive += warm.display_count() as f64;
+        r.uniform += uniform.display_count() as f64;
     }
     let f = frames as f64;
     Replay {

@@ -140,10 +140,17 @@ pub struct Projector {
 }
 
 impl Projector {
-    /// See [`View::pixels`].
-    pub fn pixels(&self, length: f32, center: Vec3, radius: f32) -> f32 {
-        let depth = ((center - self.eye).dot(self.forward) - radius).max(NEAR);
-        length * self.scale / depth
+    /// Whether `length` projects to more than `pixels` ([`View::pixels`]
+    /// without its division, for tests over many nodes per frame).
+    #[inline(always)]
+    pub fn exceeds(&self, length: f32, center: Vec3, radius: f32, pixels: f32) -> bool {
+        length * self.scale > pixels * self.depth(center, radius)
+    }
+
+    /// The nearest depth of the sphere, at least the near distance.
+    #[inline(always)]
+    fn depth(&self, center: Vec3, radius: f32) -> f32 {
+        ((center - self.eye).dot(self.forward) - radius).max(NEAR)
     }
 }
 

@@ -98,11 +98,10 @@ fn orbit_keeps_dependencies_no_folds_topology_and_matches_cold_starts() {
         let same = (0..tree.merges().len()).all(|k| warm.is_merged(k) == cold.is_merged(k));
         assert!(same, "frame {i}: incremental and cold-start cuts differ");
         if i % 25 == 0 {
-            let mut a = warm.display_triangles().to_vec();
-            let mut b = cold.display_triangles().to_vec();
-            a.sort_unstable();
-            b.sort_unstable();
-            assert_eq!(a, b, "frame {i}");
+            assert!(
+                warm.display_triangles().eq(cold.display_triangles()),
+                "frame {i}"
+            );
             let set = warm.draw_set();
             assert!(set.mesh.triangles.len() < tree.mesh().triangles.len());
             let after = Topology::of(&set.mesh);
@@ -136,8 +135,7 @@ fn displayed_vertices_meet_the_screen_space_threshold() {
         assert!(set.error_bound >= 0.0);
         let mut shown: Vec<u32> = view_state
             .display_triangles()
-            .iter()
-            .flat_map(|tri| tree.triangle(*tri))
+            .flat_map(|tri| tree.triangle(tri))
             .collect();
         shown.sort_unstable();
         shown.dedup();
@@ -167,7 +165,7 @@ fn front_and_back(view_state: &MergeTreeView, eye: Vec3) -> (usize, usize) {
     let p = |v: u32| tree.mesh().positions[v as usize];
     let mut counts = (0, 0);
     for t in view_state.display_triangles() {
-        let [a, b, c] = tree.triangle(*t).map(p);
+        let [a, b, c] = tree.triangle(t).map(p);
         if (b - a).cross(c - a).dot(a - eye) < 0.0 {
             counts.0 += 1;
         } else {

@@ -154,12 +154,12 @@ pub fn run(args: MergeTreeArgs) -> Result<(), CliError> {
             differing_frames += 1;
         }
         folds += warm.folds();
-        adaptive.push(warm.display_triangles().len() as f64);
+        adaptive.push(warm.display_count() as f64);
         // Uniform: one object-space error everywhere, the largest whose
         // projection is within P pixels at the model's nearest point.
         let scale = view.pixels(1.0, center, 0.5 * diagonal);
         uniform.update(&view, Tolerance::Relative(args.pixels / scale / diagonal));
-        uniform_tris.push(uniform.display_triangles().len() as f64);
+        uniform_tris.push(uniform.display_count() as f64);
     }
     if mismatches > 0 || differing_frames > 0 {
         return Err(CliError::Failure(format!(

@@ -10,6 +10,7 @@
 
 mod criteria;
 mod dependencies;
+mod node_set;
 mod selection;
 mod tree;
 
@@ -316,6 +317,11 @@ mod tests {
         let mesh = torus(1.0, 0.35, 60, 24);
         let before = Topology::of(&mesh);
         let tree = Arc::new(build(&mesh, &MergeTreeOptions::default(), &Progress::new()).unwrap());
+        // Every §4.3 link, also those the stored dependencies leave implied.
+        let built = tree::build_levels(&mesh, &MergeTreeOptions::default(), &Progress::new());
+        let built = built.unwrap();
+        let all = dependencies::links(&built.merges, &built.region, mesh.positions.len());
+        assert!(all.len() > tree.dependency_count());
         let mut warm = MergeTreeView::new(tree.clone(), Criteria::default());
         let mut cold = MergeTreeView::new(tree.clone(), Criteria::default());
         let frames = 40;
@@ -326,14 +332,17 @@ mod tests {
             cold.reset();
             assert_eq!(cold.update(&view, Tolerance::Pixels(4.0)).fan_mismatches, 0);
             assert!(dependencies_hold(&warm), "frame {i}");
+            let implied =
+                |(r, j): &(u32, u32)| !warm.is_merged(*r as usize) || warm.is_merged(*j as usize);
+            assert!(all.iter().all(implied), "frame {i}");
+            assert!(warm.active_follows_display() && cold.active_follows_display());
             for k in 0..tree.merges().len() {
                 assert_eq!(warm.is_merged(k), cold.is_merged(k), "frame {i} merge {k}");
             }
-            let mut a = warm.display_triangles().to_vec();
-            let mut b = cold.display_triangles().to_vec();
-            a.sort_unstable();
-            b.sort_unstable();
-            assert_eq!(a, b, "frame {i}");
+            assert!(
+                warm.display_triangles().eq(cold.display_triangles()),
+                "frame {i}"
+            );
             assert_eq!(warm.folds(), 0);
             let set = warm.select(&view, Tolerance::Pixels(4.0));
             assert!(set.mesh.triangles.len() < mesh.triangles.len());

@@ -8,59 +8,13 @@
 
 use std::sync::Arc;
 
+use fixedbitset::FixedBitSet;
+
+use super::node_set::{List, MergeState, NodeList};
 use super::{Criteria, MergeTree, NONE};
 use crate::cut::{DrawSet, Hierarchy};
 use crate::geom::TriMesh;
 use crate::view::{Tolerance, View};
-
-/// A set of small ids with O(1) insert, remove and membership, and a dense
-/// list to walk.
-#[derive(Debug, Clone)]
-struct IdSet {
-    items: Vec<u32>,
-    slot: Vec<u32>,
-}
-
-impl IdSet {
-    fn new(capacity: usize) -> Self {
-        Self {
-            items: Vec::with_capacity(capacity),
-            slot: vec![NONE; capacity],
-        }
-    }
-
-    fn clear(&mut self) {
-        for &i in &self.items {
-            self.slot[i as usize] = NONE;
-        }
-        self.items.clear();
-    }
-
-    fn contains(&self, i: u32) -> bool {
-        self.slot[i as usize] != NONE
-    }
-
-    fn insert(&mut self, i: u32) {
-        if !self.contains(i) {
-            self.slot[i as usize] = self.items.len() as u32;
-            self.items.push(i);
-        }
-    }
-
-    /// False when `i` was not there.
-    fn remove(&mut self, i: u32) -> bool {
-        let s = self.slot[i as usize];
-        if s == NONE {
-            return false;
-        }
-        self.items.swap_remove(s as usize);
-        if let Some(&moved) = self.items.get(s as usize) {
-            self.slot[moved as usize] = s;
-        }
-        self.slot[i as usize] = NONE;
-        true
-    }
-}
 
 /// What one update did.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
@@ -80,17 +34,24 @@ pub struct UpdateStats {
 pub struct MergeTreeView {
     tree: Arc<MergeTree>,
     pub criteria: Criteria,
-    merged: Vec<bool>,
-    /// Per merge, how many of its requirements are not in place.
-    missing: Vec<u32>,
+    /// Per merge: in place, requirements missing, places in the lists.
+    state: Vec<MergeState>,
     /// Merges not in place whose requirements all are: may merge next.
-    mergeable: IdSet,
-    /// The display vertices and triangles.
-    shown: IdSet,
-    display: IdSet,
+    mergeable: NodeList,
+    /// The display vertices and triangles, as bits: a fan swap touches a few
+    /// words of a small array instead of a dense list's slots.
+    shown: FixedBitSet,
+    display: FixedBitSet,
+    displayed: usize,
     /// Per vertex, its node now ([`NONE`]: the vertex itself, a leaf).
     node: Vec<u32>,
+    /// The nodes of the display vertices that have one: the walk down
+    /// starts from them.
+    active: NodeList,
     work: Vec<u32>,
+    /// Per-frame scratch of the batched tests.
+    flags: Vec<u8>,
+    pending: Vec<u32>,
     remap: Vec<u32>,
 }
 
@@ -101,13 +62,16 @@ impl MergeTreeView {
         let n = tree.mesh.positions.len();
         let mut view = MergeTreeView {
             criteria,
-            merged: vec![false; m],
-            missing: vec![0; m],
-            mergeable: IdSet::new(m),
-            shown: IdSet::new(n),
-            display: IdSet::new(tree.triangles.len()),
+            state: vec![MergeState::NEW; m],
+            mergeable: NodeList::with_capacity(m),
+            shown: FixedBitSet::with_capacity(n),
+            display: FixedBitSet::with_capacity(tree.triangles.len()),
+            displayed: 0,
             node: vec![NONE; n],
+            active: NodeList::with_capacity(m),
             work: Vec::with_capacity(m),
+            flags: Vec::with_capacity(m),
+            pending: Vec::with_capacity(m),
             remap: vec![NONE; n],
             tree,
         };
@@ -117,21 +81,24 @@ impl MergeTreeView {
 
     /// Back to every input vertex and triangle: a cold start.
     pub fn reset(&mut self) {
-        self.merged.fill(false);
+        self.state.fill(MergeState::NEW);
         self.node.fill(NONE);
         self.mergeable.clear();
+        self.active.clear();
         self.shown.clear();
         self.display.clear();
         for k in 0..self.tree.merges.len() {
-            self.missing[k] = self.tree.requires.row(k).len() as u32;
-            if self.missing[k] == 0 {
-                self.mergeable.insert(k as u32);
+            self.state[k].missing = self.tree.requires.row(k).len() as u32;
+            if self.state[k].missing == 0 {
+                self.insert(List::Mergeable, k as u32);
             }
         }
-        for t in 0..self.tree.mesh.triangles.len() as u32 {
-            self.display.insert(t);
-            for v in self.tree.triangles[t as usize] {
-                self.shown.insert(v);
+        let input = self.tree.mesh.triangles.len();
+        self.display.insert_range(..input);
+        self.displayed = input;
+        for tri in &self.tree.triangles[..input] {
+            for v in tri {
+                self.shown.insert(*v as usize);
             }
         }
     }
@@ -141,22 +108,30 @@ impl MergeTreeView {
     }
 
     /// §5.1: adapts the cut from the previous frame's to `view`; no allocation
-    /// once the work list has grown.
+    /// once the work lists have grown. Every display vertex's node and every
+    /// mergeable merge is tested in one batched pass; only the nodes a split
+    /// or merge uncovers are tested one by one.
     pub fn update(&mut self, view: &View, tolerance: Tolerance) -> UpdateStats {
         let tree = Arc::clone(&self.tree);
         let frame = self.criteria.frame(view, tolerance, tree.diagonal);
         let refine = |k: u32| frame.must_refine(&tree.nodes[k as usize]);
         let mut stats = UpdateStats::default();
+        self.work.clear();
         // Down the tree from every display vertex whose node is too coarse,
         // splitting what depends on it first (§4.3).
-        self.work.clear();
-        for &v in &self.shown.items {
-            if self.node[v as usize] != NONE {
-                self.work.push(self.node[v as usize]);
+        frame.refine_flags(&self.active.nodes, &mut self.flags);
+        stats.evaluated += self.active.len();
+        select(&self.active.ids, &self.flags, 1, &mut self.pending);
+        // In merge order: rows of neighbouring merges are neighbours in memory.
+        self.pending.sort_unstable();
+        for i in 0..self.pending.len() {
+            let k = self.pending[i];
+            if self.state[k as usize].merged {
+                self.split(k, &mut stats);
             }
         }
         while let Some(k) = self.work.pop() {
-            if !self.merged[k as usize] {
+            if !self.state[k as usize].merged {
                 continue;
             }
             stats.evaluated += 1;
@@ -166,9 +141,18 @@ impl MergeTreeView {
         }
         // Up the tree: merge children wherever the view and the dependencies
         // allow it.
-        self.work.extend_from_slice(&self.mergeable.items);
+        frame.refine_flags(&self.mergeable.nodes, &mut self.flags);
+        stats.evaluated += self.mergeable.len();
+        select(&self.mergeable.ids, &self.flags, 0, &mut self.pending);
+        self.pending.sort_unstable();
+        for i in 0..self.pending.len() {
+            let k = self.pending[i];
+            if !self.state[k as usize].merged && self.state[k as usize].missing == 0 {
+                self.merge(k, &mut stats);
+            }
+        }
         while let Some(k) = self.work.pop() {
-            if self.merged[k as usize] || self.missing[k as usize] != 0 {
+            if self.state[k as usize].merged || self.state[k as usize].missing != 0 {
                 continue;
             }
             stats.evaluated += 1;
@@ -179,15 +163,58 @@ impl MergeTreeView {
         stats
     }
 
+    fn insert(&mut self, which: List, k: u32) {
+        let list = match which {
+            List::Mergeable => &mut self.mergeable,
+            List::Active => &mut self.active,
+        };
+        list.insert(which, k, &self.tree.nodes[k as usize], &mut self.state);
+    }
+
+    fn remove(&mut self, which: List, k: u32) {
+        let list = match which {
+            List::Mergeable => &mut self.mergeable,
+            List::Active => &mut self.active,
+        };
+        list.remove(which, k, &mut self.state);
+    }
+
+    /// Sets vertex `v`'s node, keeping the display vertices' nodes in step.
+    fn set_node(&mut self, v: u32, k: u32) {
+        let old = std::mem::replace(&mut self.node[v as usize], k);
+        if old != NONE {
+            self.remove(List::Active, old);
+        }
+        if k != NONE {
+            self.insert(List::Active, k);
+        }
+    }
+
+    /// Shows or hides vertex `v` (with its node).
+    fn show(&mut self, v: u32, shown: bool) {
+        let k = self.node[v as usize];
+        self.shown.set(v as usize, shown);
+        match (k != NONE, shown) {
+            (true, true) => self.insert(List::Active, k),
+            (true, false) => self.remove(List::Active, k),
+            _ => {}
+        }
+    }
+
     /// Swaps fan `from` for fan `to` in the display triangles.
     fn swap(&mut self, from: &[u32], to: &[u32], stats: &mut UpdateStats) {
         for &t in from {
-            if !self.display.remove(t) {
+            if self.display.contains(t as usize) {
+                self.display.remove(t as usize);
+                self.displayed -= 1;
+            } else {
                 stats.fan_mismatches += 1;
             }
         }
         for &t in to {
-            self.display.insert(t);
+            if !self.display.put(t as usize) {
+                self.displayed += 1;
+            }
         }
     }
 
@@ -197,25 +224,25 @@ impl MergeTreeView {
         let tree = Arc::clone(&self.tree);
         let ku = k as usize;
         for &r in tree.dependents.row(ku) {
-            if self.merged[r as usize] {
+            if self.state[r as usize].merged {
                 self.split(r, stats);
             }
         }
         let m = tree.merges[ku];
         self.swap(tree.added.row(ku), tree.removed.row(ku), stats);
-        self.merged[ku] = false;
-        self.shown.insert(m.child);
-        self.node[m.parent as usize] = tree.previous[ku];
+        self.state[ku].merged = false;
+        self.show(m.child, true);
+        self.set_node(m.parent, tree.previous[ku]);
         for v in [m.parent, m.child] {
             if self.node[v as usize] != NONE {
                 self.work.push(self.node[v as usize]);
             }
         }
         // Everything k requires is in place, so k may merge again.
-        self.mergeable.insert(k);
+        self.insert(List::Mergeable, k);
         for &r in tree.dependents.row(ku) {
-            self.missing[r as usize] += 1;
-            self.mergeable.remove(r);
+            self.state[r as usize].missing += 1;
+            self.remove(List::Mergeable, r);
         }
         stats.splits += 1;
     }
@@ -225,28 +252,49 @@ impl MergeTreeView {
         let ku = k as usize;
         let m = tree.merges[ku];
         self.swap(tree.removed.row(ku), tree.added.row(ku), stats);
-        self.merged[ku] = true;
-        self.shown.remove(m.child);
-        self.node[m.parent as usize] = k;
-        self.mergeable.remove(k);
+        self.state[ku].merged = true;
+        self.show(m.child, false);
+        self.set_node(m.parent, k);
+        self.remove(List::Mergeable, k);
         for &r in tree.dependents.row(ku) {
-            self.missing[r as usize] -= 1;
-            if self.missing[r as usize] == 0 {
-                self.mergeable.insert(r);
+            self.state[r as usize].missing -= 1;
+            if self.state[r as usize].missing == 0 {
+                self.insert(List::Mergeable, r);
                 self.work.push(r);
             }
         }
         stats.merges += 1;
     }
 
-    /// Whether merge `k` is in place (its child is not displayed).
-    pub fn is_merged(&self, k: usize) -> bool {
-        self.merged[k]
+    /// Whether the batched walk's node list is exactly the display vertices'
+    /// nodes.
+    #[cfg(test)]
+    pub(crate) fn active_follows_display(&self) -> bool {
+        let mut want: Vec<u32> = (self.shown.ones())
+            .map(|v| self.node[v])
+            .filter(|k| *k != NONE)
+            .collect();
+        let mut have = self.active.ids.clone();
+        want.sort_unstable();
+        have.sort_unstable();
+        let copies = (self.active.ids.iter().zip(&self.active.nodes))
+            .all(|(k, n)| self.tree.nodes[*k as usize] == *n);
+        want == have && copies
     }
 
-    /// The display triangles, as build-triangle ids.
-    pub fn display_triangles(&self) -> &[u32] {
-        &self.display.items
+    /// Whether merge `k` is in place (its child is not displayed).
+    pub fn is_merged(&self, k: usize) -> bool {
+        self.state[k].merged
+    }
+
+    /// The display triangles, as build-triangle ids in ascending order.
+    pub fn display_triangles(&self) -> impl Iterator<Item = u32> + '_ {
+        self.display.ones().map(|t| t as u32)
+    }
+
+    /// How many triangles are displayed.
+    pub fn display_count(&self) -> usize {
+        self.displayed
     }
 
     /// A display vertex's node ([`NONE`]: a leaf).
@@ -256,10 +304,8 @@ impl MergeTreeView {
 
     /// Display triangles facing against the input triangle they stand for.
     pub fn folds(&self) -> usize {
-        self.display
-            .items
-            .iter()
-            .filter(|t| self.tree.is_folded(**t))
+        self.display_triangles()
+            .filter(|t| self.tree.is_folded(*t))
             .count()
     }
 
@@ -270,9 +316,9 @@ impl MergeTreeView {
         let tree = &self.tree;
         let src = &tree.mesh;
         let mut order: Vec<u32> = Vec::new();
-        let mut triangles = Vec::with_capacity(self.display.items.len());
-        let mut errors = Vec::with_capacity(self.display.items.len());
-        let mut levels = Vec::with_capacity(self.display.items.len());
+        let mut triangles = Vec::with_capacity(self.displayed);
+        let mut errors = Vec::with_capacity(self.displayed);
+        let mut levels = Vec::with_capacity(self.displayed);
         let error = |v: u32| match self.node[v as usize] {
             NONE => 0.0,
             k => tree.nodes[k as usize].downswitch,
@@ -282,8 +328,8 @@ impl MergeTreeView {
             NONE => 0,
             k => tree.merges[k as usize].level + 1,
         };
-        for &t in &self.display.items {
-            let tri = tree.triangles[t as usize];
+        for t in self.display.ones() {
+            let tri = tree.triangles[t];
             errors.push(tri.iter().map(|v| error(*v)).fold(0.0, f32::max));
             levels.push(tri.iter().map(|v| level(*v)).max().unwrap_or(0));
             triangles.push(tri.map(|v| {
@@ -303,10 +349,8 @@ impl MergeTreeView {
             colors: gather(&src.colors, &order),
             uvs: gather(&src.uvs, &order),
             parts: src.parts.as_ref().map(|p| {
-                self.display
-                    .items
-                    .iter()
-                    .map(|t| p[tree.origin[*t as usize] as usize])
+                (self.display.ones())
+                    .map(|t| p[tree.origin[t] as usize])
                     .collect()
             }),
             materials: src.materials.clone(),
@@ -320,6 +364,17 @@ impl MergeTreeView {
             ..DrawSet::default()
         }
     }
+}
+
+/// The ids whose flag is `want`, into `out`.
+fn select(ids: &[u32], flags: &[u8], want: u8, out: &mut Vec<u32>) {
+    out.clear();
+    out.extend(
+        ids.iter()
+            .zip(flags)
+            .filter(|(_, f)| **f == want)
+            .map(|(k, _)| *k),
+    );
 }
 
 /// The per-vertex attribute of `order`'s vertices, where there is one.
