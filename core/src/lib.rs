@@ -16,6 +16,7 @@ pub mod io;
 pub mod mergetree;
 pub mod progress;
 pub mod rng;
+mod simd;
 pub mod simplify;
 pub mod stats;
 pub mod view;

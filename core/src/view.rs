@@ -76,10 +76,7 @@ impl View {
     /// containing sphere never projects smaller) even where f32 round-off
     /// would break ties, as incremental cuts need (hybrid paper §6).
     pub fn pixels_f64(&self, length: f64, center: Vec3, radius: f64) -> f64 {
-        let depth = ((center.as_dvec3() - self.eye.as_dvec3()).dot(self.forward().as_dvec3())
-            - radius)
-            .max(NEAR as f64);
-        length * self.focal_pixels() as f64 * self.corner_stretch() / depth
+        self.sphere_test().pixels(length, center, radius)
     }
 
     /// The worst off-axis stretch of a length, at the viewport's corner.
@@ -104,10 +101,20 @@ impl View {
     /// Computed in double precision, so that a containing sphere is never
     /// culled while one inside it is seen.
     pub fn sees_sphere(&self, center: Vec3, radius: f32) -> bool {
-        let radius = radius as f64;
-        let v = center.as_dvec3() - self.eye.as_dvec3();
-        v.dot(self.forward().as_dvec3()) >= -radius
-            && self.side_planes_f64().iter().all(|n| v.dot(*n) >= -radius)
+        self.sphere_test().sees(center, radius)
+    }
+
+    /// [`View::sees_sphere`] and [`View::pixels_f64`] with the view's
+    /// constants (a tangent, square roots, five normalisations) computed once,
+    /// for callers testing many spheres per frame (hybrid cuts).
+    pub fn sphere_test(&self) -> SphereTest {
+        SphereTest {
+            eye: self.eye.as_dvec3(),
+            forward: self.forward().as_dvec3(),
+            planes: self.side_planes_f64(),
+            focal: self.focal_pixels() as f64,
+            stretch: self.corner_stretch(),
+        }
     }
 
     /// Inward unit normals of the frustum's four side planes through the eye
@@ -128,6 +135,39 @@ impl View {
             (f * tx - right).normalize(),
             (f * tx + right).normalize(),
         ]
+    }
+}
+
+/// The per-view constants of [`View::sees_sphere`] and [`View::pixels_f64`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SphereTest {
+    eye: glam::DVec3,
+    forward: glam::DVec3,
+    planes: [glam::DVec3; 4],
+    focal: f64,
+    stretch: f64,
+}
+
+impl SphereTest {
+    /// See [`View::sees_sphere`].
+    #[inline(always)]
+    pub fn sees(&self, center: Vec3, radius: f32) -> bool {
+        let radius = radius as f64;
+        let v = center.as_dvec3() - self.eye;
+        let [p0, p1, p2, p3] = self.planes;
+        // `&`, not `&&`: branch-free, so that tests over many spheres vectorise.
+        (v.dot(self.forward) >= -radius)
+            & (v.dot(p0) >= -radius)
+            & (v.dot(p1) >= -radius)
+            & (v.dot(p2) >= -radius)
+            & (v.dot(p3) >= -radius)
+    }
+
+    /// See [`View::pixels_f64`].
+    #[inline(always)]
+    pub fn pixels(&self, length: f64, center: Vec3, radius: f64) -> f64 {
+        let depth = ((center.as_dvec3() - self.eye).dot(self.forward) - radius).max(NEAR as f64);
+        length * self.focal * self.stretch / depth
     }
 }
 

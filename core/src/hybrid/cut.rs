@@ -4,7 +4,7 @@
 //! A node must be refined when its error, seen in its sphere, exceeds the
 //! tolerance: object space compares the error with a fraction of the bounding-
 //! box diagonal; screen space projects it conservatively with
-//! [`View::pixels_f64`] anywhere in the node's sphere grown by the error (the
+//! [`View::pixels_f64`] (via [`SphereTest`]) anywhere in the node's sphere grown by the error (the
 //! deviation may reach that far), and a node whose grown sphere is outside the
 //! view frustum needs no refinement. Node spheres contain their children's and
 //! errors never decrease upwards, so "must be refined" is monotone: the cut is
@@ -18,10 +18,88 @@ use std::sync::Arc;
 
 use glam::Vec3;
 
-use super::mrg::{DRAIN, Mrg, NodeKind};
+use super::mrg::{DRAIN, Mrg, NodeKind, Sphere};
 use crate::cut::{CutPoint, DrawSet, Hierarchy};
 use crate::geom::TriMesh;
-use crate::view::{Tolerance, View};
+use crate::view::{SphereTest, Tolerance, View};
+
+/// Node ids with O(1) insert, remove and membership, and a dense list with
+/// a value beside each id.
+#[derive(Debug, Clone)]
+struct IdSet<T> {
+    items: Vec<u32>,
+    values: Vec<T>,
+    slot: Vec<u32>,
+}
+
+impl<T> IdSet<T> {
+    fn new(n: usize) -> Self {
+        IdSet {
+            items: Vec::new(),
+            values: Vec::new(),
+            slot: vec![u32::MAX; n],
+        }
+    }
+
+    fn clear(&mut self) {
+        for &i in &self.items {
+            self.slot[i as usize] = u32::MAX;
+        }
+        self.items.clear();
+        self.values.clear();
+    }
+
+    /// Puts `i` in the set (with `value()`) or takes it out.
+    fn set(&mut self, i: u32, member: bool, value: impl FnOnce() -> T) {
+        let s = self.slot[i as usize];
+        if member && s == u32::MAX {
+            self.slot[i as usize] = self.items.len() as u32;
+            self.items.push(i);
+            self.values.push(value());
+        } else if !member && s != u32::MAX {
+            self.items.swap_remove(s as usize);
+            self.values.swap_remove(s as usize);
+            if let Some(&moved) = self.items.get(s as usize) {
+                self.slot[moved as usize] = s;
+            }
+            self.slot[i as usize] = u32::MAX;
+        }
+    }
+}
+
+/// What the refinement test reads of a node: copied beside the front's ids,
+/// so that a frame tests the whole front in one pass over contiguous memory.
+#[derive(Debug, Clone, Copy)]
+struct Probe {
+    kind: NodeKind,
+    sphere: Sphere,
+    error: f32,
+}
+
+impl Probe {
+    fn of(mrg: &Mrg, n: u32) -> Probe {
+        let node = &mrg.nodes[n as usize];
+        Probe {
+            kind: node.kind,
+            sphere: node.sphere,
+            error: node.error,
+        }
+    }
+
+    /// Branch-free on the node, so that a pass over the front vectorises.
+    #[inline(always)]
+    fn must_refine(&self, test: &SphereTest, tolerance: Tolerance, diagonal: f32) -> bool {
+        let refines = match tolerance {
+            Tolerance::Relative(f) => self.error > f * diagonal,
+            Tolerance::Pixels(p) => {
+                let (center, reach) = (self.sphere.center, self.sphere.radius + self.error);
+                test.sees(center, reach)
+                    & (test.pixels(self.error as f64, center, reach as f64) > p as f64)
+            }
+        };
+        (self.kind == NodeKind::Source) | (refines & (self.kind != NodeKind::Drain))
+    }
+}
 
 /// A cut of an MRG that adapts from frame to frame.
 #[derive(Debug, Clone)]
@@ -29,30 +107,46 @@ pub struct HybridCut {
     mrg: Arc<Mrg>,
     above: Vec<bool>,
     /// Below nodes with an above parent (producers of the cut's arcs).
-    front: Vec<u32>,
+    front: IdSet<Probe>,
     /// Above nodes whose children are all below.
-    bottom: Vec<u32>,
-    stamp: Vec<u32>,
-    generation: u32,
+    bottom: IdSet<Probe>,
+    /// Per-frame scratch: the walk's stack, the nodes that moved, one pass's
+    /// tests and the nodes they picked.
+    stack: Vec<u32>,
+    moved: Vec<u32>,
+    flags: Vec<u8>,
+    pending: Vec<u32>,
     primed: bool,
 }
 
-/// Whether node `n` must be refined for `view` and `tolerance`.
-pub fn must_refine(mrg: &Mrg, n: u32, view: &View, tolerance: Tolerance) -> bool {
-    let node = &mrg.nodes[n as usize];
-    match node.kind {
-        NodeKind::Drain => false,
-        NodeKind::Source => true,
-        _ => match tolerance {
-            Tolerance::Relative(f) => node.error > f * mrg.diagonal,
-            Tolerance::Pixels(p) => {
-                let reach = node.sphere.radius + node.error;
-                view.sees_sphere(node.sphere.center, reach)
-                    && view.pixels_f64(node.error as f64, node.sphere.center, reach as f64)
-                        > p as f64
+/// Tests every node of `set` in one vector pass ([`crate::simd::wide`]) and
+/// puts those whose answer is `want` (0 or 1) into `picked`.
+fn tested(
+    set: &IdSet<Probe>,
+    (test, tolerance, diagonal): (&SphereTest, Tolerance, f32),
+    (flags, picked): (&mut Vec<u8>, &mut Vec<u32>),
+    want: u8,
+) {
+    flags.clear();
+    flags.resize(set.items.len(), 0);
+    crate::simd::wide(
+        &set.values,
+        flags,
+        #[inline(always)]
+        |probes, flags| {
+            for (f, p) in flags.iter_mut().zip(probes) {
+                *f = u8::from(p.must_refine(test, tolerance, diagonal));
             }
         },
-    }
+    );
+    picked.clear();
+    let flagged = set.items.iter().zip(flags.iter());
+    picked.extend(flagged.filter(|(_, f)| **f == want).map(|(n, _)| *n));
+}
+
+/// Whether node `n` must be refined for the view of `test` and `tolerance`.
+pub fn must_refine(mrg: &Mrg, n: u32, test: &SphereTest, tolerance: Tolerance) -> bool {
+    Probe::of(mrg, n).must_refine(test, tolerance, mrg.diagonal)
 }
 
 /// Screen radius of a point primitive in pixels (§6: the same scale as errors).
@@ -66,10 +160,12 @@ impl HybridCut {
         HybridCut {
             mrg,
             above: vec![false; n],
-            front: Vec::new(),
-            bottom: Vec::new(),
-            stamp: vec![0; n],
-            generation: 0,
+            front: IdSet::new(n),
+            bottom: IdSet::new(n),
+            stack: Vec::new(),
+            moved: Vec::new(),
+            flags: Vec::new(),
+            pending: Vec::new(),
             primed: false,
         }
     }
@@ -85,33 +181,40 @@ impl HybridCut {
 
     /// The cut from scratch: a traversal down from the source.
     pub fn select_fresh(&mut self, view: &View, tolerance: Tolerance) {
-        let mrg = &*self.mrg;
+        let mrg = Arc::clone(&self.mrg);
         self.above.fill(false);
+        self.front.clear();
+        self.bottom.clear();
         if mrg.nodes.len() < 2 {
             return;
         }
         let source = mrg.source();
         self.above[source as usize] = true;
-        let mut stack = vec![source];
-        let mut reached = Vec::new();
-        while let Some(n) = stack.pop() {
+        let test = view.sphere_test();
+        // Every node the traversal raises, in `moved`; children it reaches
+        // that stay below are the front.
+        self.moved.clear();
+        self.moved.push(source);
+        self.stack.clear();
+        self.stack.push(source);
+        while let Some(n) = self.stack.pop() {
             for c in mrg.child_nodes(n) {
-                if self.above[c as usize] || c == DRAIN {
-                    reached.push(c);
-                } else if must_refine(mrg, c, view, tolerance) {
+                if self.above[c as usize] {
+                    continue;
+                }
+                if c != DRAIN && must_refine(&mrg, c, &test, tolerance) {
                     self.above[c as usize] = true;
-                    stack.push(c);
+                    self.moved.push(c);
+                    self.stack.push(c);
                 } else {
-                    reached.push(c);
+                    self.front.set(c, true, || Probe::of(&mrg, c));
                 }
             }
         }
-        let all_above: Vec<u32> = (0..mrg.nodes.len() as u32)
-            .filter(|n| self.above[*n as usize])
-            .collect();
-        self.front = reached;
-        self.bottom = all_above;
-        self.tidy();
+        for i in 0..self.moved.len() {
+            let n = self.moved[i];
+            self.bottom.set(n, self.in_bottom(n), || Probe::of(&mrg, n));
+        }
         self.primed = true;
     }
 
@@ -122,85 +225,90 @@ impl HybridCut {
         }
         let mrg = Arc::clone(&self.mrg);
         let source = mrg.source();
-        let refine = |n: u32| must_refine(&mrg, n, view, tolerance);
-        // Coarsen: above nodes with all children below that need no refinement.
-        let mut lowered = Vec::new();
-        let mut stack = self.bottom.clone();
-        while let Some(n) = stack.pop() {
-            if !self.above[n as usize] || n == source {
-                continue;
+        let test = view.sphere_test();
+        let refine = |n: u32| must_refine(&mrg, n, &test, tolerance);
+        self.moved.clear();
+        self.stack.clear();
+        // Coarsen: above nodes with all children below that need no
+        // refinement. The bottom's tests run in one pass over its copies (its
+        // nodes have no above child), the parents they uncover one by one.
+        let diagonal = mrg.diagonal;
+        self.pending.clear();
+        let view = (&test, tolerance, diagonal);
+        tested(&self.bottom, view, (&mut self.flags, &mut self.pending), 0);
+        for i in 0..self.pending.len() {
+            let n = self.pending[i];
+            if n != source {
+                self.lower(n);
             }
-            if mrg.child_nodes(n).any(|c| self.above[c as usize]) || refine(n) {
-                continue;
+        }
+        while let Some(n) = self.stack.pop() {
+            if self.above[n as usize]
+                && n != source
+                && !mrg.child_nodes(n).any(|c| self.above[c as usize])
+                && !refine(n)
+            {
+                self.lower(n);
             }
-            self.above[n as usize] = false;
-            lowered.push(n);
-            stack.extend(mrg.parent_nodes(n));
         }
-        // Refine: below nodes with all parents above that must be refined.
-        let mut raised = Vec::new();
-        let mut stack = self.front.clone();
-        stack.extend(&lowered);
-        while let Some(n) = stack.pop() {
-            if self.above[n as usize] || n == DRAIN || !refine(n) {
-                continue;
+        // Refine: below nodes with all parents above that must be refined;
+        // likewise the front in one pass, the rest one by one.
+        let lowered = self.moved.len();
+        tested(&self.front, view, (&mut self.flags, &mut self.pending), 1);
+        for i in 0..self.pending.len() {
+            self.raise(self.pending[i]);
+        }
+        self.stack.extend_from_slice(&self.moved[..lowered]);
+        while let Some(n) = self.stack.pop() {
+            if !self.above[n as usize] && n != DRAIN && refine(n) {
+                self.raise(n);
             }
-            if mrg.parent_nodes(n).any(|m| !self.above[m as usize]) {
-                continue;
+        }
+        // A node's place in the front depends on it and its parents, in the
+        // bottom on it and its children: only those around a moved node change.
+        for i in 0..self.moved.len() {
+            let n = self.moved[i];
+            let around = std::iter::once(n)
+                .chain(mrg.child_nodes(n))
+                .chain(mrg.parent_nodes(n));
+            for m in around {
+                self.front.set(m, self.in_front(m), || Probe::of(&mrg, m));
+                self.bottom.set(m, self.in_bottom(m), || Probe::of(&mrg, m));
             }
-            self.above[n as usize] = true;
-            raised.push(n);
-            stack.extend(mrg.child_nodes(n));
         }
-        if raised.is_empty() && lowered.is_empty() {
-            return;
-        }
-        self.front.extend(&lowered);
-        for n in &raised {
-            self.front.extend(mrg.child_nodes(*n));
-        }
-        self.bottom.extend(&raised);
-        for n in &lowered {
-            self.bottom.extend(mrg.parent_nodes(*n));
-        }
-        self.tidy();
     }
 
-    /// Keeps only true frontier nodes, once each.
-    fn tidy(&mut self) {
+    /// Lowers above node `n`, which need not be refined and has no above
+    /// child; its parents join the walk.
+    fn lower(&mut self, n: u32) {
+        self.above[n as usize] = false;
+        self.moved.push(n);
+        self.stack.extend(self.mrg.parent_nodes(n));
+    }
+
+    /// Raises below node `n`, which must be refined, if all its parents are
+    /// above; its children join the walk.
+    fn raise(&mut self, n: u32) {
         let mrg = &*self.mrg;
-        self.generation = self.generation.wrapping_add(1);
-        if self.generation == 0 {
-            self.stamp.fill(0);
-            self.generation = 1;
+        if self.above[n as usize] || mrg.parent_nodes(n).any(|m| !self.above[m as usize]) {
+            return;
         }
-        let g = self.generation;
-        let (above, stamp) = (&self.above, &mut self.stamp);
-        self.front.retain(|n| {
-            let keep = !above[*n as usize]
-                && stamp[*n as usize] != g
-                && mrg.parent_nodes(*n).any(|m| above[m as usize]);
-            if keep {
-                stamp[*n as usize] = g;
-            }
-            keep
-        });
-        self.bottom.retain(|n| {
-            let keep = above[*n as usize]
-                && stamp[*n as usize] != g
-                && !mrg.child_nodes(*n).any(|c| above[c as usize]);
-            if keep {
-                stamp[*n as usize] = g;
-            }
-            keep
-        });
+        self.above[n as usize] = true;
+        self.moved.push(n);
+        self.stack.extend(mrg.child_nodes(n));
+    }
+
+    fn in_front(&self, n: u32) -> bool {
+        !self.above[n as usize] && self.mrg.parent_nodes(n).any(|m| self.above[m as usize])
+    }
+
+    fn in_bottom(&self, n: u32) -> bool {
+        self.above[n as usize] && !self.mrg.child_nodes(n).any(|c| self.above[c as usize])
     }
 
     /// The arcs on the cut.
     pub fn arcs(&self) -> Vec<u32> {
-        let mut out: Vec<u32> = self
-            .front
-            .iter()
+        let mut out: Vec<u32> = (self.front.items.iter())
             .flat_map(|n| self.mrg.nodes[*n as usize].parents.iter().copied())
             .filter(|a| self.above[self.mrg.arcs[*a as usize].consumer as usize])
             .collect();

@@ -221,41 +221,29 @@ impl Frame {
 
     /// [`Frame::must_refine`] of every node in `nodes`, as 0/1 in `flags`.
     /// §5.1's walk tests every display vertex each frame; without branches on
-    /// the node the test runs as one vector loop, 8 wide where the CPU has
-    /// AVX2 (no FMA: the answers stay those of the scalar test, bit for bit).
+    /// the node the test runs as one vector loop ([`crate::simd::wide`]).
     pub(crate) fn refine_flags(&self, nodes: &[Node], flags: &mut Vec<u8>) {
         flags.clear();
         flags.resize(nodes.len(), 0);
-        #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx2") {
-            // SAFETY: the CPU has AVX2.
-            unsafe { self.refine_flags_avx2(nodes, flags) };
-            return;
-        }
-        self.refine_flags_into(nodes, flags);
-    }
-
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2")]
-    fn refine_flags_avx2(&self, nodes: &[Node], flags: &mut [u8]) {
-        self.refine_flags_into(nodes, flags);
-    }
-
-    #[inline(always)]
-    fn refine_flags_into(&self, nodes: &[Node], flags: &mut [u8]) {
-        let flags = flags.iter_mut().zip(nodes);
-        match self.tolerance {
-            Tolerance::Relative(f) => {
-                for (o, n) in flags {
-                    *o = u8::from(n.downswitch > f * self.diagonal);
+        let t = match self.tolerance {
+            Tolerance::Relative(_) => {
+                for (o, n) in flags.iter_mut().zip(nodes) {
+                    *o = u8::from(self.must_refine(n));
                 }
+                return;
             }
-            Tolerance::Pixels(t) => {
-                for (o, n) in flags {
+            Tolerance::Pixels(t) => t,
+        };
+        crate::simd::wide(
+            nodes,
+            flags,
+            #[inline(always)]
+            |nodes, flags| {
+                for (o, n) in flags.iter_mut().zip(nodes) {
                     *o = u8::from(self.too_many_pixels(n, t));
                 }
-            }
-        }
+            },
+        );
     }
 
     /// The screen-space test with its threshold `t` scaled by the other
