@@ -10,6 +10,7 @@ use std::sync::Arc;
 
 use fixedbitset::FixedBitSet;
 
+use super::criteria::Frame;
 use super::node_set::{List, MergeState, NodeList};
 use super::{Criteria, MergeTree, NONE};
 use crate::cut::{DrawSet, Hierarchy};
@@ -119,11 +120,7 @@ impl MergeTreeView {
         self.work.clear();
         // Down the tree from every display vertex whose node is too coarse,
         // splitting what depends on it first (§4.3).
-        frame.refine_flags(&self.active.nodes, &mut self.flags);
-        stats.evaluated += self.active.len();
-        select(&self.active.ids, &self.flags, 1, &mut self.pending);
-        // In merge order: rows of neighbouring merges are neighbours in memory.
-        self.pending.sort_unstable();
+        stats.evaluated += self.pick(&frame, List::Active, true);
         for i in 0..self.pending.len() {
             let k = self.pending[i];
             if self.state[k as usize].merged {
@@ -141,10 +138,7 @@ impl MergeTreeView {
         }
         // Up the tree: merge children wherever the view and the dependencies
         // allow it.
-        frame.refine_flags(&self.mergeable.nodes, &mut self.flags);
-        stats.evaluated += self.mergeable.len();
-        select(&self.mergeable.ids, &self.flags, 0, &mut self.pending);
-        self.pending.sort_unstable();
+        stats.evaluated += self.pick(&frame, List::Mergeable, false);
         for i in 0..self.pending.len() {
             let k = self.pending[i];
             if !self.state[k as usize].merged && self.state[k as usize].missing == 0 {
@@ -161,6 +155,21 @@ impl MergeTreeView {
             }
         }
         stats
+    }
+
+    /// Tests every node of list `which` in one pass and puts the merges whose
+    /// answer is `refine` into `pending`; returns how many were tested.
+    fn pick(&mut self, frame: &Frame, which: List, refine: bool) -> usize {
+        let list = match which {
+            List::Mergeable => &self.mergeable,
+            List::Active => &self.active,
+        };
+        frame.refine_flags(&list.nodes, &mut self.flags);
+        self.pending.clear();
+        let flagged = list.ids.iter().zip(&self.flags);
+        let picked = flagged.filter(|(_, f)| (**f == 1) == refine);
+        self.pending.extend(picked.map(|(k, _)| *k));
+        list.len()
     }
 
     fn insert(&mut self, which: List, k: u32) {
@@ -364,17 +373,6 @@ impl MergeTreeView {
             ..DrawSet::default()
         }
     }
-}
-
-/// The ids whose flag is `want`, into `out`.
-fn select(ids: &[u32], flags: &[u8], want: u8, out: &mut Vec<u32>) {
-    out.clear();
-    out.extend(
-        ids.iter()
-            .zip(flags)
-            .filter(|(_, f)| **f == want)
-            .map(|(k, _)| *k),
-    );
 }
 
 /// The per-vertex attribute of `order`'s vertices, where there is one.
