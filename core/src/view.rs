@@ -166,8 +166,20 @@ impl SphereTest {
     /// See [`View::pixels_f64`].
     #[inline(always)]
     pub fn pixels(&self, length: f64, center: Vec3, radius: f64) -> f64 {
-        let depth = ((center.as_dvec3() - self.eye).dot(self.forward) - radius).max(NEAR as f64);
-        length * self.focal * self.stretch / depth
+        length * self.focal * self.stretch / self.depth(center, radius)
+    }
+
+    /// Whether `length` projects to more than `pixels` ([`SphereTest::pixels`]
+    /// without its division, for passes over many nodes).
+    #[inline(always)]
+    pub fn exceeds(&self, length: f64, center: Vec3, radius: f64, pixels: f64) -> bool {
+        length * self.focal * self.stretch > pixels * self.depth(center, radius)
+    }
+
+    /// The sphere's nearest depth, at least the near distance.
+    #[inline(always)]
+    fn depth(&self, center: Vec3, radius: f64) -> f64 {
+        ((center.as_dvec3() - self.eye).dot(self.forward) - radius).max(NEAR as f64)
     }
 }
 

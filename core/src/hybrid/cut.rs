@@ -94,7 +94,7 @@ impl Probe {
             Tolerance::Pixels(p) => {
                 let (center, reach) = (self.sphere.center, self.sphere.radius + self.error);
                 test.sees(center, reach)
-                    & (test.pixels(self.error as f64, center, reach as f64) > p as f64)
+                    & test.exceeds(self.error as f64, center, reach as f64, p as f64)
             }
         };
         (self.kind == NodeKind::Source) | (refines & (self.kind != NodeKind::Drain))
