@@ -11,6 +11,7 @@ pub mod cut;
 pub mod distance;
 pub mod geom;
 pub mod hybrid;
+mod id_set;
 pub mod implicit;
 pub mod io;
 pub mod mergetree;

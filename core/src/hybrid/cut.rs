@@ -3,10 +3,10 @@
 //!
 //! A node must be refined when its error, seen in its sphere, exceeds the
 //! tolerance: object space compares the error with a fraction of the bounding-
-//! box diagonal; screen space projects it conservatively with
-//! [`View::pixels_f64`] (via [`SphereTest`]) anywhere in the node's sphere grown by the error (the
-//! deviation may reach that far), and a node whose grown sphere is outside the
-//! view frustum needs no refinement. Node spheres contain their children's and
+//! box diagonal; screen space projects it conservatively
+//! ([`View::pixels_f64`], via [`SphereTest`]) anywhere in the node's sphere
+//! grown by the error (the deviation may reach that far), and a node whose
+//! grown sphere is outside the view frustum needs no refinement. Node spheres contain their children's and
 //! errors never decrease upwards, so "must be refined" is monotone: the cut is
 //! exactly {nodes that must be refined} ∪ {source}, found fresh by a traversal
 //! from the source, or incrementally (§4, §6) by moving the frontier nodes up
@@ -21,51 +21,8 @@ use glam::Vec3;
 use super::mrg::{DRAIN, Mrg, NodeKind, Sphere};
 use crate::cut::{CutPoint, DrawSet, Hierarchy};
 use crate::geom::TriMesh;
+use crate::id_set::IdSet;
 use crate::view::{SphereTest, Tolerance, View};
-
-/// Node ids with O(1) insert, remove and membership, and a dense list with
-/// a value beside each id.
-#[derive(Debug, Clone)]
-struct IdSet<T> {
-    items: Vec<u32>,
-    values: Vec<T>,
-    slot: Vec<u32>,
-}
-
-impl<T> IdSet<T> {
-    fn new(n: usize) -> Self {
-        IdSet {
-            items: Vec::new(),
-            values: Vec::new(),
-            slot: vec![u32::MAX; n],
-        }
-    }
-
-    fn clear(&mut self) {
-        for &i in &self.items {
-            self.slot[i as usize] = u32::MAX;
-        }
-        self.items.clear();
-        self.values.clear();
-    }
-
-    /// Puts `i` in the set (with `value()`) or takes it out.
-    fn set(&mut self, i: u32, member: bool, value: impl FnOnce() -> T) {
-        let s = self.slot[i as usize];
-        if member && s == u32::MAX {
-            self.slot[i as usize] = self.items.len() as u32;
-            self.items.push(i);
-            self.values.push(value());
-        } else if !member && s != u32::MAX {
-            self.items.swap_remove(s as usize);
-            self.values.swap_remove(s as usize);
-            if let Some(&moved) = self.items.get(s as usize) {
-                self.slot[moved as usize] = s;
-            }
-            self.slot[i as usize] = u32::MAX;
-        }
-    }
-}
 
 /// What the refinement test reads of a node: copied beside the front's ids,
 /// so that a frame tests the whole front in one pass over contiguous memory.
@@ -232,10 +189,8 @@ impl HybridCut {
         // Coarsen: above nodes with all children below that need no
         // refinement. The bottom's tests run in one pass over its copies (its
         // nodes have no above child), the parents they uncover one by one.
-        let diagonal = mrg.diagonal;
-        self.pending.clear();
-        let view = (&test, tolerance, diagonal);
-        tested(&self.bottom, view, (&mut self.flags, &mut self.pending), 0);
+        let at = (&test, tolerance, mrg.diagonal);
+        tested(&self.bottom, at, (&mut self.flags, &mut self.pending), 0);
         for i in 0..self.pending.len() {
             let n = self.pending[i];
             if n != source {
@@ -254,7 +209,7 @@ impl HybridCut {
         // Refine: below nodes with all parents above that must be refined;
         // likewise the front in one pass, the rest one by one.
         let lowered = self.moved.len();
-        tested(&self.front, view, (&mut self.flags, &mut self.pending), 1);
+        tested(&self.front, at, (&mut self.flags, &mut self.pending), 1);
         for i in 0..self.pending.len() {
             self.raise(self.pending[i]);
         }

@@ -10,7 +10,6 @@
 
 mod criteria;
 mod dependencies;
-mod node_set;
 mod selection;
 mod tree;
 

@@ -11,10 +11,10 @@ use std::sync::Arc;
 use fixedbitset::FixedBitSet;
 
 use super::criteria::Frame;
-use super::node_set::{List, MergeState, NodeList};
-use super::{Criteria, MergeTree, NONE};
+use super::{Criteria, MergeTree, NONE, Node};
 use crate::cut::{DrawSet, Hierarchy};
 use crate::geom::TriMesh;
+use crate::id_set::IdSet;
 use crate::view::{Tolerance, View};
 
 /// What one update did.
@@ -29,16 +29,40 @@ pub struct UpdateStats {
     pub fan_mismatches: usize,
 }
 
+/// Per merge, what the run time knows of it, in one record.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+struct MergeState {
+    merged: bool,
+    /// How many of its requirements are not in place.
+    missing: u32,
+}
+
+impl MergeState {
+    const NEW: MergeState = MergeState {
+        merged: false,
+        missing: 0,
+    };
+}
+
+/// The two lists of merges a frame tests, each with a copy of their nodes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum List {
+    /// Merges not in place whose requirements all are: may merge next.
+    Mergeable,
+    /// The nodes of the display vertices that have one.
+    Active,
+}
+
 /// The run-time state of a merge tree: the merges in place, the display
 /// vertices and triangles, and the frontier the next frame's walk up starts from.
 #[derive(Debug, Clone)]
 pub struct MergeTreeView {
     tree: Arc<MergeTree>,
     pub criteria: Criteria,
-    /// Per merge: in place, requirements missing, places in the lists.
+    /// Per merge: in place, requirements missing.
     state: Vec<MergeState>,
     /// Merges not in place whose requirements all are: may merge next.
-    mergeable: NodeList,
+    mergeable: IdSet<Node>,
     /// The display vertices and triangles, as bits: a fan swap touches a few
     /// words of a small array instead of a dense list's slots.
     shown: FixedBitSet,
@@ -48,7 +72,7 @@ pub struct MergeTreeView {
     node: Vec<u32>,
     /// The nodes of the display vertices that have one: the walk down
     /// starts from them.
-    active: NodeList,
+    active: IdSet<Node>,
     work: Vec<u32>,
     /// Per-frame scratch of the batched tests.
     flags: Vec<u8>,
@@ -64,12 +88,12 @@ impl MergeTreeView {
         let mut view = MergeTreeView {
             criteria,
             state: vec![MergeState::NEW; m],
-            mergeable: NodeList::with_capacity(m),
+            mergeable: IdSet::new(m),
             shown: FixedBitSet::with_capacity(n),
             display: FixedBitSet::with_capacity(tree.triangles.len()),
             displayed: 0,
             node: vec![NONE; n],
-            active: NodeList::with_capacity(m),
+            active: IdSet::new(m),
             work: Vec::with_capacity(m),
             flags: Vec::with_capacity(m),
             pending: Vec::with_capacity(m),
@@ -164,28 +188,28 @@ impl MergeTreeView {
             List::Mergeable => &self.mergeable,
             List::Active => &self.active,
         };
-        frame.refine_flags(&list.nodes, &mut self.flags);
+        frame.refine_flags(&list.values, &mut self.flags);
         self.pending.clear();
-        let flagged = list.ids.iter().zip(&self.flags);
+        let flagged = list.items.iter().zip(&self.flags);
         let picked = flagged.filter(|(_, f)| (**f == 1) == refine);
         self.pending.extend(picked.map(|(k, _)| *k));
         list.len()
     }
 
-    fn insert(&mut self, which: List, k: u32) {
-        let list = match which {
+    fn list(&mut self, which: List) -> &mut IdSet<Node> {
+        match which {
             List::Mergeable => &mut self.mergeable,
             List::Active => &mut self.active,
-        };
-        list.insert(which, k, &self.tree.nodes[k as usize], &mut self.state);
+        }
+    }
+
+    fn insert(&mut self, which: List, k: u32) {
+        let node = self.tree.nodes[k as usize];
+        self.list(which).insert(k, || node);
     }
 
     fn remove(&mut self, which: List, k: u32) {
-        let list = match which {
-            List::Mergeable => &mut self.mergeable,
-            List::Active => &mut self.active,
-        };
-        list.remove(which, k, &mut self.state);
+        self.list(which).remove(k);
     }
 
     /// Sets vertex `v`'s node, keeping the display vertices' nodes in step.
@@ -283,10 +307,10 @@ impl MergeTreeView {
             .map(|v| self.node[v])
             .filter(|k| *k != NONE)
             .collect();
-        let mut have = self.active.ids.clone();
+        let mut have = self.active.items.clone();
         want.sort_unstable();
         have.sort_unstable();
-        let copies = (self.active.ids.iter().zip(&self.active.nodes))
+        let copies = (self.active.items.iter().zip(&self.active.values))
             .all(|(k, n)| self.tree.nodes[*k as usize] == *n);
         want == have && copies
     }
