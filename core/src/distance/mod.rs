@@ -3,6 +3,7 @@
 //! guaranteed error bound is checked against.
 
 pub mod bvh;
+pub mod facets;
 pub mod hausdorff;
 pub mod triangle;
 pub mod winding;

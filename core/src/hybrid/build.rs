@@ -43,7 +43,8 @@ use rayon::prelude::*;
 
 use super::mrg::{DRAIN, Mrg, NodeKind, Point, Sphere};
 use super::{point_replacement, point_simplification};
-use crate::distance::{MeshDistance, closest_point_on_triangle};
+use crate::distance::MeshDistance;
+use crate::distance::facets::Facets;
 use crate::geom::TriMesh;
 use crate::progress::{Cancelled, Progress};
 use crate::simplify::bound::{BoundOptions, max_distance_bound};
@@ -129,22 +130,20 @@ pub fn build_observed(
 
     // §5.1–5.2: edge collapses in cost/benefit order.
     progress.stage("hybrid: collapsing edges");
-    let cache = Mutex::new(Vec::<f64>::new());
+    let queue = Mutex::new(QueueScratch::default());
     let cost = move |cand: &crate::simplify::Candidate, col: &EdgeCollapser| {
-        let star = col.star(cand.edge);
-        let old: Vec<[Vec3; 3]> = star.iter().map(|t| col.triangle_positions(*t)).collect();
-        let new = col.star_after(cand);
-        let value =
-            tau * deviation(&old, &new, cand.position) / cand.triangles_removed.max(1) as f64;
+        let mut guard = queue.lock().unwrap_or_else(|e| e.into_inner());
+        let q = &mut *guard;
+        col.star_into(cand.edge, &mut q.star);
+        let value = tau * q.deviation(col, cand) / cand.triangles_removed.max(1) as f64;
         if kappa > 1.0 {
-            let mut cache = cache.lock().unwrap_or_else(|e| e.into_inner());
-            if cache.len() < col.triangle_total() {
-                cache.resize(col.triangle_total(), f64::NAN);
+            if q.replacement.len() < col.triangle_total() {
+                q.replacement.resize(col.triangle_total(), f64::NAN);
             }
-            for (t, p) in star.iter().zip(&old) {
-                let v = &mut cache[*t as usize];
+            for t in &q.star {
+                let v = &mut q.replacement[*t as usize];
                 if v.is_nan() {
-                    *v = point_replacement::value(p, kappa);
+                    *v = point_replacement::value(&col.triangle_positions(*t), kappa);
                 }
                 if *v < value {
                     return f64::INFINITY;
@@ -155,7 +154,7 @@ pub fn build_observed(
     };
     let mut col = EdgeCollapser::with_star_cost(mesh, opts.collapse, Box::new(cost));
     let mut tri_producer: Vec<u32> = vec![DRAIN; n];
-    let mut collapses: Vec<(u32, Vec<u32>, Vec<u32>)> = Vec::new();
+    let mut collapses: Vec<Recorded> = Vec::new();
     while let Some(c) = col.step() {
         let balls = c
             .added
@@ -181,7 +180,11 @@ pub fn build_observed(
         for t in &c.added {
             tri_producer[*t as usize] = node;
         }
-        collapses.push((node, c.removed, c.added));
+        collapses.push(Recorded {
+            node,
+            removed: c.removed,
+            added: c.added,
+        });
         if collapses.len().is_multiple_of(256) && progress.wants_preview() {
             // Watching the build: the triangles left and the points made so far.
             progress.publish(crate::cut::DrawSet {
@@ -237,6 +240,24 @@ pub fn build_observed(
         .par_iter()
         .map(|p| original.nearest(*p))
         .collect();
+    // Exact distances found so far bound each triangle's error from below, and
+    // a node's error is at least its descendants' (errors never decrease
+    // upwards): refining a triangle below that floor cannot raise any node's
+    // error, so its bound stops there.
+    let low = |t: usize| {
+        mrg.triangles[t]
+            .iter()
+            .map(|v| nearest[*v as usize].0)
+            .fold(forward[t], f32::max)
+    };
+    let mut floor = vec![0.0f32; mrg.nodes.len()];
+    for c in &collapses {
+        let own = c.added.iter().map(|t| low(*t as usize)).fold(0.0, f32::max);
+        floor[c.node as usize] = mrg
+            .child_nodes(c.node)
+            .map(|k| floor[k as usize])
+            .fold(own, f32::max);
+    }
     let tri_error: Vec<f32> = (0..mrg.triangles.len())
         .into_par_iter()
         .map(|t| {
@@ -245,24 +266,25 @@ pub fn build_observed(
             }
             let p = mrg.triangle_positions(t as u32);
             let at = mrg.triangles[t].map(|v| nearest[v as usize]);
-            // No need to go below the other direction's value.
-            let (reverse, _) = max_distance_bound(p, at, &original, &bound_opts, forward[t]);
+            let enough = forward[t].max(floor[tri_producer[t] as usize]);
+            let (reverse, _) = max_distance_bound(p, at, &original, &bound_opts, enough);
             // f32 round-off of the coordinates (flat collapses bound to 0).
             let scale = p.iter().map(|v| v.abs().max_element()).fold(0.0, f32::max);
             reverse.max(forward[t]) + 8.0 * f32::EPSILON * scale
         })
         .collect();
     progress.check()?;
-    for (node, _, added) in &collapses {
-        let own = added
+    for c in &collapses {
+        let own = c
+            .added
             .iter()
             .map(|t| tri_error[*t as usize])
             .fold(0.0, f32::max);
         let below = mrg
-            .child_nodes(*node)
-            .map(|c| mrg.nodes[c as usize].error)
+            .child_nodes(c.node)
+            .map(|k| mrg.nodes[k as usize].error)
             .fold(0.0, f32::max);
-        mrg.nodes[*node as usize].error = own.max(below);
+        mrg.nodes[c.node as usize].error = own.max(below);
     }
 
     // §5.3: every remaining triangle is point-replaced.
@@ -419,34 +441,74 @@ fn spheres_of(mrg: &Mrg, own: Vec<Sphere>, children: &mut dyn Iterator<Item = u3
     Sphere::enclose(&balls)
 }
 
-/// Queue estimate of H(new star, old star): a lower bound from the new
-/// vertex, the midpoints of its edges and the centroids of the new triangles
-/// against the old star, and the old endpoints against the new star.
-fn deviation(old: &[[Vec3; 3]], new: &[[Vec3; 3]], p: Vec3) -> f64 {
-    let dist = |q: Vec3, set: &[[Vec3; 3]]| {
-        set.iter()
-            .map(|t| closest_point_on_triangle(q, t[0], t[1], t[2]).distance_squared(q))
-            .fold(f32::INFINITY, f32::min)
-    };
-    let mut worst = dist(p, old);
-    for t in new {
-        let far: Vec<Vec3> = t.iter().copied().filter(|v| *v != p).collect();
-        for v in &far {
-            worst = worst.max(dist((*v + p) * 0.5, old));
+/// Buffers of the queue's cost, reused across its calls (about a dozen per
+/// collapse).
+#[derive(Default)]
+struct QueueScratch {
+    star: Vec<u32>,
+    old: Facets,
+    new: Facets,
+    /// New triangles' positions.
+    made: Vec<[Vec3; 3]>,
+    /// Far ends of the new vertex's edges seen so far.
+    spokes: Vec<Vec3>,
+    /// Point-replacement value per triangle id (NaN until needed; a triangle's
+    /// value never changes).
+    replacement: Vec<f64>,
+}
+
+impl QueueScratch {
+    /// Queue estimate of H(new star, old star) for the collapse of `cand`
+    /// (the star in `self.star`): a lower bound from the new vertex, the
+    /// midpoints of its edges and the centroids of the new triangles against
+    /// the old star, and the old endpoints against the new star.
+    fn deviation(&mut self, col: &EdgeCollapser, cand: &crate::simplify::Candidate) -> f64 {
+        let [a, b] = cand.edge;
+        let p = cand.position;
+        self.old.clear();
+        self.new.clear();
+        self.made.clear();
+        for &t in &self.star {
+            let tri = col.triangle(t);
+            let pos = col.triangle_positions(t);
+            self.old.push(&pos);
+            if !(tri.contains(&a) && tri.contains(&b)) {
+                let moved = std::array::from_fn(|k| {
+                    if tri[k] == a || tri[k] == b {
+                        p
+                    } else {
+                        pos[k]
+                    }
+                });
+                self.new.push(&moved);
+                self.made.push(moved);
+            }
         }
-        worst = worst.max(dist((t[0] + t[1] + t[2]) / 3.0, old));
+        // Each spoke from p is shared by two new triangles: its midpoint once.
+        self.spokes.clear();
+        let mut worst = self.old.nearest_squared(p);
+        for t in &self.made {
+            for v in t.iter().filter(|v| **v != p) {
+                if !self.spokes.contains(v) {
+                    self.spokes.push(*v);
+                    worst = worst.max(self.old.nearest_squared((*v + p) * 0.5));
+                }
+            }
+            worst = worst.max(self.old.nearest_squared((t[0] + t[1] + t[2]) / 3.0));
+        }
+        // The collapsed edge's endpoints are the old vertices that moved.
+        for v in [col.position(a), col.position(b)] {
+            worst = worst.max(self.new.nearest_squared(v));
+        }
+        (worst as f64).sqrt()
     }
-    // The collapsed edge's endpoints are the old vertices that moved.
-    let moved: Vec<Vec3> = old
-        .iter()
-        .flatten()
-        .copied()
-        .filter(|v| !new.iter().flatten().any(|w| w == v))
-        .collect();
-    for v in moved {
-        worst = worst.max(dist(v, new));
-    }
-    (worst as f64).sqrt()
+}
+
+/// One edge collapse as the MRG recorded it.
+struct Recorded {
+    node: u32,
+    removed: Vec<u32>,
+    added: Vec<u32>,
 }
 
 /// Attributes every original triangle to one triangle of each model it
@@ -455,7 +517,7 @@ fn deviation(old: &[[Vec3; 3]], new: &[[Vec3; 3]], p: Vec3) -> f64 {
 /// exact for a whole triangle since the distance to a triangle is convex).
 /// Returns, per triangle, the largest such distance of its originals (the
 /// original-to-simplified direction of its bound).
-fn attribute(mesh: &TriMesh, mrg: &Mrg, collapses: &[(u32, Vec<u32>, Vec<u32>)]) -> Vec<f32> {
+fn attribute(mesh: &TriMesh, mrg: &Mrg, collapses: &[Recorded]) -> Vec<f32> {
     let mut owned: Vec<Vec<u32>> = (0..mrg.triangles.len() as u32)
         .map(|t| {
             if (t as usize) < mesh.triangles.len() {
@@ -466,31 +528,28 @@ fn attribute(mesh: &TriMesh, mrg: &Mrg, collapses: &[(u32, Vec<u32>, Vec<u32>)])
         })
         .collect();
     let mut forward = vec![0.0f32; mrg.triangles.len()];
-    for (_, removed, added) in collapses {
-        let region: Vec<u32> = removed
-            .iter()
-            .flat_map(|t| std::mem::take(&mut owned[*t as usize]))
-            .collect();
-        let new: Vec<[Vec3; 3]> = added.iter().map(|t| mrg.triangle_positions(*t)).collect();
+    let mut facets = Facets::default();
+    let mut region = Vec::new();
+    for c in collapses {
+        region.clear();
+        for t in &c.removed {
+            region.extend(std::mem::take(&mut owned[*t as usize]));
+        }
+        facets.clear();
+        for t in &c.added {
+            facets.push(&mrg.triangle_positions(*t));
+        }
         let choice: Vec<(usize, f32)> = region
             .par_iter()
             .with_min_len(256)
             .map(|o| {
-                let v = mesh.triangle(*o as usize);
-                new.iter()
-                    .map(|p| {
-                        v.iter()
-                            .map(|q| closest_point_on_triangle(*q, p[0], p[1], p[2]).distance(*q))
-                            .fold(0.0, f32::max)
-                    })
-                    .enumerate()
-                    .min_by(|a, b| a.1.total_cmp(&b.1))
-                    .unwrap_or((0, 0.0))
+                let (k, d) = facets.nearest_cover(&mesh.triangle(*o as usize));
+                (k, d.sqrt())
             })
             .collect();
-        for (o, (k, d)) in region.into_iter().zip(choice) {
-            let t = added[k] as usize;
-            owned[t].push(o);
+        for (o, (k, d)) in region.iter().zip(choice) {
+            let t = c.added[k] as usize;
+            owned[t].push(*o);
             forward[t] = forward[t].max(d);
         }
     }

@@ -58,7 +58,7 @@ pub struct Candidate {
 pub type CostFn = dyn Fn(&Candidate) -> f64 + Send + Sync;
 
 /// A cost that may also look at the working mesh (the star a candidate
-/// replaces, via [`EdgeCollapser::star`] and [`EdgeCollapser::star_after`]);
+/// replaces, via [`EdgeCollapser::star_into`] and [`EdgeCollapser::triangle`]);
 /// a non-finite cost takes the candidate out of the queue (the hybrid method
 /// does so when a point replacement takes precedence, §5).
 pub type StarCostFn = dyn Fn(&Candidate, &EdgeCollapser) -> f64 + Send + Sync;
@@ -396,33 +396,28 @@ impl EdgeCollapser {
         self.materials.as_ref()
     }
 
-    /// The triangles a collapse of `edge` removes: every triangle around either end.
+    /// The triangles a collapse of `edge` removes (every triangle around either
+    /// end), ascending.
     pub fn star(&self, edge: [u32; 2]) -> Vec<u32> {
-        let [a, b] = edge;
-        let mut s: Vec<u32> = self.vtris[a as usize].clone();
-        s.extend(self.vtris[b as usize].iter().copied());
+        let mut s = Vec::new();
+        self.star_into(edge, &mut s);
         s.sort_unstable();
-        s.dedup();
         s
     }
 
-    /// The triangles `cand` would create, as positions.
-    pub fn star_after(&self, cand: &Candidate) -> Vec<[Vec3; 3]> {
-        let [a, b] = cand.edge;
-        self.star(cand.edge)
-            .into_iter()
-            .map(|t| self.tris[t as usize])
-            .filter(|tri| !(tri.contains(&a) && tri.contains(&b)))
-            .map(|tri| {
-                tri.map(|w| {
-                    if w == a || w == b {
-                        cand.position
-                    } else {
-                        self.pos[w as usize]
-                    }
-                })
-            })
-            .collect()
+    /// The triangles of [`EdgeCollapser::star`] into `out`, each once, in no
+    /// particular order: a cost function runs about a dozen times per
+    /// collapse, so it reuses its buffer.
+    pub fn star_into(&self, edge: [u32; 2], out: &mut Vec<u32>) {
+        let [a, b] = edge;
+        out.clear();
+        out.extend_from_slice(&self.vtris[a as usize]);
+        out.extend(
+            self.vtris[b as usize]
+                .iter()
+                .copied()
+                .filter(|t| !self.tris[*t as usize].contains(&a)),
+        );
     }
 
     /// Ids of the triangles alive now.
