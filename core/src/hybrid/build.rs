@@ -156,15 +156,8 @@ pub fn build_observed(
     let mut tri_producer: Vec<u32> = vec![DRAIN; n];
     let mut collapses: Vec<Recorded> = Vec::new();
     while let Some(c) = col.step() {
-        let balls = c
-            .added
-            .iter()
-            .flat_map(|t| col.triangle_positions(*t))
-            .map(|center| Sphere {
-                center,
-                radius: 0.0,
-            })
-            .collect();
+        sync(&mut mrg, &col);
+        let balls = mrg.balls(&c.added, &[]);
         let mut kids: Vec<u32> = c
             .removed
             .iter()
@@ -175,7 +168,6 @@ pub fn build_observed(
         let sphere = spheres_of(&mrg, balls, &mut kids.into_iter());
         let node = mrg.add_node(NodeKind::TriangleSimplification, 0.0, sphere);
         tri_producer.resize(col.triangle_total(), DRAIN);
-        sync(&mut mrg, &col);
         mrg.consume(node, &c.removed, &[], &tri_producer, &[]);
         for t in &c.added {
             tri_producer[*t as usize] = node;

@@ -206,13 +206,20 @@ impl Mrg {
         }
     }
 
-    /// Balls bounding primitives: triangle vertices and point spheres.
+    /// Balls bounding primitives: triangle vertices (each once: neighbouring
+    /// triangles share them, and the enclosing sphere's cost follows the
+    /// count) and point spheres.
     pub(crate) fn balls(&self, triangles: &[u32], points: &[u32]) -> Vec<Sphere> {
-        let mut out: Vec<Sphere> = triangles
+        let mut vertices: Vec<u32> = triangles
             .iter()
-            .flat_map(|t| self.triangle_positions(*t))
-            .map(|center| Sphere {
-                center,
+            .flat_map(|t| self.triangles[*t as usize])
+            .collect();
+        vertices.sort_unstable();
+        vertices.dedup();
+        let mut out: Vec<Sphere> = vertices
+            .iter()
+            .map(|v| Sphere {
+                center: self.positions[*v as usize],
                 radius: 0.0,
             })
             .collect();

@@ -113,6 +113,17 @@ impl Frame {
         })
     }
 
+    /// Samples needed at distance d (capped, so absurd d stay cheap).
+    fn count(&self, d: f32) -> usize {
+        if self.len <= 0.0 || d.is_nan() || d <= 0.0 {
+            return 1;
+        }
+        if self.h / d > 1e6 {
+            return usize::MAX;
+        }
+        self.rows(d).map(|(_, m)| m).sum()
+    }
+
     fn corners(&self) -> [Vec2; 3] {
         [
             Vec2::ZERO,
@@ -122,16 +133,9 @@ impl Frame {
     }
 }
 
-/// Samples a triangle needs at distance d (capped, so absurd d stay cheap).
+/// Samples a triangle needs at distance d.
 pub fn count(tri: &[Vec3; 3], d: f32) -> usize {
-    let f = Frame::new(tri);
-    if f.len <= 0.0 || d.is_nan() || d <= 0.0 {
-        return 1;
-    }
-    if f.h / d > 1e6 {
-        return usize::MAX;
-    }
-    f.rows(d).map(|(_, m)| m).sum()
+    Frame::new(tri).count(d)
 }
 
 /// The §5.3.1 samples at distance d.
@@ -199,8 +203,10 @@ pub fn smallest_distance(tri: &[Vec3; 3], s: usize) -> f32 {
     if hi.is_nan() || hi <= 0.0 {
         return 0.0;
     }
+    // One frame for every count of the search.
+    let frame = Frame::new(tri);
     let mut lo = 0.0;
-    while count(tri, hi) > s {
+    while frame.count(hi) > s {
         lo = hi;
         hi *= 2.0;
     }
@@ -209,7 +215,7 @@ pub fn smallest_distance(tri: &[Vec3; 3], s: usize) -> f32 {
     }
     while hi - lo > 1e-3 * hi {
         let mid = 0.5 * (lo + hi);
-        if count(tri, mid) <= s {
+        if frame.count(mid) <= s {
             hi = mid;
         } else {
             lo = mid;
