@@ -250,33 +250,42 @@ pub fn build_observed(
             .map(|k| floor[k as usize])
             .fold(own, f32::max);
     }
-    let tri_error: Vec<f32> = (0..mrg.triangles.len())
-        .into_par_iter()
-        .map(|t| {
-            if t < n {
-                return 0.0;
-            }
-            let p = mrg.triangle_positions(t as u32);
-            let at = mrg.triangles[t].map(|v| nearest[v as usize]);
-            let enough = forward[t].max(floor[tri_producer[t] as usize]);
-            let (reverse, _) = max_distance_bound(p, at, &original, &bound_opts, enough);
-            // f32 round-off of the coordinates (flat collapses bound to 0).
-            let scale = p.iter().map(|v| v.abs().max_element()).fold(0.0, f32::max);
-            reverse.max(forward[t]) + 8.0 * f32::EPSILON * scale
-        })
-        .collect();
-    progress.check()?;
-    for c in &collapses {
-        let own = c
-            .added
-            .iter()
-            .map(|t| tri_error[*t as usize])
-            .fold(0.0, f32::max);
-        let below = mrg
-            .child_nodes(c.node)
-            .map(|k| mrg.nodes[k as usize].error)
-            .fold(0.0, f32::max);
-        mrg.nodes[c.node as usize].error = own.max(below);
+    // Waves of collapses in build order: each wave's triangles are bounded in
+    // parallel, and a triangle also stops once it is below the final error of
+    // a child node from an earlier wave (its node's error is at least that).
+    let mut jobs = Vec::new();
+    for (k, wave) in collapses.chunks(1024).enumerate() {
+        jobs.clear();
+        for c in wave {
+            let below = mrg
+                .child_nodes(c.node)
+                .map(|k| mrg.nodes[k as usize].error)
+                .fold(floor[c.node as usize], f32::max);
+            jobs.extend(c.added.iter().map(|t| (*t as usize, below)));
+        }
+        let tri_error: Vec<f32> = jobs
+            .par_iter()
+            .map(|&(t, below)| {
+                let p = mrg.triangle_positions(t as u32);
+                let at = mrg.triangles[t].map(|v| nearest[v as usize]);
+                let enough = forward[t].max(below);
+                let (reverse, _) = max_distance_bound(p, at, &original, &bound_opts, enough);
+                // f32 round-off of the coordinates (flat collapses bound to 0).
+                let scale = p.iter().map(|v| v.abs().max_element()).fold(0.0, f32::max);
+                reverse.max(forward[t]) + 8.0 * f32::EPSILON * scale
+            })
+            .collect();
+        let mut errors = tri_error.into_iter();
+        for c in wave {
+            let own = errors.by_ref().take(c.added.len()).fold(0.0, f32::max);
+            let below = mrg
+                .child_nodes(c.node)
+                .map(|k| mrg.nodes[k as usize].error)
+                .fold(0.0, f32::max);
+            mrg.nodes[c.node as usize].error = own.max(below);
+        }
+        progress.set_fraction(((k + 1) * 1024) as f32 / collapses.len().max(1) as f32);
+        progress.check()?;
     }
 
     // §5.3: every remaining triangle is point-replaced.
