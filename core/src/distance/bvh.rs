@@ -93,7 +93,18 @@ impl Bvh {
     /// The primitive nearest to `p` under `dist` (which must be at least the
     /// distance to the primitive's box), and its distance; `None` when empty.
     pub fn nearest(&self, p: Vec3, dist: impl Fn(u32) -> f32) -> Option<(f32, u32)> {
-        let mut best = (f32::INFINITY, u32::MAX);
+        self.nearest_from(p, (f32::INFINITY, u32::MAX), dist)
+    }
+
+    /// [`Bvh::nearest`] starting from a known (distance, primitive): a good
+    /// guess prunes most boxes from the first one on.
+    pub fn nearest_from(
+        &self,
+        p: Vec3,
+        start: (f32, u32),
+        dist: impl Fn(u32) -> f32,
+    ) -> Option<(f32, u32)> {
+        let mut best = start;
         let mut stack: [u32; 64] = [0; 64];
         let mut top = usize::from(!self.nodes.is_empty());
         while top > 0 {
@@ -169,8 +180,22 @@ impl<'a> MeshDistance<'a> {
 
     /// Distance to the surface and the nearest triangle (`u32::MAX` when empty).
     pub fn nearest(&self, p: Vec3) -> (f32, u32) {
-        self.closest(p)
-            .map_or((f32::INFINITY, u32::MAX), |(q, t)| (q.distance(p), t))
+        self.bvh
+            .nearest(p, |t| self.triangle_distance(p, t))
+            .unwrap_or((f32::INFINITY, u32::MAX))
+    }
+
+    /// [`MeshDistance::nearest`] searched from triangle `hint` (a neighbour's
+    /// nearest triangle is usually near).
+    pub fn nearest_near(&self, p: Vec3, hint: u32) -> (f32, u32) {
+        let start = if (hint as usize) < self.mesh.triangles.len() {
+            (self.triangle_distance(p, hint), hint)
+        } else {
+            (f32::INFINITY, u32::MAX)
+        };
+        self.bvh
+            .nearest_from(p, start, |t| self.triangle_distance(p, t))
+            .unwrap_or((f32::INFINITY, u32::MAX))
     }
 }
 

@@ -170,7 +170,11 @@ pub fn max_distance_bound(
             (p[1] + p[2]) * 0.5,
             (p[2] + p[0]) * 0.5,
         ];
-        let am = m.map(|q| target.nearest(q));
+        let am = [
+            target.nearest_near(m[0], near[0]),
+            target.nearest_near(m[1], near[1]),
+            target.nearest_near(m[2], near[2]),
+        ];
         let (dm, nm) = (am.map(|x| x.0), am.map(|x| x.1));
         lower = lower.max(dm[0]).max(dm[1]).max(dm[2]);
         heap.push(piece(
