@@ -30,11 +30,15 @@
 //!   their children, so originals stay within that distance of the points.
 //!
 //! A node's error is the largest over what it produces and its children
-//! (errors never decrease upwards). For a cut, every point of a drawn
-//! primitive is within its bound of O, and every original point follows its
-//! attribution up to the first triangle on the cut, or to a triangle replaced
-//! below the cut whose balls (or their merged parents) are on it: so the
-//! two-sided Hausdorff distance of any cut is at most its largest node error.
+//! (errors never decrease upwards), so a triangle's branch and bound stops
+//! once it is below what its node's error already is (the largest exact
+//! distance found under the node, a child's final error): every bound is
+//! still a true upper bound, and refining further could not lower any node's.
+//! For a cut, every point of a drawn primitive is within its bound of O, and
+//! every original point follows its attribution up to the first triangle on
+//! the cut, or to a triangle replaced below the cut whose balls (or their
+//! merged parents) are on it: so the two-sided Hausdorff distance of any cut
+//! is at most its largest node error.
 
 use std::sync::Mutex;
 
