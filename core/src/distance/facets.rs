@@ -10,10 +10,9 @@
 use glam::Vec3;
 
 /// Lanes per block.
-pub const LANES: usize = 8;
+const LANES: usize = 8;
 
 /// Eight triangles in columns (structure of arrays); unused lanes are far away.
-#[derive(Clone, Copy)]
 struct Block {
     /// Vertex 0 and the unit normal (zero when degenerate).
     a: [[f32; LANES]; 3],
@@ -98,14 +97,6 @@ impl Facets {
     pub fn clear(&mut self) {
         self.blocks.clear();
         self.len = 0;
-    }
-
-    pub fn len(&self) -> usize {
-        self.len
-    }
-
-    pub fn is_empty(&self) -> bool {
-        self.len == 0
     }
 
     pub fn push(&mut self, t: &[Vec3; 3]) {
