@@ -10,12 +10,10 @@
 //! primitive. The order comes from a caller-supplied cost; by default the
 //! quadric error of the best legal placement.
 
-use std::cmp::Reverse;
-use std::collections::BinaryHeap;
-
 use glam::{Vec2, Vec3};
 
 use super::quadric::Quadric;
+use super::queue::CollapseQueue;
 use crate::geom::{Adjacency, Materials, TriMesh};
 
 /// Legality rules for collapses.
@@ -118,7 +116,7 @@ pub struct EdgeCollapser {
     /// On a border of the mesh itself (see [`border_vertices`]).
     border: Vec<bool>,
     quadric: Vec<Quadric>,
-    heap: BinaryHeap<Reverse<Entry>>,
+    queue: CollapseQueue<Entry>,
     deferred: Vec<(u32, u32)>,
     collapsed_since_retry: bool,
     /// Per-vertex stamps for neighbourhood tests without allocation.
@@ -334,7 +332,7 @@ impl EdgeCollapser {
             constrained,
             border: border_vertices(mesh, &adj),
             quadric,
-            heap: BinaryHeap::with_capacity(adj.edges.len()),
+            queue: CollapseQueue::with_capacity(adj.edges.len()),
             deferred: Vec::new(),
             collapsed_since_retry: false,
             mark: std::cell::RefCell::new((vec![0; nv], 0)),
@@ -429,7 +427,7 @@ impl EdgeCollapser {
         if let Some((cand, _)) = self.best_candidate(a, b, false) {
             let cost = (self.cost)(&cand, self);
             if cost.is_finite() {
-                self.heap.push(Reverse(Entry { cost, a, b }));
+                self.queue.push(Entry { cost, a, b });
             }
         }
     }
@@ -552,7 +550,11 @@ impl EdgeCollapser {
     /// Performs the next legal collapse in cost order; `None` when none is left.
     pub fn step(&mut self) -> Option<Collapse> {
         loop {
-            let Some(Reverse(e)) = self.heap.pop() else {
+            let alive = &self.v_alive;
+            let Some(e) = self
+                .queue
+                .pop(|e| alive[e.a as usize] && alive[e.b as usize])
+            else {
                 // Retry edges that were illegal when they came up, if collapses
                 // since then may have changed their neighbourhood.
                 if !self.collapsed_since_retry {
@@ -576,7 +578,7 @@ impl EdgeCollapser {
                     let cost = (self.cost)(&cand, self);
                     if cost > e.cost * (1.0 + 1e-9) + f64::MIN_POSITIVE {
                         if cost.is_finite() {
-                            self.heap.push(Reverse(Entry { cost, ..e }));
+                            self.queue.push(Entry { cost, ..e });
                         }
                         continue;
                     }

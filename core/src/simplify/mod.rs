@@ -10,6 +10,7 @@
 pub mod bound;
 pub mod collapse;
 pub mod quadric;
+mod queue;
 
 pub use bound::{BoundOptions, Certificate, certify, certify_with_progress};
 pub use collapse::{Candidate, Collapse, CollapseOptions, CostFn, EdgeCollapser, StarCostFn};
