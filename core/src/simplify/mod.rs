@@ -13,7 +13,7 @@ pub mod quadric;
 mod queue;
 
 pub use bound::{BoundOptions, Certificate, certify, certify_with_progress};
-pub use collapse::{Candidate, Collapse, CollapseOptions, CostFn, EdgeCollapser, StarCostFn};
+pub use collapse::{Candidate, Collapse, CollapseOptions, EdgeCollapser, StarCostFn, quadric_cost};
 
 use crate::geom::TriMesh;
 use crate::progress::{Cancelled, Progress};

@@ -48,6 +48,11 @@ impl Quadric {
         q
     }
 
+    /// Total weight of the planes (the trace: each unit normal adds w).
+    pub fn weight(&self) -> f64 {
+        self.a[0] + self.a[3] + self.a[5]
+    }
+
     fn matrix(&self) -> DMat3 {
         let a = &self.a;
         DMat3::from_cols(
