@@ -115,20 +115,53 @@ impl Ord for Piece {
     }
 }
 
-/// The better of the convexity and Lipschitz bounds for a piece, and the target
-/// triangle that achieved the best convexity bound.
+/// The best of the convexity and Lipschitz bounds for a piece, and the target
+/// triangle that achieved the best convexity bound. Convexity is tried with
+/// each vertex's nearest triangle alone and, for a piece that straddles two of
+/// them, with both: a straight cut where their distances cross leaves two
+/// convex parts, each within its triangle's distance at its corners.
 fn piece_bound(p: &[Vec3; 3], d: &[f32; 3], near: &[u32; 3], target: &MeshDistance) -> (f32, u32) {
-    let mut best = (f32::INFINITY, near[0]);
-    for (k, &t) in near.iter().enumerate() {
-        if near[..k].contains(&t) {
-            continue;
+    let mut cands = [(u32::MAX, [0.0f32; 3]); 3];
+    let mut n = 0;
+    for &t in near {
+        if cands[..n].iter().all(|c| c.0 != t) {
+            cands[n] = (t, p.map(|q| target.triangle_distance(q, t)));
+            n += 1;
         }
-        let b = p
-            .iter()
-            .map(|q| target.triangle_distance(*q, t))
-            .fold(0.0, f32::max);
+    }
+    let mut best = (f32::INFINITY, near[0]);
+    for (t, ds) in &cands[..n] {
+        let b = ds[0].max(ds[1]).max(ds[2]);
         if b < best.0 {
-            best = (b, t);
+            best = (b, *t);
+        }
+    }
+    for i in 0..n {
+        for j in i + 1..n {
+            let ((tx, dx), (ty, dy)) = (cands[i], cands[j]);
+            let f = |k: usize| dx[k] - dy[k];
+            let side_x = [0, 1, 2].map(|k| f(k) <= 0.0);
+            if side_x.iter().all(|s| *s) || side_x.iter().all(|s| !*s) {
+                continue;
+            }
+            let (mut bx, mut by) = (0.0f32, 0.0f32);
+            for k in 0..3 {
+                if side_x[k] {
+                    bx = bx.max(dx[k]);
+                } else {
+                    by = by.max(dy[k]);
+                }
+                let l = (k + 1) % 3;
+                if side_x[k] != side_x[l] {
+                    let s = (f(k) / (f(k) - f(l))).clamp(0.0, 1.0);
+                    let c = p[k] + (p[l] - p[k]) * s;
+                    bx = bx.max(target.triangle_distance(c, tx));
+                    by = by.max(target.triangle_distance(c, ty));
+                }
+            }
+            if bx.max(by) < best.0 {
+                best = (bx.max(by), if bx >= by { tx } else { ty });
+            }
         }
     }
     let lipschitz = d[0].max(d[1]).max(d[2]) + cover_radius(p);

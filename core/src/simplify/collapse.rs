@@ -266,23 +266,26 @@ pub(crate) fn constrained_vertices(mesh: &TriMesh, adj: &Adjacency, tri_part: &[
     constrained
 }
 
-/// The default order: the quadric error, but at least the quadric's weight
-/// times the squared distance the collapsed endpoints end up from the new
-/// triangles. The small faces at a sharp tip barely weigh in an area-weighted
-/// quadric, so moving the tip along its ridge looked free; the second term
-/// charges it as if all the area moved that far (the horse at 10%: measured
-/// Hausdorff 1.01e-3 → 2.9e-4, BENCHMARKS.md).
+/// The quadric error over the quadric's weight: the mean squared distance of
+/// the placement to the planes (area weighted), a lower bound of [`quadric_cost`].
+pub fn quadric_mean(cand: &Candidate) -> f64 {
+    cand.quadric_error / cand.quadric_weight.max(f64::MIN_POSITIVE)
+}
+
+/// The default order, a squared distance: the larger of [`quadric_mean`] and
+/// the squared distance the collapsed endpoints end up from the new
+/// triangles. The raw area-weighted quadric let small features (a sharp tip,
+/// an ear) move far for little cost, and the mean alone misses how far a tip
+/// moves along its ridge; the larger of the two follows the largest error
+/// (measured: the horse at 10% went from 1.01e-3 to 3.0e-4, BENCHMARKS.md).
 pub fn quadric_cost(cand: &Candidate, col: &EdgeCollapser) -> f64 {
-    let w = cand.quadric_weight;
-    if w <= 0.0 {
-        return cand.quadric_error;
-    }
-    let floor = (cand.quadric_error / w) as f32;
-    let moved = col.endpoint_deviation_squared(cand, floor);
+    let mean = quadric_mean(cand);
+    let floor = mean as f32;
+    let moved = col.deviation_squared(cand, floor);
     if moved > floor {
-        cand.quadric_error.max(w * moved as f64)
+        mean.max(moved as f64)
     } else {
-        cand.quadric_error
+        mean
     }
 }
 
@@ -290,12 +293,7 @@ impl EdgeCollapser {
     /// Starts from `mesh` (expected repaired: no degenerate triangles), ordered
     /// by [`quadric_cost`].
     pub fn new(mesh: &TriMesh, opts: CollapseOptions) -> Self {
-        Self::build(
-            mesh,
-            opts,
-            Box::new(quadric_cost),
-            Some(|c| c.quadric_error),
-        )
+        Self::build(mesh, opts, Box::new(quadric_cost), Some(quadric_mean))
     }
 
     /// Starts with a caller-supplied ordering (the hybrid method's, §5.1).
@@ -586,36 +584,57 @@ impl EdgeCollapser {
         true
     }
 
-    /// The larger of `floor` and the squared distance from the farther of the
-    /// collapsed edge's endpoints to the triangles the collapse of `cand` would
-    /// make. An endpoint's scan starts with its own fan and stops as soon as it
-    /// is below what is already known (usually after a triangle or two).
-    pub fn endpoint_deviation_squared(&self, cand: &Candidate, floor: f32) -> f32 {
+    /// The larger of `floor` and a squared deviation of the collapse of `cand`
+    /// both ways: the collapsed edge's endpoints against the triangles it
+    /// would make, and the midpoints of the new vertex's edges against the
+    /// triangles it removes. Each scan starts with the nearest fan and stops
+    /// as soon as it is below what is already known (usually after a triangle
+    /// or two).
+    pub fn deviation_squared(&self, cand: &Candidate, floor: f32) -> f32 {
         let [a, b] = cand.edge;
+        let moved = |w: u32| {
+            if w == a || w == b {
+                cand.position
+            } else {
+                self.pos[w as usize]
+            }
+        };
         let mut worst = floor;
-        for (end, other) in [(a, b), (b, a)] {
-            let x = self.pos[end as usize];
+        // x against the triangles of the fans of `first` then `second`, moved or not.
+        let mut scan = |x: Vec3, hint: Option<u32>, first: u32, second: u32, after: bool| {
             let mut near = f32::INFINITY;
-            'scan: for v in [end, other] {
-                for &t in &self.vtris[v as usize] {
-                    let tri = self.tris[t as usize];
-                    if tri.contains(&a) && tri.contains(&b) {
-                        continue;
-                    }
-                    let [p, q, r] = tri.map(|w| {
-                        if w == a || w == b {
-                            cand.position
-                        } else {
-                            self.pos[w as usize]
-                        }
-                    });
-                    near = near.min(closest_point_on_triangle(x, p, q, r).distance_squared(x));
-                    if near <= worst {
-                        break 'scan;
-                    }
+            let fans = [first, second].map(|v| self.vtris[v as usize].as_slice());
+            for &t in hint.as_slice().iter().chain(fans[0]).chain(fans[1]) {
+                let tri = self.tris[t as usize];
+                if after && tri.contains(&a) && tri.contains(&b) {
+                    continue;
+                }
+                let [p, q, r] = if after {
+                    tri.map(moved)
+                } else {
+                    tri.map(|w| self.pos[w as usize])
+                };
+                near = near.min(closest_point_on_triangle(x, p, q, r).distance_squared(x));
+                if near <= worst {
+                    return;
                 }
             }
-            worst = worst.max(near);
+            worst = near;
+        };
+        for (end, other) in [(a, b), (b, a)] {
+            scan(self.pos[end as usize], None, end, other, true);
+        }
+        // Each spoke once: in the new triangle where it leaves the new vertex.
+        for (end, other) in [(a, b), (b, a)] {
+            for &t in &self.vtris[end as usize] {
+                let tri = self.tris[t as usize];
+                if tri.contains(&other) {
+                    continue;
+                }
+                let k = tri.iter().position(|w| *w == end).unwrap_or(0);
+                let m = (cand.position + self.pos[tri[(k + 1) % 3] as usize]) * 0.5;
+                scan(m, Some(t), end, other, false);
+            }
         }
         worst
     }

@@ -13,7 +13,9 @@ pub mod quadric;
 mod queue;
 
 pub use bound::{BoundOptions, Certificate, certify, certify_with_progress};
-pub use collapse::{Candidate, Collapse, CollapseOptions, EdgeCollapser, StarCostFn, quadric_cost};
+pub use collapse::{
+    Candidate, Collapse, CollapseOptions, EdgeCollapser, StarCostFn, quadric_cost, quadric_mean,
+};
 
 use crate::geom::TriMesh;
 use crate::progress::{Cancelled, Progress};
