@@ -7,8 +7,10 @@
 //! (or not at all with `lock_borders`). Each collapse kills both endpoints and
 //! every triangle around them and creates a new vertex and new triangles, so a
 //! caller building a hierarchy (the hybrid MRG) gets distinct ids for every
-//! primitive. The order comes from a caller-supplied cost; by default the
-//! quadric error of the best legal placement.
+//! primitive. The order comes from a caller-supplied cost; by default
+//! [`quadric_cost`] at the best legal quadric placement, queued first by its
+//! cheap lower bound [`quadric_mean`] and computed in full only when a
+//! candidate reaches the front.
 
 use glam::{Vec2, Vec3};
 
@@ -273,11 +275,12 @@ pub fn quadric_mean(cand: &Candidate) -> f64 {
 }
 
 /// The default order, a squared distance: the larger of [`quadric_mean`] and
-/// the squared distance the collapsed endpoints end up from the new
-/// triangles. The raw area-weighted quadric let small features (a sharp tip,
-/// an ear) move far for little cost, and the mean alone misses how far a tip
-/// moves along its ridge; the larger of the two follows the largest error
-/// (measured: the horse at 10% went from 1.01e-3 to 3.0e-4, BENCHMARKS.md).
+/// the collapse's two-way deviation ([`EdgeCollapser::deviation_squared`]).
+/// The raw area-weighted quadric let small features (a sharp tip, an ear)
+/// move far for little cost, and a mean misses how far a tip moves along its
+/// ridge or a new edge bridges a groove; the larger of the two follows the
+/// largest error, which is what the certificate and the Hausdorff distance
+/// measure (the horse at 10%: 1.01e-3 → 1.7e-4, BENCHMARKS.md).
 pub fn quadric_cost(cand: &Candidate, col: &EdgeCollapser) -> f64 {
     let mean = quadric_mean(cand);
     let floor = mean as f32;
@@ -588,8 +591,9 @@ impl EdgeCollapser {
     /// both ways: the collapsed edge's endpoints against the triangles it
     /// would make, and the midpoints of the new vertex's edges against the
     /// triangles it removes. Each scan starts with the nearest fan and stops
-    /// as soon as it is below what is already known (usually after a triangle
-    /// or two).
+    /// as soon as it is below what is already known, so only the points that
+    /// raise the result cost a full scan. (The hybrid queue measures more
+    /// points with no floor: its cost is the deviation itself, §5.1.)
     pub fn deviation_squared(&self, cand: &Candidate, floor: f32) -> f32 {
         let [a, b] = cand.edge;
         let moved = |w: u32| {
@@ -665,10 +669,16 @@ impl EdgeCollapser {
             }
             match self.best_candidate(e.a, e.b, true) {
                 Some((cand, _)) => {
-                    // The queued cost was for the best placement, legal or not: if
-                    // only a worse one is legal, the edge waits its real turn.
+                    // The queued cost was for the best placement, legal or not,
+                    // or a lower bound: if the real cost is above what is queued
+                    // next, the edge waits its real turn.
                     let cost = (self.cost)(&cand, self);
-                    if cost > e.cost * (1.0 + 1e-9) + f64::MIN_POSITIVE {
+                    let alive = &self.v_alive;
+                    let next = self
+                        .queue
+                        .peek(|e| alive[e.a as usize] && alive[e.b as usize])
+                        .map_or(f64::INFINITY, |n| n.cost);
+                    if cost > next * (1.0 + 1e-9) + f64::MIN_POSITIVE {
                         if cost.is_finite() {
                             self.queue.push(Entry { cost, ..e });
                         }

@@ -41,18 +41,30 @@ impl<T: Ord + Copy> CollapseQueue<T> {
 
     /// The smallest entry; a refill first drops the cold entries `keep` rejects.
     pub fn pop(&mut self, keep: impl Fn(&T) -> bool) -> Option<T> {
-        if self.hot.is_empty() {
-            self.cold.retain(|e| keep(e));
-            if self.cold.is_empty() {
-                self.bar = None;
-                return None;
-            }
-            let k = BATCH.min(self.cold.len());
-            self.cold.select_nth_unstable(k - 1);
-            self.bar = Some(self.cold[k - 1]);
-            self.hot.extend(self.cold.drain(..k).map(Reverse));
-        }
+        self.refill(keep);
         self.hot.pop().map(|Reverse(e)| e)
+    }
+
+    /// The smallest entry, left in place (refilling as `pop` does).
+    pub fn peek(&mut self, keep: impl Fn(&T) -> bool) -> Option<&T> {
+        self.refill(keep);
+        self.hot.peek().map(|Reverse(e)| e)
+    }
+
+    /// Moves the next batch to the heap when it has run dry.
+    fn refill(&mut self, keep: impl Fn(&T) -> bool) {
+        if !self.hot.is_empty() {
+            return;
+        }
+        self.cold.retain(|e| keep(e));
+        if self.cold.is_empty() {
+            self.bar = None;
+            return;
+        }
+        let k = BATCH.min(self.cold.len());
+        self.cold.select_nth_unstable(k - 1);
+        self.bar = Some(self.cold[k - 1]);
+        self.hot.extend(self.cold.drain(..k).map(Reverse));
     }
 }
 
@@ -82,6 +94,11 @@ mod tests {
                     match got {
                         Some(e) if e.0 % 2 == 1 => continue,
                         _ => {
+                            if let Some(e) = got {
+                                // What is left starts no lower.
+                                let next = q.peek(|e| e.0 % 2 == 0).copied();
+                                assert!(next.is_none_or(|n| n >= e));
+                            }
                             assert_eq!(got, reference.pop().map(|Reverse(e)| e));
                             popped += 1;
                             break;
