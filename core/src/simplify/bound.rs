@@ -401,6 +401,54 @@ mod tests {
     use crate::builtins::icosphere;
     use crate::distance::{SamplingOptions, hausdorff_mesh_mesh};
 
+    /// A triangle over a roof of two faces: its vertices are nearest to
+    /// different faces, so the unsplit bound comes from the cut between them;
+    /// it must hold against dense sampling and beat either face alone.
+    #[test]
+    fn straddling_piece_bound_holds() {
+        let roof = TriMesh::new(
+            vec![
+                Vec3::new(0.0, -1.0, 0.0),
+                Vec3::new(0.0, 1.0, 0.0),
+                Vec3::new(-1.0, 0.0, -0.4),
+                Vec3::new(1.0, 0.0, -0.4),
+            ],
+            vec![[0, 1, 2], [1, 0, 3]],
+        );
+        let target = MeshDistance::new(&roof);
+        let tri = [
+            Vec3::new(-0.8, -0.2, -0.1),
+            Vec3::new(0.8, -0.2, -0.1),
+            Vec3::new(0.0, 0.6, 0.1),
+        ];
+        let at = tri.map(|p| target.nearest(p));
+        assert_ne!(at[0].1, at[1].1, "the piece must straddle the ridge");
+        let opts = BoundOptions {
+            max_splits: 0,
+            ..BoundOptions::for_diagonal(2.0)
+        };
+        let (upper, _) = max_distance_bound(tri, at, &target, &opts, 0.0);
+        let mut sampled = 0.0f32;
+        let n = 200;
+        for i in 0..=n {
+            for j in 0..=n - i {
+                let (u, v) = (i as f32 / n as f32, j as f32 / n as f32);
+                let y = tri[0] + (tri[1] - tri[0]) * u + (tri[2] - tri[0]) * v;
+                sampled = sampled.max(target.distance(y));
+            }
+        }
+        let single = [0u32, 1].map(|t| {
+            tri.iter()
+                .map(|p| target.triangle_distance(*p, t))
+                .fold(0.0, f32::max)
+        });
+        assert!(upper >= sampled, "bound {upper} < sampled {sampled}");
+        assert!(
+            upper < single[0].min(single[1]),
+            "cut {upper} vs single {single:?}"
+        );
+    }
+
     /// A coarse sphere against a fine one: the bound holds against dense
     /// sampling and is within a small factor of it.
     #[test]

@@ -895,6 +895,34 @@ mod tests {
         assert!(out.triangles.len() < grid.triangles.len() / 2);
     }
 
+    /// A hexagonal fan whose centre is raised by `h`: collapsing the centre
+    /// onto a rim vertex flattens the tip, so the deviation is the tip's
+    /// height (the endpoint against the new star), and 0 when it was flat.
+    #[test]
+    fn deviation_measures_how_far_a_tip_moves() {
+        for h in [0.0f32, 0.3] {
+            let mut fan = TriMesh::default();
+            fan.positions.push(Vec3::new(0.0, 0.0, h));
+            for k in 0..6 {
+                let a = k as f32 * std::f32::consts::PI / 3.0;
+                fan.positions.push(Vec3::new(a.cos(), a.sin(), 0.0));
+            }
+            fan.triangles = (0..6u32).map(|k| [0, 1 + k, 1 + (k + 1) % 6]).collect();
+            let s = EdgeCollapser::new(&fan, CollapseOptions::default());
+            let cand = Candidate {
+                edge: [0, 1],
+                position: fan.positions[1],
+                quadric_error: 0.0,
+                quadric_weight: 1.0,
+                triangles_removed: 2,
+            };
+            let d = s.deviation_squared(&cand, 0.0).sqrt();
+            assert!((d - h).abs() < 1e-5, "h {h}: deviation {d}");
+            // A floor above the deviation is what comes back.
+            assert_eq!(s.deviation_squared(&cand, 1.0), 1.0);
+        }
+    }
+
     #[test]
     fn sliver_guard_keeps_triangle_quality() {
         let mesh = icosphere(Vec3::ZERO, 1.0, 4);
