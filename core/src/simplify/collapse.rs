@@ -57,8 +57,9 @@ pub struct Candidate {
     pub triangles_removed: usize,
 }
 
-/// Orders candidate collapses (smaller goes first), looking at the working mesh (the star a candidate
-/// replaces, via [`EdgeCollapser::star_into`] and [`EdgeCollapser::triangle`]);
+/// Orders candidate collapses (smaller goes first), looking at the working
+/// mesh (the star a candidate replaces, via [`EdgeCollapser::star_into`] and
+/// [`EdgeCollapser::triangle`]);
 /// a non-finite cost takes the candidate out of the queue (the hybrid method
 /// does so when a point replacement takes precedence, §5).
 pub type StarCostFn = dyn Fn(&Candidate, &EdgeCollapser) -> f64 + Send + Sync;
@@ -605,10 +606,10 @@ impl EdgeCollapser {
         };
         let mut worst = floor;
         // x against the triangles of the fans of `first` then `second`, moved or not.
-        let mut scan = |x: Vec3, hint: Option<u32>, first: u32, second: u32, after: bool| {
+        let mut scan = |x: Vec3, first: u32, second: u32, after: bool| {
             let mut near = f32::INFINITY;
             let fans = [first, second].map(|v| self.vtris[v as usize].as_slice());
-            for &t in hint.as_slice().iter().chain(fans[0]).chain(fans[1]) {
+            for &t in fans[0].iter().chain(fans[1]) {
                 let tri = self.tris[t as usize];
                 if after && tri.contains(&a) && tri.contains(&b) {
                     continue;
@@ -626,7 +627,7 @@ impl EdgeCollapser {
             worst = near;
         };
         for (end, other) in [(a, b), (b, a)] {
-            scan(self.pos[end as usize], None, end, other, true);
+            scan(self.pos[end as usize], end, other, true);
         }
         // Each spoke once: in the new triangle where it leaves the new vertex.
         for (end, other) in [(a, b), (b, a)] {
@@ -637,7 +638,7 @@ impl EdgeCollapser {
                 }
                 let k = tri.iter().position(|w| *w == end).unwrap_or(0);
                 let m = (cand.position + self.pos[tri[(k + 1) % 3] as usize]) * 0.5;
-                scan(m, Some(t), end, other, false);
+                scan(m, end, other, false);
             }
         }
         worst
