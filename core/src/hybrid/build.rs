@@ -20,7 +20,7 @@
 //! before the triangles ran out. Instead each primitive gets both directions
 //! of the two-sided Hausdorff distance directly against the original O:
 //! - simplified → original: for a triangle, the branch and bound of
-//!   `simplify::bound` against O's BVH; for a ball of radius r around c,
+//!   `simplify::bound` against O (planar projection, else its BVH); for a ball of radius r around c,
 //!   r + d(c, O) (exact distance);
 //! - original → simplified: every original triangle is attributed to one
 //!   triangle of each model it passes through (at a collapse, the originals
@@ -52,6 +52,7 @@ use crate::distance::facets::Facets;
 use crate::geom::TriMesh;
 use crate::progress::{Cancelled, Progress};
 use crate::simplify::bound::{BoundOptions, max_distance_bound};
+use crate::simplify::projection::Projection;
 use crate::simplify::{CollapseOptions, EdgeCollapser};
 
 /// Parameters of the hybrid build (§5.1, §5.3).
@@ -222,6 +223,7 @@ pub fn build_observed(
     // errors upwards in build order.
     progress.stage("hybrid: bounding errors");
     let original = MeshDistance::new(mesh);
+    let projection = Projection::new(mesh);
     let forward = attribute(mesh, &mrg, &collapses);
     progress.check()?;
     // Looser than the simplifier's certificate (there are ~3 bounds per
@@ -273,7 +275,8 @@ pub fn build_observed(
                 let p = mrg.triangle_positions(t as u32);
                 let at = mrg.triangles[t].map(|v| nearest[v as usize]);
                 let enough = forward[t].max(below);
-                let (reverse, _) = max_distance_bound(p, at, &original, &bound_opts, enough);
+                let to = (&original, Some(&projection));
+                let (reverse, _, _) = max_distance_bound(p, at, to, &bound_opts, enough);
                 // f32 round-off of the coordinates (flat collapses bound to 0).
                 let scale = p.iter().map(|v| v.abs().max_element()).fold(0.0, f32::max);
                 reverse.max(forward[t]) + 8.0 * f32::EPSILON * scale

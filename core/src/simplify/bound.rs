@@ -8,7 +8,11 @@
 //!   a convex set), so max_{y∈P} d(y, X) ≤ max_{y∈P} d(y, T) = max_i d(p_i, T);
 //!   we try the triangles of X nearest to P's vertices;
 //! - Lipschitz: y ↦ d(y, X) is 1-Lipschitz and every y ∈ P lies within
-//!   ρ(P) ≤ ℓ_max(P)/√3 of a vertex, so max_{y∈P} d(y, X) ≤ max_i d(p_i, X) + ρ(P).
+//!   ρ(P) ≤ ℓ_max(P)/√3 of a vertex, so max_{y∈P} d(y, X) ≤ max_i d(p_i, X) + ρ(P);
+//! - for S → O, Cohen et al.'s planar projection (module `projection`): a
+//!   patch of O that lies over all of P without folding bounds d(y, O) by its
+//!   height over P's plane. It certifies most triangles whole, so it is tried
+//!   on a piece once before the piece is split.
 //!
 //! The piece with the largest upper value is split until it is within a
 //! tolerance of the largest exact d(p, X) seen, which is a lower bound; the
@@ -26,6 +30,7 @@ use std::sync::atomic::{AtomicUsize, Ordering as AtomicOrdering};
 use glam::Vec3;
 use rayon::prelude::*;
 
+use super::projection::Projection;
 use crate::distance::MeshDistance;
 use crate::geom::TriMesh;
 use crate::progress::{Cancelled, Progress};
@@ -96,6 +101,8 @@ struct Piece {
     p: [Vec3; 3],
     d: [f32; 3],
     near: [u32; 3],
+    /// The planar projection was tried on it.
+    projected: bool,
 }
 
 impl PartialEq for Piece {
@@ -125,7 +132,15 @@ fn piece_bound(p: &[Vec3; 3], d: &[f32; 3], near: &[u32; 3], target: &MeshDistan
     let mut n = 0;
     for &t in near {
         if cands[..n].iter().all(|c| c.0 != t) {
-            cands[n] = (t, p.map(|q| target.triangle_distance(q, t)));
+            // A vertex's distance to its own nearest triangle is known.
+            let ds = [0, 1, 2].map(|i| {
+                if near[i] == t {
+                    d[i]
+                } else {
+                    target.triangle_distance(p[i], t)
+                }
+            });
+            cands[n] = (t, ds);
             n += 1;
         }
     }
@@ -174,64 +189,101 @@ fn piece(p: [Vec3; 3], d: [f32; 3], near: [u32; 3], target: &MeshDistance) -> Pi
         p,
         d,
         near,
+        projected: false,
     }
 }
 
+/// Largest patch of O a planar projection grows over one piece: beyond it,
+/// splitting is cheaper.
+pub const PATCH_CAP: usize = 4096;
+
 /// Upper bound of max_{y ∈ tri} d(y, X) for the surface X behind `target`;
 /// `at` holds (d(tri_i, X), nearest triangle of X) for the three vertices.
+/// With `projection` (of X), a piece that stays above the tolerance also
+/// tries the planar projection (module `projection`) once before it is split:
+/// most triangles of a simplification are certified whole that way.
 /// Refinement also stops once the bound is at most `enough`. Returns the upper
-/// bound and the largest exact distance found (a lower bound).
+/// bound, the largest exact distance found (a lower bound) and the triangle of
+/// X that covers `tri` best as a whole.
 pub fn max_distance_bound(
     tri: [Vec3; 3],
     at: [(f32, u32); 3],
-    target: &MeshDistance,
+    (target, projection): (&MeshDistance, Option<&Projection>),
     opts: &BoundOptions,
     enough: f32,
-) -> (f32, f32) {
-    let d = at.map(|x| x.0);
+) -> (f32, f32, u32) {
+    let (d, near) = (at.map(|x| x.0), at.map(|x| x.1));
     let mut lower = d[0].max(d[1]).max(d[2]);
-    let mut heap = BinaryHeap::with_capacity(3 * opts.max_splits + 1);
-    heap.push(piece(tri, d, at.map(|x| x.1), target));
-    for _ in 0..opts.max_splits {
-        let Some(top) = heap.peek() else { break };
-        if top.upper <= enough || top.upper <= lower * (1.0 + opts.rel_tol) + opts.abs_tol {
+    let threshold = |lower: f32| enough.max(lower * (1.0 + opts.rel_tol) + opts.abs_tol);
+    let (upper, owner) = piece_bound(&tri, &d, &near, target);
+    let mut top = Piece {
+        upper,
+        p: tri,
+        d,
+        near,
+        projected: projection.is_none(),
+    };
+    // Most triangles need no split: no heap for them.
+    let mut heap = BinaryHeap::new();
+    let mut splits = 0;
+    // `top` is always the piece with the largest upper value.
+    loop {
+        if top.upper <= threshold(lower) {
             break;
         }
-        let Piece { p, d, near, .. } = heap.pop().expect("peeked");
-        let m = [
-            (p[0] + p[1]) * 0.5,
-            (p[1] + p[2]) * 0.5,
-            (p[2] + p[0]) * 0.5,
-        ];
-        let am = [
-            target.nearest_near(m[0], near[0]),
-            target.nearest_near(m[1], near[1]),
-            target.nearest_near(m[2], near[2]),
-        ];
-        let (dm, nm) = (am.map(|x| x.0), am.map(|x| x.1));
-        lower = lower.max(dm[0]).max(dm[1]).max(dm[2]);
-        heap.push(piece(
-            [p[0], m[0], m[2]],
-            [d[0], dm[0], dm[2]],
-            [near[0], nm[0], nm[2]],
-            target,
-        ));
-        heap.push(piece(
-            [m[0], p[1], m[1]],
-            [dm[0], d[1], dm[1]],
-            [nm[0], near[1], nm[1]],
-            target,
-        ));
-        heap.push(piece(
-            [m[2], m[1], p[2]],
-            [dm[2], dm[1], d[2]],
-            [nm[2], nm[1], near[2]],
-            target,
-        ));
-        heap.push(piece(m, dm, nm, target));
+        if !top.projected {
+            let limit = 2.0 * threshold(lower);
+            let projection = projection.expect("not projected only with a projection");
+            if let Some(b) = projection.bound(top.p, top.near, PATCH_CAP, limit) {
+                top.upper = top.upper.min(b.max(lower));
+            }
+            top.projected = true;
+            heap.push(top);
+        } else if splits < opts.max_splits {
+            splits += 1;
+            let Piece { p, d, near, .. } = top;
+            let m = [
+                (p[0] + p[1]) * 0.5,
+                (p[1] + p[2]) * 0.5,
+                (p[2] + p[0]) * 0.5,
+            ];
+            let am = [
+                target.nearest_near(m[0], near[0]),
+                target.nearest_near(m[1], near[1]),
+                target.nearest_near(m[2], near[2]),
+            ];
+            let (dm, nm) = (am.map(|x| x.0), am.map(|x| x.1));
+            lower = lower.max(dm[0]).max(dm[1]).max(dm[2]);
+            let unprojected = projection.is_some();
+            for (p, d, near) in [
+                (
+                    [p[0], m[0], m[2]],
+                    [d[0], dm[0], dm[2]],
+                    [near[0], nm[0], nm[2]],
+                ),
+                (
+                    [m[0], p[1], m[1]],
+                    [dm[0], d[1], dm[1]],
+                    [nm[0], near[1], nm[1]],
+                ),
+                (
+                    [m[2], m[1], p[2]],
+                    [dm[2], dm[1], d[2]],
+                    [nm[2], nm[1], near[2]],
+                ),
+                (m, dm, nm),
+            ] {
+                heap.push(Piece {
+                    projected: !unprojected,
+                    ..piece(p, d, near, target)
+                });
+            }
+        } else {
+            break;
+        }
+        top = heap.pop().expect("a piece was just pushed");
     }
-    let upper = heap.peek().map_or(lower, |top| top.upper.max(lower));
-    (upper * (1.0 + ROUNDING), lower)
+    (top.upper.max(lower) * (1.0 + ROUNDING), lower, owner)
 }
 
 /// Bound, lower bound and best covering triangle of `to`, per triangle of `from`.
@@ -243,6 +295,8 @@ struct Side<'a> {
     to: &'a MeshDistance<'a>,
     /// Exact distance and nearest triangle of `to` per vertex of `from`.
     at_vertex: Vec<(f32, u32)>,
+    /// For S → O: the original's planar projection, tried first.
+    projection: Option<Projection<'a>>,
 }
 
 /// Progress over all passes, and the cancel flag checked per triangle.
@@ -265,12 +319,17 @@ impl Tracker<'_> {
 }
 
 impl<'a> Side<'a> {
-    fn new(from: &'a TriMesh, to: &'a MeshDistance<'a>) -> Self {
+    fn new(
+        from: &'a TriMesh,
+        to: &'a MeshDistance<'a>,
+        projection: Option<Projection<'a>>,
+    ) -> Self {
         let at_vertex = from.positions.par_iter().map(|p| to.nearest(*p)).collect();
         Side {
             from,
             to,
             at_vertex,
+            projection,
         }
     }
 
@@ -289,9 +348,7 @@ impl<'a> Side<'a> {
                 }
                 let at = self.at(t);
                 let tri = self.from.triangle(t);
-                let (_, owner) = piece_bound(&tri, &at.map(|x| x.0), &at.map(|x| x.1), self.to);
-                let (upper, lower) = max_distance_bound(tri, at, self.to, opts, enough);
-                (upper, lower, owner)
+                max_distance_bound(tri, at, (self.to, self.projection.as_ref()), opts, enough)
             })
             .collect()
     }
@@ -305,8 +362,9 @@ impl<'a> Side<'a> {
         };
         bounds.par_iter_mut().enumerate().for_each(|(t, b)| {
             if track.tick() && b.0 > enough {
-                let (upper, lower) =
-                    max_distance_bound(self.from.triangle(t), self.at(t), self.to, &deep, enough);
+                let to = (self.to, self.projection.as_ref());
+                let (upper, lower, _) =
+                    max_distance_bound(self.from.triangle(t), self.at(t), to, &deep, enough);
                 *b = (upper.min(b.0), lower.max(b.1), b.2);
             }
         });
@@ -343,7 +401,8 @@ pub fn certify_with_progress(
         });
     }
     let (to_o, to_s) = (MeshDistance::new(original), MeshDistance::new(simplified));
-    let (rev, fwd) = (Side::new(simplified, &to_o), Side::new(original, &to_s));
+    let rev = Side::new(simplified, &to_o, Some(Projection::new(original)));
+    let fwd = Side::new(original, &to_s, None);
     progress.check()?;
     // The largest exact vertex distance is a lower bound of the result: refining a
     // triangle far below it cannot change the maximum, so the absolute tolerance
@@ -427,7 +486,7 @@ mod tests {
             max_splits: 0,
             ..BoundOptions::for_diagonal(2.0)
         };
-        let (upper, _) = max_distance_bound(tri, at, &target, &opts, 0.0);
+        let (upper, _, _) = max_distance_bound(tri, at, (&target, None), &opts, 0.0);
         let mut sampled = 0.0f32;
         let n = 200;
         for i in 0..=n {

@@ -9,6 +9,7 @@
 
 pub mod bound;
 pub mod collapse;
+pub mod projection;
 pub mod quadric;
 mod queue;
 
