@@ -85,6 +85,10 @@ fn certified_bound_holds_against_dense_sampling_and_is_tight() {
     let median = ratios[ratios.len() / 2];
     eprintln!("bound / measured, sorted: {ratios:?}");
     assert!(median <= 2.0, "median bound/measured {median}");
+    // Every case, not only the median: the fandisk's flat faces end at
+    // creases, where branch and bound alone left its bound 9× the measurement.
+    let worst = ratios[ratios.len() - 1];
+    assert!(worst <= 1.5, "worst bound/measured {worst}");
 }
 
 /// With seams kept, the truck's texture seams (split vertices) and borders keep
