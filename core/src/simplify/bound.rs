@@ -241,7 +241,10 @@ pub fn max_distance_bound(
             heap.push(top);
         } else if splits < opts.max_splits {
             splits += 1;
-            let Piece { p, d, near, .. } = top;
+            // A part is within any bound of the whole.
+            let Piece {
+                p, d, near, upper, ..
+            } = top;
             let m = [
                 (p[0] + p[1]) * 0.5,
                 (p[1] + p[2]) * 0.5,
@@ -273,9 +276,11 @@ pub fn max_distance_bound(
                 ),
                 (m, dm, nm),
             ] {
+                let part = piece(p, d, near, target);
                 heap.push(Piece {
+                    upper: part.upper.min(upper),
                     projected: !unprojected,
-                    ..piece(p, d, near, target)
+                    ..part
                 });
             }
         } else {
