@@ -63,8 +63,8 @@ struct Frame {
     e2: DVec3,
     n: DVec3,
     corners: [DVec2; 3],
-    /// Inward unit normal and offset of each edge of P inset by `slack`'s
-    /// δ: inside(k, x) = n·x − c.
+    /// Inward unit normal and offset of each edge of P inset by a margin δ:
+    /// inside(k, x) = n·x − c.
     edges: [(DVec2, f64); 3],
     lo: DVec2,
     hi: DVec2,
