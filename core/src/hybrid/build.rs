@@ -20,8 +20,8 @@
 //! before the triangles ran out. Instead each primitive gets both directions
 //! of the two-sided Hausdorff distance directly against the original O:
 //! - simplified → original: for a triangle, the branch and bound of
-//!   `simplify::bound` against O (planar projection, else its BVH); for a ball of radius r around c,
-//!   r + d(c, O) (exact distance);
+//!   `simplify::bound` against O (planar projection, else its BVH); for a
+//!   ball of radius r around c, r + d(c, O) (exact distance);
 //! - original → simplified: every original triangle is attributed to one
 //!   triangle of each model it passes through (at a collapse, the originals
 //!   of the removed triangles go to the nearest new triangle); a triangle's

@@ -221,7 +221,7 @@ pub fn max_distance_bound(
         p: tri,
         d,
         near,
-        projected: projection.is_none(),
+        projected: false,
     };
     // Most triangles need no split: no heap for them.
     let mut heap = BinaryHeap::new();
@@ -231,9 +231,8 @@ pub fn max_distance_bound(
         if top.upper <= threshold(lower) {
             break;
         }
-        if !top.projected {
+        if let Some(projection) = projection.filter(|_| !top.projected) {
             let limit = 2.0 * threshold(lower);
-            let projection = projection.expect("not projected only with a projection");
             if let Some(b) = projection.bound(top.p, top.near, PATCH_CAP, limit) {
                 top.upper = top.upper.min(b.max(lower));
             }
@@ -257,7 +256,6 @@ pub fn max_distance_bound(
             ];
             let (dm, nm) = (am.map(|x| x.0), am.map(|x| x.1));
             lower = lower.max(dm[0]).max(dm[1]).max(dm[2]);
-            let unprojected = projection.is_some();
             for (p, d, near) in [
                 (
                     [p[0], m[0], m[2]],
@@ -279,7 +277,6 @@ pub fn max_distance_bound(
                 let part = piece(p, d, near, target);
                 heap.push(Piece {
                     upper: part.upper.min(upper),
-                    projected: !unprojected,
                     ..part
                 });
             }
