@@ -3,22 +3,44 @@
 //! each frontier node there, so that one pass over contiguous memory tests
 //! them all).
 
-/// Members `items[i]` with `values[i]`.
+/// Members `items[i]` with row `i` of `values` (a `Vec` of rows, or any
+/// [`Columns`] that stores each field of a row in a column of its own).
 #[derive(Debug, Clone)]
-pub(crate) struct IdSet<T> {
+pub(crate) struct IdSet<C> {
     pub(crate) items: Vec<u32>,
-    pub(crate) values: Vec<T>,
+    pub(crate) values: C,
     slot: Vec<u32>,
+}
+
+/// A table of rows that an [`IdSet`] keeps beside its ids.
+pub(crate) trait Columns: Default {
+    type Row;
+    fn push(&mut self, row: Self::Row);
+    fn swap_remove(&mut self, i: usize);
+    fn clear(&mut self);
+}
+
+impl<T> Columns for Vec<T> {
+    type Row = T;
+    fn push(&mut self, row: T) {
+        Vec::push(self, row);
+    }
+    fn swap_remove(&mut self, i: usize) {
+        Vec::swap_remove(self, i);
+    }
+    fn clear(&mut self) {
+        Vec::clear(self);
+    }
 }
 
 const OUT: u32 = u32::MAX;
 
-impl<T> IdSet<T> {
+impl<C: Columns> IdSet<C> {
     /// An empty set of ids below `n`.
     pub(crate) fn new(n: usize) -> Self {
         IdSet {
             items: Vec::new(),
-            values: Vec::new(),
+            values: C::default(),
             slot: vec![OUT; n],
         }
     }
@@ -36,7 +58,7 @@ impl<T> IdSet<T> {
     }
 
     /// Adds `i` with `value()` unless it is in already.
-    pub(crate) fn insert(&mut self, i: u32, value: impl FnOnce() -> T) {
+    pub(crate) fn insert(&mut self, i: u32, value: impl FnOnce() -> C::Row) {
         if self.slot[i as usize] == OUT {
             self.slot[i as usize] = self.items.len() as u32;
             self.items.push(i);
@@ -58,7 +80,7 @@ impl<T> IdSet<T> {
     }
 
     /// Inserts (with `value()`) or removes `i`.
-    pub(crate) fn set(&mut self, i: u32, member: bool, value: impl FnOnce() -> T) {
+    pub(crate) fn set(&mut self, i: u32, member: bool, value: impl FnOnce() -> C::Row) {
         if member {
             self.insert(i, value);
         } else {
@@ -74,7 +96,7 @@ mod tests {
     /// The values follow their ids through inserts and swap-removes.
     #[test]
     fn values_stay_beside_their_ids() {
-        let mut set = IdSet::new(10);
+        let mut set: IdSet<Vec<u32>> = IdSet::new(10);
         for k in [3, 7, 1, 9, 3] {
             set.insert(k, || k * 10);
         }

@@ -18,18 +18,19 @@ use std::sync::Arc;
 
 use glam::Vec3;
 
-use super::mrg::{DRAIN, Mrg, NodeKind, Sphere};
+use super::mrg::{DRAIN, Mrg, NodeKind};
 use crate::cut::{CutPoint, DrawSet, Hierarchy};
 use crate::geom::TriMesh;
-use crate::id_set::IdSet;
-use crate::view::{SphereTest, Tolerance, View};
+use crate::id_set::{Columns, IdSet};
+use crate::view::{NarrowTest, SphereTest, Tolerance, View};
 
-/// What the refinement test reads of a node: copied beside the front's ids,
-/// so that a frame tests the whole front in one pass over contiguous memory.
+/// What the refinement test reads of a node.
 #[derive(Debug, Clone, Copy)]
 struct Probe {
     kind: NodeKind,
-    sphere: Sphere,
+    center: Vec3,
+    /// The sphere's radius plus the error: how far the deviation may reach.
+    reach: f32,
     error: f32,
 }
 
@@ -38,23 +39,84 @@ impl Probe {
         let node = &mrg.nodes[n as usize];
         Probe {
             kind: node.kind,
-            sphere: node.sphere,
+            center: node.sphere.center,
+            reach: node.sphere.radius + node.error,
             error: node.error,
         }
     }
 
-    /// Branch-free on the node, so that a pass over the front vectorises.
+    /// The exact test (double precision, [`SphereTest`]).
     #[inline(always)]
     fn must_refine(&self, test: &SphereTest, tolerance: Tolerance, diagonal: f32) -> bool {
         let refines = match tolerance {
             Tolerance::Relative(f) => self.error > f * diagonal,
             Tolerance::Pixels(p) => {
-                let (center, reach) = (self.sphere.center, self.sphere.radius + self.error);
-                test.sees(center, reach)
-                    & test.exceeds(self.error as f64, center, reach as f64, p as f64)
+                test.sees(self.center, self.reach)
+                    & test.exceeds(self.error as f64, self.center, self.reach as f64, p as f64)
             }
         };
+        self.settled(refines)
+    }
+
+    /// The source is always refined, the drain never.
+    #[inline(always)]
+    fn settled(&self, refines: bool) -> bool {
         (self.kind == NodeKind::Source) | (refines & (self.kind != NodeKind::Drain))
+    }
+}
+
+/// The front's or bottom's copies of their probes, a column per number, so
+/// that one pass over a set loads eight nodes per instruction.
+#[derive(Debug, Clone, Default)]
+struct Probes {
+    x: Vec<f32>,
+    y: Vec<f32>,
+    z: Vec<f32>,
+    reach: Vec<f32>,
+    error: Vec<f32>,
+    kind: Vec<NodeKind>,
+}
+
+impl Probes {
+    fn row(&self, i: usize) -> Probe {
+        Probe {
+            kind: self.kind[i],
+            center: Vec3::new(self.x[i], self.y[i], self.z[i]),
+            reach: self.reach[i],
+            error: self.error[i],
+        }
+    }
+}
+
+impl Columns for Probes {
+    type Row = Probe;
+    fn push(&mut self, p: Probe) {
+        self.x.push(p.center.x);
+        self.y.push(p.center.y);
+        self.z.push(p.center.z);
+        self.reach.push(p.reach);
+        self.error.push(p.error);
+        self.kind.push(p.kind);
+    }
+    fn swap_remove(&mut self, i: usize) {
+        self.x.swap_remove(i);
+        self.y.swap_remove(i);
+        self.z.swap_remove(i);
+        self.reach.swap_remove(i);
+        self.error.swap_remove(i);
+        self.kind.swap_remove(i);
+    }
+    fn clear(&mut self) {
+        for c in [
+            &mut self.x,
+            &mut self.y,
+            &mut self.z,
+            &mut self.reach,
+            &mut self.error,
+        ] {
+            c.clear();
+        }
+        self.kind.clear();
     }
 }
 
@@ -64,9 +126,9 @@ pub struct HybridCut {
     mrg: Arc<Mrg>,
     above: Vec<bool>,
     /// Below nodes with an above parent (producers of the cut's arcs).
-    front: IdSet<Probe>,
+    front: IdSet<Probes>,
     /// Above nodes whose children are all below.
-    bottom: IdSet<Probe>,
+    bottom: IdSet<Probes>,
     /// Per-frame scratch: the walk's stack, the nodes that moved, one pass's
     /// tests and the nodes they picked.
     stack: Vec<u32>,
@@ -76,29 +138,88 @@ pub struct HybridCut {
     primed: bool,
 }
 
-/// Tests every node of `set` in one vector pass ([`crate::simd::wide`]) and
-/// puts those whose answer is `want` (0 or 1) into `picked`.
+/// Tests every node of `set` and puts those whose answer is `want` (0 or 1)
+/// into `picked`: one vector pass ([`crate::simd::wide`]) in single
+/// precision ([`NarrowTest`]), then the exact test for the few it leaves
+/// unsure. Few nodes change their answer in a frame, so the flags are
+/// scanned eight at a time.
 fn tested(
-    set: &IdSet<Probe>,
+    set: &IdSet<Probes>,
     (test, tolerance, diagonal): (&SphereTest, Tolerance, f32),
     (flags, picked): (&mut Vec<u8>, &mut Vec<u32>),
     want: u8,
 ) {
+    let p = &set.values;
+    let n = set.items.len();
     flags.clear();
-    flags.resize(set.items.len(), 0);
+    flags.resize(n, 0);
+    let columns = (
+        &p.x[..n],
+        &p.y[..n],
+        &p.z[..n],
+        &p.reach[..n],
+        &p.error[..n],
+        &p.kind[..n],
+    );
+    let narrow = test.narrow();
     crate::simd::wide(
-        &set.values,
+        &columns,
         flags,
         #[inline(always)]
-        |probes, flags| {
-            for (f, p) in flags.iter_mut().zip(probes) {
-                *f = u8::from(p.must_refine(test, tolerance, diagonal));
+        |&(x, y, z, reach, error, kind), flags| {
+            // Slices of one length, so that the loops run without bounds
+            // checks.
+            let n = flags.len();
+            let (x, y, z, reach, error, kind) = (
+                &x[..n],
+                &y[..n],
+                &z[..n],
+                &reach[..n],
+                &error[..n],
+                &kind[..n],
+            );
+            // 1 where the answer is `want`, UNSURE where the exact test must
+            // decide, 0 elsewhere; the source and drain are settled.
+            let flag = |i: usize, answer: u8| {
+                let (source, drain) = (kind[i] == NodeKind::Source, kind[i] == NodeKind::Drain);
+                let answer = if source | drain {
+                    u8::from(source)
+                } else {
+                    answer
+                };
+                (answer & NarrowTest::UNSURE) | u8::from(answer == want)
+            };
+            match tolerance {
+                Tolerance::Relative(f) => {
+                    for i in 0..n {
+                        flags[i] = flag(i, u8::from(error[i] > f * diagonal));
+                    }
+                }
+                Tolerance::Pixels(px) => {
+                    for i in 0..n {
+                        let answer = narrow.refines([x[i], y[i], z[i]], reach[i], error[i], px);
+                        flags[i] = flag(i, answer);
+                    }
+                }
             }
         },
     );
     picked.clear();
-    let flagged = set.items.iter().zip(flags.iter());
-    picked.extend(flagged.filter(|(_, f)| **f == want).map(|(n, _)| *n));
+    let mut pick = |i: usize, f: u8| {
+        if f == 1 || u8::from(p.row(i).must_refine(test, tolerance, diagonal)) == want {
+            picked.push(set.items[i]);
+        }
+    };
+    let words = flags.chunks_exact(8);
+    let tail = 8 * words.len();
+    for (k, word) in words.enumerate() {
+        if u64::from_ne_bytes(word.try_into().expect("8 flags")) != 0 {
+            let flagged = word.iter().enumerate().filter(|(_, f)| **f != 0);
+            flagged.for_each(|(j, f)| pick(8 * k + j, *f));
+        }
+    }
+    let flagged = flags[tail..].iter().enumerate().filter(|(_, f)| **f != 0);
+    flagged.for_each(|(j, f)| pick(tail + j, *f));
 }
 
 /// Whether node `n` must be refined for the view of `test` and `tolerance`.

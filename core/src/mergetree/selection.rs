@@ -62,7 +62,7 @@ pub struct MergeTreeView {
     /// Per merge: in place, requirements missing.
     state: Vec<MergeState>,
     /// Merges not in place whose requirements all are: may merge next.
-    mergeable: IdSet<Node>,
+    mergeable: IdSet<Vec<Node>>,
     /// The display vertices and triangles, as bits: a fan swap touches a few
     /// words of a small array instead of a dense list's slots.
     shown: FixedBitSet,
@@ -72,7 +72,7 @@ pub struct MergeTreeView {
     node: Vec<u32>,
     /// The nodes of the display vertices that have one: the walk down
     /// starts from them.
-    active: IdSet<Node>,
+    active: IdSet<Vec<Node>>,
     work: Vec<u32>,
     /// Per-frame scratch of the batched tests.
     flags: Vec<u8>,
@@ -196,7 +196,7 @@ impl MergeTreeView {
         list.len()
     }
 
-    fn list(&mut self, which: List) -> &mut IdSet<Node> {
+    fn list(&mut self, which: List) -> &mut IdSet<Vec<Node>> {
         match which {
             List::Mergeable => &mut self.mergeable,
             List::Active => &mut self.active,
