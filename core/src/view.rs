@@ -79,9 +79,14 @@ impl View {
         self.sphere_test().pixels(length, center, radius)
     }
 
-    /// The worst off-axis stretch of a length, at the viewport's corner.
-    fn corner_stretch(&self) -> f64 {
-        let half_h = (0.5 * self.fov_y as f64).tan();
+    /// tan(fov_y / 2), which the frustum's planes and the stretch share.
+    fn half_tan(&self) -> f64 {
+        (0.5 * self.fov_y as f64).tan()
+    }
+
+    /// The worst off-axis stretch of a length, at the viewport's corner
+    /// (`half_h` = [`View::half_tan`]).
+    fn corner_stretch(&self, half_h: f64) -> f64 {
         let aspect = self.aspect() as f64;
         (1.0 + half_h * half_h * (1.0 + aspect * aspect)).sqrt()
     }
@@ -92,7 +97,7 @@ impl View {
         Projector {
             eye: self.eye,
             forward: self.forward(),
-            scale: self.focal_pixels() * self.corner_stretch() as f32,
+            scale: self.focal_pixels() * self.corner_stretch(self.half_tan()) as f32,
         }
     }
 
@@ -108,26 +113,28 @@ impl View {
     /// constants (a tangent, square roots, five normalisations) computed once,
     /// for callers testing many spheres per frame (hybrid cuts).
     pub fn sphere_test(&self) -> SphereTest {
+        let (forward, ty) = (self.forward().as_dvec3(), self.half_tan());
         SphereTest {
             eye: self.eye.as_dvec3(),
-            forward: self.forward().as_dvec3(),
-            planes: self.side_planes_f64(),
+            forward,
+            planes: self.side_planes_f64(forward, ty),
             focal: self.focal_pixels() as f64,
-            stretch: self.corner_stretch(),
+            stretch: self.corner_stretch(ty),
         }
     }
 
     /// Inward unit normals of the frustum's four side planes through the eye
     /// (callers testing many spheres per frame compute them once).
     pub fn side_planes(&self) -> [Vec3; 4] {
-        self.side_planes_f64().map(|n| n.as_vec3())
+        let forward = self.forward().as_dvec3();
+        self.side_planes_f64(forward, self.half_tan())
+            .map(|n| n.as_vec3())
     }
 
-    fn side_planes_f64(&self) -> [glam::DVec3; 4] {
-        let f = self.forward().as_dvec3();
+    /// The side planes from the forward direction `f` and [`View::half_tan`].
+    fn side_planes_f64(&self, f: glam::DVec3, ty: f64) -> [glam::DVec3; 4] {
         let right = f.cross(self.up.as_dvec3()).normalize_or(glam::DVec3::X);
         let up = right.cross(f);
-        let ty = (0.5 * self.fov_y as f64).tan();
         let tx = ty * self.aspect() as f64;
         [
             (f * ty - up).normalize(),
