@@ -136,6 +136,10 @@ pub struct HybridCut {
     flags: Vec<u8>,
     pending: Vec<u32>,
     primed: bool,
+    /// The draw set's scratch: each MRG vertex's number in the cut (or
+    /// `u32::MAX`), and the vertices numbered.
+    remap: Vec<u32>,
+    order: Vec<u32>,
 }
 
 /// Tests every node of `set` and puts those whose answer is `want` (0 or 1)
@@ -245,6 +249,8 @@ impl HybridCut {
             flags: Vec::new(),
             pending: Vec::new(),
             primed: false,
+            remap: Vec::new(),
+            order: Vec::new(),
         }
     }
 
@@ -400,25 +406,39 @@ impl HybridCut {
         })
     }
 
-    /// The cut's primitives (§6).
-    pub fn draw_set(&self) -> DrawSet {
+    /// The cut's primitives (§6). Per frame: the cut's vertices are numbered
+    /// through a table kept from frame to frame (reset where it was written),
+    /// not a hash map, and the outputs are sized once.
+    pub fn draw_set(&mut self) -> DrawSet {
         let mrg = &*self.mrg;
+        let arcs = self.arcs();
+        let (nt, np) = arcs.iter().fold((0, 0), |(t, p), a| {
+            let a = &mrg.arcs[*a as usize];
+            (t + a.triangles.len(), p + a.points.len())
+        });
         let mut out = DrawSet::default();
-        let mut remap = std::collections::HashMap::new();
         let mut mesh = TriMesh::default();
+        mesh.triangles.reserve(nt);
+        out.triangle_errors.reserve(nt);
+        out.points.reserve(np);
+        let mut parts = Vec::with_capacity(nt);
+        let remap = &mut self.remap;
+        remap.resize(mrg.positions.len(), u32::MAX);
         // The cut's vertices: the MRG's, each taken once.
-        let mut order = Vec::new();
-        let mut parts = Vec::new();
-        for a in self.arcs() {
+        let order = &mut self.order;
+        order.clear();
+        for a in arcs {
             let arc = &mrg.arcs[a as usize];
             let error = mrg.nodes[arc.producer as usize].error;
             out.error_bound = out.error_bound.max(error);
             for t in &arc.triangles {
                 let tri = mrg.triangles[*t as usize].map(|v| {
-                    *remap.entry(v).or_insert_with(|| {
-                        order.push(v as usize);
-                        order.len() as u32 - 1
-                    })
+                    let slot = &mut remap[v as usize];
+                    if *slot == u32::MAX {
+                        *slot = order.len() as u32;
+                        order.push(v);
+                    }
+                    *slot
                 });
                 mesh.triangles.push(tri);
                 parts.push(mrg.parts.get(*t as usize).copied().unwrap_or(0));
@@ -435,14 +455,17 @@ impl HybridCut {
                 }
             }));
         }
-        let gather = |a: &[Vec3]| order.iter().map(|&v| a[v]).collect::<Vec<_>>();
-        mesh.positions = order.iter().map(|&v| mrg.positions[v]).collect();
+        for &v in order.iter() {
+            remap[v as usize] = u32::MAX;
+        }
+        let gather = |a: &[Vec3]| order.iter().map(|&v| a[v as usize]).collect::<Vec<_>>();
+        mesh.positions = gather(&mrg.positions);
         mesh.colors = mrg.colors.as_deref().map(gather);
         mesh.normals = mrg.normals.as_deref().map(gather);
         mesh.uvs = mrg
             .uvs
             .as_ref()
-            .map(|u| order.iter().map(|&v| u[v]).collect());
+            .map(|u| order.iter().map(|&v| u[v as usize]).collect());
         mesh.parts = parts.iter().any(|p| *p != 0).then_some(parts);
         mesh.materials = mrg.materials.clone();
         out.mesh = mesh;
