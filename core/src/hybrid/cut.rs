@@ -459,7 +459,7 @@ impl HybridCut {
             remap[v as usize] = u32::MAX;
         }
         let gather = |a: &[Vec3]| order.iter().map(|&v| a[v as usize]).collect::<Vec<_>>();
-        mesh.positions = gather(&mrg.positions);
+        mesh.positions = order.iter().map(|&v| mrg.positions[v as usize]).collect();
         mesh.colors = mrg.colors.as_deref().map(gather);
         mesh.normals = mrg.normals.as_deref().map(gather);
         mesh.uvs = mrg
