@@ -113,13 +113,30 @@ impl View {
     /// constants (a tangent, square roots, five normalisations) computed once,
     /// for callers testing many spheres per frame (hybrid cuts).
     pub fn sphere_test(&self) -> SphereTest {
-        let (forward, ty) = (self.forward().as_dvec3(), self.half_tan());
+        self.sphere_test_after(None)
+    }
+
+    /// [`View::sphere_test`], taking the projection's constants from the
+    /// previous frame's test `before` where the field of view and viewport
+    /// are the same (two tangents and a square root fewer per frame).
+    pub fn sphere_test_after(&self, before: Option<&SphereTest>) -> SphereTest {
+        let lens = (self.fov_y.to_bits(), self.width, self.height);
+        let (ty, focal, stretch) = match before {
+            Some(b) if b.lens == lens => (b.half_tan, b.focal, b.stretch),
+            _ => {
+                let ty = self.half_tan();
+                (ty, self.focal_pixels() as f64, self.corner_stretch(ty))
+            }
+        };
+        let forward = self.forward().as_dvec3();
         SphereTest {
             eye: self.eye.as_dvec3(),
             forward,
             planes: self.side_planes_f64(forward, ty),
-            focal: self.focal_pixels() as f64,
-            stretch: self.corner_stretch(ty),
+            focal,
+            stretch,
+            lens,
+            half_tan: ty,
         }
     }
 
@@ -153,6 +170,10 @@ pub struct SphereTest {
     planes: [glam::DVec3; 4],
     focal: f64,
     stretch: f64,
+    /// What `focal`, `stretch` and `half_tan` were computed from: the field
+    /// of view's bits and the viewport.
+    lens: (u32, u32, u32),
+    half_tan: f64,
 }
 
 impl SphereTest {

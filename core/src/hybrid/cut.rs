@@ -140,6 +140,9 @@ pub struct HybridCut {
     /// `u32::MAX`), and the vertices numbered.
     remap: Vec<u32>,
     order: Vec<u32>,
+    /// The last frame's view constants, whose projection part the next frame
+    /// reuses when the lens is the same.
+    last_test: Option<SphereTest>,
 }
 
 /// Tests every node of `set` and puts those whose answer is `want` (0 or 1)
@@ -149,7 +152,7 @@ pub struct HybridCut {
 /// scanned eight at a time.
 fn tested(
     set: &IdSet<Probes>,
-    (test, tolerance, diagonal): (&SphereTest, Tolerance, f32),
+    (test, narrow, tolerance, diagonal): (&SphereTest, &NarrowTest, Tolerance, f32),
     (flags, picked): (&mut Vec<u8>, &mut Vec<u32>),
     want: u8,
 ) {
@@ -165,7 +168,6 @@ fn tested(
         &p.error[..n],
         &p.kind[..n],
     );
-    let narrow = test.narrow();
     crate::simd::wide(
         &columns,
         flags,
@@ -251,6 +253,7 @@ impl HybridCut {
             primed: false,
             remap: Vec::new(),
             order: Vec::new(),
+            last_test: None,
         }
     }
 
@@ -274,7 +277,7 @@ impl HybridCut {
         }
         let source = mrg.source();
         self.above[source as usize] = true;
-        let test = view.sphere_test();
+        let test = view.sphere_test_after(self.last_test.as_ref());
         // Every node the traversal raises, in `moved`; children it reaches
         // that stay below are the front.
         self.moved.clear();
@@ -300,6 +303,7 @@ impl HybridCut {
             self.bottom.set(n, self.in_bottom(n), || Probe::of(&mrg, n));
         }
         self.primed = true;
+        self.last_test = Some(test);
     }
 
     /// Moves the previous cut to `view` and `tolerance` (§4, §6).
@@ -309,14 +313,15 @@ impl HybridCut {
         }
         let mrg = Arc::clone(&self.mrg);
         let source = mrg.source();
-        let test = view.sphere_test();
+        let test = view.sphere_test_after(self.last_test.as_ref());
         let refine = |n: u32| must_refine(&mrg, n, &test, tolerance);
         self.moved.clear();
         self.stack.clear();
         // Coarsen: above nodes with all children below that need no
         // refinement. The bottom's tests run in one pass over its copies (its
         // nodes have no above child), the parents they uncover one by one.
-        let at = (&test, tolerance, mrg.diagonal);
+        let narrow = test.narrow();
+        let at = (&test, &narrow, tolerance, mrg.diagonal);
         tested(&self.bottom, at, (&mut self.flags, &mut self.pending), 0);
         for i in 0..self.pending.len() {
             let n = self.pending[i];
@@ -358,6 +363,7 @@ impl HybridCut {
                 self.bottom.set(m, self.in_bottom(m), || Probe::of(&mrg, m));
             }
         }
+        self.last_test = Some(test);
     }
 
     /// Lowers above node `n`, which need not be refined and has no above
