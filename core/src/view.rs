@@ -116,50 +116,76 @@ impl View {
         self.sphere_test_after(None)
     }
 
-    /// [`View::sphere_test`], taking the projection's constants from the
-    /// previous frame's test `before` where the field of view and viewport
-    /// are the same (two tangents and a square root fewer per frame).
+    /// [`View::sphere_test`], taking the lens's constants from the previous
+    /// frame's test `before` where the field of view and viewport are the
+    /// same: per frame, only two square roots remain.
     pub fn sphere_test_after(&self, before: Option<&SphereTest>) -> SphereTest {
-        let lens = (self.fov_y.to_bits(), self.width, self.height);
-        let (ty, focal, stretch) = match before {
-            Some(b) if b.lens == lens => (b.half_tan, b.focal, b.stretch),
-            _ => {
-                let ty = self.half_tan();
-                (ty, self.focal_pixels() as f64, self.corner_stretch(ty))
-            }
+        let key = (self.fov_y.to_bits(), self.width, self.height);
+        let lens = match before {
+            Some(b) if b.lens.key == key => b.lens,
+            _ => self.lens(key),
         };
-        let forward = self.forward().as_dvec3();
+        // In double precision throughout, unit to its round-off: a normal
+        // longer than 1 by f32's round-off could cull a containing sphere
+        // while a contained one is seen.
+        let forward = (self.target - self.eye)
+            .as_dvec3()
+            .normalize_or(glam::DVec3::NEG_Z);
         SphereTest {
             eye: self.eye.as_dvec3(),
             forward,
-            planes: self.side_planes_f64(forward, ty),
-            focal,
-            stretch,
+            planes: self.side_planes_f64(forward, &lens),
             lens,
-            half_tan: ty,
+        }
+    }
+
+    fn lens(&self, key: (u32, u32, u32)) -> Lens {
+        let ty = self.half_tan();
+        let tx = ty * self.aspect() as f64;
+        Lens {
+            key,
+            half_tan: [ty, tx],
+            unit: [ty, tx].map(|t| 1.0 / (1.0 + t * t).sqrt()),
+            focal: self.focal_pixels() as f64,
+            stretch: self.corner_stretch(ty),
         }
     }
 
     /// Inward unit normals of the frustum's four side planes through the eye
     /// (callers testing many spheres per frame compute them once).
     pub fn side_planes(&self) -> [Vec3; 4] {
-        let forward = self.forward().as_dvec3();
-        self.side_planes_f64(forward, self.half_tan())
-            .map(|n| n.as_vec3())
+        let test = self.sphere_test();
+        test.planes.map(|n| n.as_vec3())
     }
 
-    /// The side planes from the forward direction `f` and [`View::half_tan`].
-    fn side_planes_f64(&self, f: glam::DVec3, ty: f64) -> [glam::DVec3; 4] {
+    /// The side planes from the unit forward direction `f`: `f·t ± u` for the
+    /// orthonormal up and right vectors `u` and the half tangents `t`, whose
+    /// lengths √(1 + t²) the lens divides out.
+    fn side_planes_f64(&self, f: glam::DVec3, lens: &Lens) -> [glam::DVec3; 4] {
         let right = f.cross(self.up.as_dvec3()).normalize_or(glam::DVec3::X);
         let up = right.cross(f);
-        let tx = ty * self.aspect() as f64;
+        let ([ty, tx], [ky, kx]) = (lens.half_tan, lens.unit);
         [
-            (f * ty - up).normalize(),
-            (f * ty + up).normalize(),
-            (f * tx - right).normalize(),
-            (f * tx + right).normalize(),
+            (f * ty - up) * ky,
+            (f * ty + up) * ky,
+            (f * tx - right) * kx,
+            (f * tx + right) * kx,
         ]
     }
+}
+
+/// What a view's projection takes from its field of view and viewport
+/// alone, kept from frame to frame while they stay the same.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Lens {
+    /// The field of view's bits and the viewport.
+    key: (u32, u32, u32),
+    /// tan of half the vertical and horizontal fields of view.
+    half_tan: [f64; 2],
+    /// 1 / √(1 + t²) of each, which makes the side planes' normals unit.
+    unit: [f64; 2],
+    focal: f64,
+    stretch: f64,
 }
 
 /// The per-view constants of [`View::sees_sphere`] and [`View::pixels_f64`].
@@ -168,12 +194,7 @@ pub struct SphereTest {
     eye: glam::DVec3,
     forward: glam::DVec3,
     planes: [glam::DVec3; 4],
-    focal: f64,
-    stretch: f64,
-    /// What `focal`, `stretch` and `half_tan` were computed from: the field
-    /// of view's bits and the viewport.
-    lens: (u32, u32, u32),
-    half_tan: f64,
+    lens: Lens,
 }
 
 impl SphereTest {
@@ -183,7 +204,7 @@ impl SphereTest {
         NarrowTest {
             eye: self.eye.as_vec3(),
             normals: [self.forward, p0, p1, p2, p3].map(|n| n.as_vec3()),
-            scale: (self.focal * self.stretch) as f32,
+            scale: (self.lens.focal * self.lens.stretch) as f32,
         }
     }
 
@@ -204,14 +225,14 @@ impl SphereTest {
     /// See [`View::pixels_f64`].
     #[inline(always)]
     pub fn pixels(&self, length: f64, center: Vec3, radius: f64) -> f64 {
-        length * self.focal * self.stretch / self.depth(center, radius)
+        length * self.lens.focal * self.lens.stretch / self.depth(center, radius)
     }
 
     /// Whether `length` projects to more than `pixels` ([`SphereTest::pixels`]
     /// without its division, for passes over many nodes).
     #[inline(always)]
     pub fn exceeds(&self, length: f64, center: Vec3, radius: f64, pixels: f64) -> bool {
-        length * self.focal * self.stretch > pixels * self.depth(center, radius)
+        length * self.lens.focal * self.lens.stretch > pixels * self.depth(center, radius)
     }
 
     /// The sphere's nearest depth, at least the near distance.
@@ -384,7 +405,7 @@ mod tests {
             let pixels = 0.5 + 20.0 * rng.f32();
             let depth = |c: Vec3| ((c - view.eye).dot(view.forward()) - reach).max(NEAR);
             let mut length =
-                pixels * depth(c) / (test.focal * test.stretch) as f32 * rng.f32() * 2.0;
+                pixels * depth(c) / (test.lens.focal * test.lens.stretch) as f32 * rng.f32() * 2.0;
             let random = k % 3 == 0;
             if !random {
                 // Onto one boundary: a side plane, or the projected length's.
@@ -400,7 +421,9 @@ mod tests {
                     let s = (c.as_dvec3() - test.eye).dot(n) + reach as f64;
                     c = (c.as_dvec3() - n * s).as_vec3();
                 } else {
-                    length = (pixels as f64 * depth(c) as f64 / (test.focal * test.stretch)) as f32;
+                    length = (pixels as f64 * depth(c) as f64
+                        / (test.lens.focal * test.lens.stretch))
+                        as f32;
                 }
             }
             let exact =

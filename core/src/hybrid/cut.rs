@@ -149,7 +149,8 @@ pub struct HybridCut {
 /// into `picked`: one vector pass ([`crate::simd::wide`]) in single
 /// precision ([`NarrowTest`]), then the exact test for the few it leaves
 /// unsure. Few nodes change their answer in a frame, so the flags are
-/// scanned eight at a time.
+/// scanned eight at a time. The flags' buffer only grows: the pass writes
+/// every one it reads.
 fn tested(
     set: &IdSet<Probes>,
     (test, narrow, tolerance, diagonal): (&SphereTest, &NarrowTest, Tolerance, f32),
@@ -158,8 +159,10 @@ fn tested(
 ) {
     let p = &set.values;
     let n = set.items.len();
-    flags.clear();
-    flags.resize(n, 0);
+    if flags.len() < n {
+        flags.resize(n, 0);
+    }
+    let flags = &mut flags[..n];
     let columns = (
         &p.x[..n],
         &p.y[..n],
