@@ -41,17 +41,18 @@
 //! is at most its largest node error.
 
 use std::sync::Mutex;
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 
 use glam::Vec3;
 use rayon::prelude::*;
 
+use super::bounds::{NodeBounds, Recorded, WAVE, Wave};
 use super::mrg::{DRAIN, Mrg, NodeKind, Point, Sphere};
 use super::{point_replacement, point_simplification};
 use crate::distance::MeshDistance;
 use crate::distance::facets::Facets;
 use crate::geom::TriMesh;
 use crate::progress::{Cancelled, Progress};
-use crate::simplify::bound::{BoundOptions, max_distance_bound};
 use crate::simplify::projection::Projection;
 use crate::simplify::{CollapseOptions, EdgeCollapser};
 
@@ -158,142 +159,122 @@ pub fn build_observed(
         value
     };
     let mut col = EdgeCollapser::with_star_cost(mesh, opts.collapse, Box::new(cost));
+    let original = MeshDistance::new(mesh);
+    let projection = Projection::new(mesh);
     let mut tri_producer: Vec<u32> = vec![DRAIN; n];
-    let mut collapses: Vec<Recorded> = Vec::new();
-    while let Some(c) = col.step() {
-        sync(&mut mrg, &col);
-        let balls = mrg.balls(&c.added, &[]);
-        let mut kids: Vec<u32> = c
-            .removed
-            .iter()
-            .map(|t| tri_producer[*t as usize])
-            .collect();
-        kids.sort_unstable();
-        kids.dedup();
-        let sphere = spheres_of(&mrg, balls, &mut kids.into_iter());
-        let node = mrg.add_node(NodeKind::TriangleSimplification, 0.0, sphere);
-        tri_producer.resize(col.triangle_total(), DRAIN);
-        mrg.consume(node, &c.removed, &[], &tri_producer, &[]);
-        for t in &c.added {
-            tri_producer[*t as usize] = node;
-        }
-        collapses.push(Recorded {
-            node,
-            removed: c.removed,
-            added: c.added,
+    // Guaranteed bounds (module doc), on a worker, a wave behind the collapses.
+    let (diagonal, to) = (mrg.diagonal, (&original, &projection));
+    // Waves sent; all sent once the collapses are done (the worker then reports progress).
+    let sent = AtomicUsize::new(0);
+    let all_sent = AtomicBool::new(false);
+    let errors = std::thread::scope(|scope| {
+        let (to_worker, waves) = std::sync::mpsc::channel::<Wave>();
+        let (sent, all_sent) = (&sent, &all_sent);
+        let worker = scope.spawn(move || {
+            let mut bounds = NodeBounds::new(mesh, to, diagonal);
+            for (k, wave) in waves.into_iter().enumerate() {
+                if progress.is_cancelled() {
+                    break;
+                }
+                bounds.wave(wave);
+                if all_sent.load(Ordering::Acquire) {
+                    progress.set_fraction((k + 1) as f32 / sent.load(Ordering::Relaxed) as f32);
+                }
+            }
+            bounds.into_errors()
         });
-        if collapses.len().is_multiple_of(256) && progress.wants_preview() {
-            // Watching the build: the triangles left and the points made so far.
-            progress.publish(crate::cut::DrawSet {
-                mesh: col.mesh().0,
-                points: mrg
-                    .points
+        let (mut sent_v, mut sent_t) = (0, 0);
+        let mut send = move |mrg: &Mrg, collapses: Vec<Recorded>| {
+            // A closed channel means the worker stopped: cancelled.
+            let _ = to_worker.send(Wave {
+                collapses,
+                positions: mrg.positions[sent_v..].to_vec(),
+                triangles: mrg.triangles[sent_t..].to_vec(),
+            });
+            (sent_v, sent_t) = (mrg.positions.len(), mrg.triangles.len());
+            sent.fetch_add(1, Ordering::Relaxed);
+        };
+        let mut collapses = Vec::with_capacity(WAVE);
+        let mut count = 0usize;
+        let collapsed = (|| {
+            while let Some(c) = col.step() {
+                sync(&mut mrg, &col);
+                let balls = mrg.balls(&c.added, &[]);
+                let mut kids: Vec<u32> = c
+                    .removed
                     .iter()
-                    .map(|p| crate::cut::CutPoint {
-                        center: p.center,
-                        radius: p.radius,
-                        color: p.color,
-                        normal: p.normal,
-                        error: p.center_error,
-                    })
-                    .collect(),
-                ..Default::default()
-            });
+                    .map(|t| tri_producer[*t as usize])
+                    .collect();
+                kids.sort_unstable();
+                kids.dedup();
+                let sphere = spheres_of(&mrg, balls, &mut kids.iter().copied());
+                let node = mrg.add_node(NodeKind::TriangleSimplification, 0.0, sphere);
+                tri_producer.resize(col.triangle_total(), DRAIN);
+                mrg.consume(node, &c.removed, &[], &tri_producer, &[]);
+                for t in &c.added {
+                    tri_producer[*t as usize] = node;
+                }
+                collapses.push(Recorded {
+                    node,
+                    removed: c.removed,
+                    added: c.added,
+                    kids,
+                });
+                count += 1;
+                if collapses.len() == WAVE {
+                    send(
+                        &mrg,
+                        std::mem::replace(&mut collapses, Vec::with_capacity(WAVE)),
+                    );
+                }
+                if count.is_multiple_of(256) && progress.wants_preview() {
+                    // Watching the build: the triangles left and the points made so far.
+                    progress.publish(crate::cut::DrawSet {
+                        mesh: col.mesh().0,
+                        points: mrg
+                            .points
+                            .iter()
+                            .map(|p| crate::cut::CutPoint {
+                                center: p.center,
+                                radius: p.radius,
+                                color: p.color,
+                                normal: p.normal,
+                                error: p.center_error,
+                            })
+                            .collect(),
+                        ..Default::default()
+                    });
+                }
+                if count.is_multiple_of(1024) {
+                    progress.set_fraction((n - col.triangle_count()) as f32 / n.max(1) as f32);
+                    progress.check()?;
+                    observe(&Snapshot {
+                        stage: "collapsing edges",
+                        triangles: col.triangle_count(),
+                        points: 0,
+                        nodes: mrg.nodes.len(),
+                    });
+                }
+            }
+            progress.check()
+        })();
+        if collapsed.is_ok() {
+            sync(&mut mrg, &col);
+            send(&mrg, collapses);
+            progress.stage("hybrid: bounding errors");
+            all_sent.store(true, Ordering::Release);
         }
-        if collapses.len().is_multiple_of(1024) {
-            progress.set_fraction((n - col.triangle_count()) as f32 / n.max(1) as f32);
-            progress.check()?;
-            observe(&Snapshot {
-                stage: "collapsing edges",
-                triangles: col.triangle_count(),
-                points: 0,
-                nodes: mrg.nodes.len(),
-            });
-        }
-    }
+        drop(send);
+        collapsed.map(|()| worker.join().expect("the bounding worker panicked"))
+    })?;
     progress.check()?;
-    sync(&mut mrg, &col);
+    for (node, error) in mrg.nodes.iter_mut().zip(errors) {
+        node.error = error;
+    }
     mrg.colors = vertex_attribute(&col, |v| col.color(v));
     mrg.normals = vertex_attribute(&col, |v| col.normal(v));
     mrg.uvs = vertex_attribute(&col, |v| col.uv(v));
     mrg.materials = col.materials().cloned();
-
-    // Guaranteed bounds (module doc): attribution of the original triangles,
-    // then both directions per created triangle (in parallel), then node
-    // errors upwards in build order.
-    progress.stage("hybrid: bounding errors");
-    let original = MeshDistance::new(mesh);
-    let projection = Projection::new(mesh);
-    let forward = attribute(mesh, &mrg, &collapses);
-    progress.check()?;
-    // Looser than the simplifier's certificate (there are ~3 bounds per
-    // collapse): still a true upper bound, within 25% of the lower one or 8 splits.
-    let bound_opts = BoundOptions {
-        rel_tol: 0.25,
-        max_splits: 8,
-        ..BoundOptions::for_diagonal(mrg.diagonal)
-    };
-    let nearest: Vec<(f32, u32)> = mrg
-        .positions
-        .par_iter()
-        .map(|p| original.nearest(*p))
-        .collect();
-    // Exact distances found so far bound each triangle's error from below, and
-    // a node's error is at least its descendants' (errors never decrease
-    // upwards): refining a triangle below that floor cannot raise any node's
-    // error, so its bound stops there.
-    let low = |t: usize| {
-        mrg.triangles[t]
-            .iter()
-            .map(|v| nearest[*v as usize].0)
-            .fold(forward[t], f32::max)
-    };
-    let mut floor = vec![0.0f32; mrg.nodes.len()];
-    for c in &collapses {
-        let own = c.added.iter().map(|t| low(*t as usize)).fold(0.0, f32::max);
-        floor[c.node as usize] = mrg
-            .child_nodes(c.node)
-            .map(|k| floor[k as usize])
-            .fold(own, f32::max);
-    }
-    // Waves of collapses in build order: each wave's triangles are bounded in
-    // parallel, and a triangle also stops once it is below the final error of
-    // a child node from an earlier wave (its node's error is at least that).
-    let mut jobs = Vec::new();
-    for (k, wave) in collapses.chunks(1024).enumerate() {
-        jobs.clear();
-        for c in wave {
-            let below = mrg
-                .child_nodes(c.node)
-                .map(|k| mrg.nodes[k as usize].error)
-                .fold(floor[c.node as usize], f32::max);
-            jobs.extend(c.added.iter().map(|t| (*t as usize, below)));
-        }
-        let tri_error: Vec<f32> = jobs
-            .par_iter()
-            .map(|&(t, below)| {
-                let p = mrg.triangle_positions(t as u32);
-                let at = mrg.triangles[t].map(|v| nearest[v as usize]);
-                let enough = forward[t].max(below);
-                let to = (&original, Some(&projection));
-                let (reverse, _, _) = max_distance_bound(p, at, to, &bound_opts, enough);
-                // f32 round-off of the coordinates (flat collapses bound to 0).
-                let scale = p.iter().map(|v| v.abs().max_element()).fold(0.0, f32::max);
-                reverse.max(forward[t]) + 8.0 * f32::EPSILON * scale
-            })
-            .collect();
-        let mut errors = tri_error.into_iter();
-        for c in wave {
-            let own = errors.by_ref().take(c.added.len()).fold(0.0, f32::max);
-            let below = mrg
-                .child_nodes(c.node)
-                .map(|k| mrg.nodes[k as usize].error)
-                .fold(0.0, f32::max);
-            mrg.nodes[c.node as usize].error = own.max(below);
-        }
-        progress.set_fraction(((k + 1) * 1024) as f32 / collapses.len().max(1) as f32);
-        progress.check()?;
-    }
 
     // §5.3: every remaining triangle is point-replaced.
     let remaining: Vec<u32> = col.alive_triangles().collect();
@@ -510,58 +491,6 @@ impl QueueScratch {
         }
         (worst as f64).sqrt()
     }
-}
-
-/// One edge collapse as the MRG recorded it.
-struct Recorded {
-    node: u32,
-    removed: Vec<u32>,
-    added: Vec<u32>,
-}
-
-/// Attributes every original triangle to one triangle of each model it
-/// passes through: at each collapse, the originals of the removed triangles go
-/// to the new triangle nearest to them (the largest distance of their vertices,
-/// exact for a whole triangle since the distance to a triangle is convex).
-/// Returns, per triangle, the largest such distance of its originals (the
-/// original-to-simplified direction of its bound).
-fn attribute(mesh: &TriMesh, mrg: &Mrg, collapses: &[Recorded]) -> Vec<f32> {
-    let mut owned: Vec<Vec<u32>> = (0..mrg.triangles.len() as u32)
-        .map(|t| {
-            if (t as usize) < mesh.triangles.len() {
-                vec![t]
-            } else {
-                Vec::new()
-            }
-        })
-        .collect();
-    let mut forward = vec![0.0f32; mrg.triangles.len()];
-    let mut facets = Facets::default();
-    let mut region = Vec::new();
-    for c in collapses {
-        region.clear();
-        for t in &c.removed {
-            region.extend(std::mem::take(&mut owned[*t as usize]));
-        }
-        facets.clear();
-        for t in &c.added {
-            facets.push(&mrg.triangle_positions(*t));
-        }
-        let choice: Vec<(usize, f32)> = region
-            .par_iter()
-            .with_min_len(256)
-            .map(|o| {
-                let (k, d) = facets.nearest_cover(&mesh.triangle(*o as usize));
-                (k, d.sqrt())
-            })
-            .collect();
-        for (o, (k, d)) in region.iter().zip(choice) {
-            let t = c.added[k] as usize;
-            owned[t].push(*o);
-            forward[t] = forward[t].max(d);
-        }
-    }
-    forward
 }
 
 #[cfg(test)]
