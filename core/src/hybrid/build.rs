@@ -585,6 +585,27 @@ pub(crate) mod tests {
         assert!(p2 < p8, "replaced triangles {p2} {p8}");
     }
 
+    /// Cancelling mid-collapse, with waves still queued for the bounding
+    /// worker, stops the build (the worker must not be left waiting).
+    #[test]
+    fn cancel_while_the_bounds_run_behind_stops_the_build() {
+        let mesh = icosphere(Vec3::ZERO, 1.0, 5);
+        let progress = std::sync::Arc::new(Progress::new());
+        let watcher = {
+            let p = progress.clone();
+            std::thread::spawn(move || {
+                while p.fraction() < 0.3 {
+                    std::thread::sleep(std::time::Duration::from_micros(200));
+                }
+                p.cancel();
+            })
+        };
+        let r = build(&mesh, &HybridOptions::default(), &progress);
+        watcher.join().unwrap();
+        assert!(r.is_err());
+        assert_eq!(progress.stage_name(), "hybrid: collapsing edges");
+    }
+
     #[test]
     fn cancel_stops_the_build() {
         let progress = Progress::new();
