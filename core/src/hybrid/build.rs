@@ -159,19 +159,20 @@ pub fn build_observed(
         value
     };
     let mut col = EdgeCollapser::with_star_cost(mesh, opts.collapse, Box::new(cost));
-    let original = MeshDistance::new(mesh);
-    let projection = Projection::new(mesh);
     let mut tri_producer: Vec<u32> = vec![DRAIN; n];
     // Guaranteed bounds (module doc), on a worker, a wave behind the collapses.
-    let (diagonal, to) = (mrg.diagonal, (&original, &projection));
+    let diagonal = mrg.diagonal;
     // Waves sent; all sent once the collapses are done (the worker then reports progress).
     let sent = AtomicUsize::new(0);
     let all_sent = AtomicBool::new(false);
-    let errors = std::thread::scope(|scope| {
+    let (errors, original) = std::thread::scope(|scope| {
         let (to_worker, waves) = std::sync::mpsc::channel::<Wave>();
         let (sent, all_sent) = (&sent, &all_sent);
         let worker = scope.spawn(move || {
-            let mut bounds = NodeBounds::new(mesh, to, diagonal);
+            // The original's search structures are built here, beside the first collapses.
+            let original = MeshDistance::new(mesh);
+            let projection = Projection::new(mesh);
+            let mut bounds = NodeBounds::new(mesh, (&original, &projection), diagonal);
             for (k, wave) in waves.into_iter().enumerate() {
                 if progress.is_cancelled() {
                     break;
@@ -181,7 +182,8 @@ pub fn build_observed(
                     progress.set_fraction((k + 1) as f32 / sent.load(Ordering::Relaxed) as f32);
                 }
             }
-            bounds.into_errors()
+            let errors = bounds.into_errors();
+            (errors, original)
         });
         let (mut sent_v, mut sent_t) = (0, 0);
         let mut send = move |mrg: &Mrg, collapses: Vec<Recorded>| {
