@@ -102,7 +102,10 @@ impl Ord for Entry {
 /// Relative weight of the constraint planes along borders and seams.
 const BORDER_WEIGHT: f64 = 10.0;
 
-/// The working mesh of an edge-collapse simplification.
+/// The working mesh of an edge-collapse simplification. A clone continues
+/// exactly as the original would (the cost function is shared), so a search
+/// over stopping points resumes from a saved state instead of the input.
+#[derive(Clone)]
 pub struct EdgeCollapser {
     pos: Vec<Vec3>,
     normals: Option<Vec<Vec3>>,
@@ -125,8 +128,10 @@ pub struct EdgeCollapser {
     /// Per-vertex stamps for neighbourhood tests without allocation.
     mark: std::cell::RefCell<(Vec<u32>, u32)>,
     alive_triangles: usize,
+    /// Collapses performed since the input.
+    collapses: usize,
     opts: CollapseOptions,
-    cost: Box<StarCostFn>,
+    cost: std::sync::Arc<StarCostFn>,
     /// A cheap lower bound of `cost` to queue candidates by: the full cost is
     /// computed only when one reaches the front, and it is queued again if
     /// that is more (the order stays the full cost's, §5.2 greedy).
@@ -386,8 +391,9 @@ impl EdgeCollapser {
             collapsed_since_retry: false,
             mark: std::cell::RefCell::new((vec![0; nv], 0)),
             alive_triangles: nt,
+            collapses: 0,
             opts,
-            cost,
+            cost: cost.into(),
             lower_bound,
         };
         for e in &adj.edges {
@@ -398,6 +404,11 @@ impl EdgeCollapser {
 
     pub fn triangle_count(&self) -> usize {
         self.alive_triangles
+    }
+
+    /// Collapses performed since the input.
+    pub fn collapses(&self) -> usize {
+        self.collapses
     }
 
     pub fn position(&self, v: u32) -> Vec3 {
@@ -731,6 +742,7 @@ impl EdgeCollapser {
         let p = cand.position;
         let c = self.pos.len() as u32;
         self.collapsed_since_retry = true;
+        self.collapses += 1;
         // Attributes: interpolate by where p projects onto the edge.
         let (pa, pb) = (self.pos[a as usize], self.pos[b as usize]);
         let ab = pb - pa;

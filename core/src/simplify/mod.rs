@@ -86,15 +86,15 @@ pub fn simplify(
         per_triangle: opts.per_triangle_bounds,
         ..BoundOptions::for_diagonal(diag)
     };
-    let count = |target: usize| -> Result<Simplified, SimplifyError> {
+    // Collapses `s` on down to `target` triangles (or as far as it can go).
+    let collapse = |s: &mut EdgeCollapser, target: usize| -> Result<(), SimplifyError> {
         progress.stage("collapsing edges");
-        let mut s = EdgeCollapser::new(mesh, opts.collapse);
-        let mut collapses = 0usize;
+        let from = s.triangle_count();
         let mut cancelled = false;
         s.run(target, |s, _| {
-            collapses += 1;
-            if collapses.is_multiple_of(512) {
-                let done = (n - s.triangle_count()) as f32 / (n - target.min(n)).max(1) as f32;
+            if s.collapses().is_multiple_of(512) {
+                let done =
+                    (from - s.triangle_count()) as f32 / from.saturating_sub(target).max(1) as f32;
                 progress.set_fraction(done);
                 cancelled = progress.is_cancelled();
                 if progress.wants_preview() {
@@ -106,15 +106,30 @@ pub fn simplify(
             }
             !cancelled
         });
-        progress.check()?;
+        Ok(progress.check()?)
+    };
+    let certify = |s: &EdgeCollapser| -> Result<Simplified, SimplifyError> {
         let (out, _) = s.mesh();
         progress.stage("certifying the error bound");
         let certificate = certify_with_progress(mesh, &out, &bound_opts, progress)?;
         Ok(Simplified {
             mesh: out,
             certificate,
-            collapses,
+            collapses: s.collapses(),
         })
+    };
+    let count = |target: usize| -> Result<Simplified, SimplifyError> {
+        let mut s = EdgeCollapser::new(mesh, opts.collapse);
+        collapse(&mut s, target)?;
+        certify(&s)
+    };
+    let to_error = |e: f32| {
+        to_error(
+            EdgeCollapser::new(mesh, opts.collapse),
+            e,
+            collapse,
+            certify,
+        )
     };
     let valid_fraction = |r: f32| r.is_finite() && (0.0..=1.0).contains(&r);
     match opts.target {
@@ -123,8 +138,8 @@ pub fn simplify(
         Target::Ratio(r) => Err(SimplifyError::BadTarget(format!(
             "ratio {r} is not in 0..=1"
         ))),
-        Target::Error(e) if e.is_finite() && e >= 0.0 => to_error(n, e, count),
-        Target::RelativeError(e) if e.is_finite() && e >= 0.0 => to_error(n, e * diag, count),
+        Target::Error(e) if e.is_finite() && e >= 0.0 => to_error(e),
+        Target::RelativeError(e) if e.is_finite() && e >= 0.0 => to_error(e * diag),
         Target::Error(e) | Target::RelativeError(e) => Err(SimplifyError::BadTarget(format!(
             "error {e} is not a finite distance >= 0"
         ))),
@@ -132,39 +147,55 @@ pub fn simplify(
 }
 
 /// The smallest triangle count whose certified bound is within `max_error`:
-/// halve the count while the bound holds, then bisect (collapses are
-/// deterministic, so each count is re-run from the input).
+/// halve the count while the bound holds, then bisect. Collapses are
+/// deterministic and a clone of the collapser continues as it would, so each
+/// probe resumes from the last count that held instead of re-running from
+/// the input (the halving adds up to one run).
 fn to_error(
-    n: usize,
+    start: EdgeCollapser,
     max_error: f32,
-    mut count: impl FnMut(usize) -> Result<Simplified, SimplifyError>,
+    mut collapse: impl FnMut(&mut EdgeCollapser, usize) -> Result<(), SimplifyError>,
+    mut certify: impl FnMut(&EdgeCollapser) -> Result<Simplified, SimplifyError>,
 ) -> Result<Simplified, SimplifyError> {
-    let mut good = count(n)?;
-    let mut good_n = n;
-    let mut bad_n = 0usize;
-    let mut probe = n / 2;
-    while probe > 0 {
-        let r = count(probe)?;
+    let n = start.triangle_count();
+    let (mut good, mut good_state, mut good_n) = (None, start, n);
+    // Halving until a probe fails (or reaches 0), then bisecting from there.
+    let (mut probe, mut bad_n, mut bisecting) = (n / 2, 0usize, false);
+    loop {
+        if bisecting {
+            if good_n <= bad_n + 1 || good_n - bad_n <= good_n / 50 {
+                break;
+            }
+            probe = (good_n + bad_n) / 2;
+        } else if probe == 0 {
+            bisecting = true;
+            continue;
+        }
+        let mut s = good_state.clone();
+        collapse(&mut s, probe)?;
+        if s.collapses() == good_state.collapses()
+            && let Some(g) = good
+        {
+            // Nothing more can collapse: every smaller count gives this mesh.
+            return Ok(g);
+        }
+        let r = certify(&s)?;
         if r.error_bound() <= max_error {
-            good_n = r.mesh.triangles.len();
-            good = r;
-            probe /= 2;
+            good_n = r.mesh.triangles.len().min(probe);
+            good = Some(r);
+            good_state = s;
+            if !bisecting {
+                probe /= 2;
+            }
         } else {
             bad_n = probe;
-            break;
+            bisecting = true;
         }
     }
-    while good_n > bad_n + 1 && good_n - bad_n > good_n / 50 {
-        let mid = (good_n + bad_n) / 2;
-        let r = count(mid)?;
-        if r.error_bound() <= max_error {
-            good_n = r.mesh.triangles.len().min(mid);
-            good = r;
-        } else {
-            bad_n = mid;
-        }
+    match good {
+        Some(g) => Ok(g),
+        None => certify(&good_state),
     }
-    Ok(good)
 }
 
 #[cfg(test)]
@@ -220,6 +251,29 @@ mod tests {
         let r = simplify(&mesh, &opts, &progress);
         watcher.join().unwrap();
         assert!(matches!(r, Err(SimplifyError::Cancelled)));
+    }
+
+    /// The error search resumes from saved collapser states; what it returns
+    /// is what a fresh run to its triangle count makes, bound included.
+    #[test]
+    fn an_error_search_ends_where_a_fresh_run_to_its_count_does() {
+        let mesh = crate::builtins::icosphere(glam::Vec3::ZERO, 1.0, 4);
+        let run = |target| {
+            let opts = SimplifyOptions {
+                per_triangle_bounds: false,
+                target,
+                collapse: CollapseOptions::default(),
+            };
+            simplify(&mesh, &opts, &Progress::new()).unwrap()
+        };
+        for e in [0.002, 0.02] {
+            let searched = run(Target::RelativeError(e));
+            let fresh = run(Target::Triangles(searched.mesh.triangles.len()));
+            assert!(searched.mesh.triangles.len() < mesh.triangles.len() / 4);
+            assert_eq!(searched.mesh, fresh.mesh);
+            assert_eq!(searched.collapses, fresh.collapses);
+            assert_eq!(searched.error_bound(), fresh.error_bound());
+        }
     }
 
     #[test]

@@ -16,6 +16,7 @@ use std::collections::BinaryHeap;
 /// Entries moved to the heap per refill: small enough for the L2 cache.
 const BATCH: usize = 1 << 14;
 
+#[derive(Clone)]
 pub(crate) struct CollapseQueue<T: Ord + Copy> {
     hot: BinaryHeap<Reverse<T>>,
     cold: Vec<T>,
