@@ -13,7 +13,9 @@ pub mod projection;
 pub mod quadric;
 mod queue;
 
-pub use bound::{BoundOptions, Certificate, certify, certify_with_progress};
+pub use bound::{
+    BoundOptions, Certificate, Original, certify, certify_against, certify_with_progress,
+};
 pub use collapse::{
     Candidate, Collapse, CollapseOptions, EdgeCollapser, StarCostFn, quadric_cost, quadric_mean,
 };
@@ -82,6 +84,27 @@ pub fn simplify(
 ) -> Result<Simplified, SimplifyError> {
     let n = mesh.triangles.len();
     let diag = mesh.bounds().diagonal();
+    let valid_fraction = |r: f32| r.is_finite() && (0.0..=1.0).contains(&r);
+    let valid_error = |e: f32| e.is_finite() && e >= 0.0;
+    // A triangle count to run to, or an error bound to search for.
+    let (count, max_error) = match opts.target {
+        Target::Triangles(t) => (Some(t), 0.0),
+        Target::Ratio(r) if valid_fraction(r) => {
+            (Some((r as f64 * n as f64).round() as usize), 0.0)
+        }
+        Target::Error(e) if valid_error(e) => (None, e),
+        Target::RelativeError(e) if valid_error(e) => (None, e * diag),
+        Target::Ratio(r) => {
+            return Err(SimplifyError::BadTarget(format!(
+                "ratio {r} is not in 0..=1"
+            )));
+        }
+        Target::Error(e) | Target::RelativeError(e) => {
+            return Err(SimplifyError::BadTarget(format!(
+                "error {e} is not a finite distance >= 0"
+            )));
+        }
+    };
     let bound_opts = BoundOptions {
         per_triangle: opts.per_triangle_bounds,
         ..BoundOptions::for_diagonal(diag)
@@ -108,42 +131,36 @@ pub fn simplify(
         });
         Ok(progress.check()?)
     };
-    let certify = |s: &EdgeCollapser| -> Result<Simplified, SimplifyError> {
-        let (out, _) = s.mesh();
-        progress.stage("certifying the error bound");
-        let certificate = certify_with_progress(mesh, &out, &bound_opts, progress)?;
-        Ok(Simplified {
-            mesh: out,
-            certificate,
-            collapses: s.collapses(),
-        })
-    };
-    let count = |target: usize| -> Result<Simplified, SimplifyError> {
-        let mut s = EdgeCollapser::new(mesh, opts.collapse);
-        collapse(&mut s, target)?;
-        certify(&s)
-    };
-    let to_error = |e: f32| {
-        to_error(
-            EdgeCollapser::new(mesh, opts.collapse),
-            e,
-            collapse,
-            certify,
-        )
-    };
-    let valid_fraction = |r: f32| r.is_finite() && (0.0..=1.0).contains(&r);
-    match opts.target {
-        Target::Triangles(t) => count(t),
-        Target::Ratio(r) if valid_fraction(r) => count((r as f64 * n as f64).round() as usize),
-        Target::Ratio(r) => Err(SimplifyError::BadTarget(format!(
-            "ratio {r} is not in 0..=1"
-        ))),
-        Target::Error(e) if e.is_finite() && e >= 0.0 => to_error(e),
-        Target::RelativeError(e) if e.is_finite() && e >= 0.0 => to_error(e * diag),
-        Target::Error(e) | Target::RelativeError(e) => Err(SimplifyError::BadTarget(format!(
-            "error {e} is not a finite distance >= 0"
-        ))),
-    }
+    std::thread::scope(|scope| {
+        // The original's search structures are built beside the first
+        // collapses (which run on one thread), for every certificate.
+        let mut building = Some(scope.spawn(|| Original::new(mesh)));
+        let mut original = None;
+        let mut certify = |s: &EdgeCollapser| -> Result<Simplified, SimplifyError> {
+            let original = original.get_or_insert_with(|| {
+                let handle = building.take().expect("joined once");
+                handle
+                    .join()
+                    .unwrap_or_else(|p| std::panic::resume_unwind(p))
+            });
+            let (out, _) = s.mesh();
+            progress.stage("certifying the error bound");
+            let certificate = certify_against(original, &out, &bound_opts, progress)?;
+            Ok(Simplified {
+                mesh: out,
+                certificate,
+                collapses: s.collapses(),
+            })
+        };
+        let mut start = EdgeCollapser::new(mesh, opts.collapse);
+        match count {
+            Some(target) => {
+                collapse(&mut start, target)?;
+                certify(&start)
+            }
+            None => to_error(start, max_error, collapse, certify),
+        }
+    })
 }
 
 /// The smallest triangle count whose certified bound is within `max_error`:
