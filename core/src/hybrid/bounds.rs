@@ -11,7 +11,7 @@ use super::mrg::DRAIN;
 use crate::distance::MeshDistance;
 use crate::distance::facets::Facets;
 use crate::geom::TriMesh;
-use crate::simplify::bound::{BoundOptions, max_distance_bound};
+use crate::simplify::bound::{BoundOptions, Original, max_distance_bound};
 use crate::simplify::projection::Projection;
 
 /// Collapses per wave. A triangle's refinement stops below the final error of
@@ -58,15 +58,11 @@ pub(crate) struct NodeBounds<'a> {
 }
 
 impl<'a> NodeBounds<'a> {
-    pub fn new(
-        mesh: &'a TriMesh,
-        (original, projection): (&'a MeshDistance<'a>, &'a Projection<'a>),
-        diagonal: f32,
-    ) -> Self {
+    pub fn new(original: &'a Original<'a>, diagonal: f32) -> Self {
         Self {
-            mesh,
-            original,
-            projection,
+            mesh: original.mesh(),
+            original: original.distance(),
+            projection: original.projection(),
             // Looser than the simplifier's certificate (there are ~3 bounds per
             // collapse): still a true upper bound, within 25% of the lower one or 8 splits.
             opts: BoundOptions {

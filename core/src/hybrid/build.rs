@@ -49,12 +49,10 @@ use rayon::prelude::*;
 use super::bounds::{NodeBounds, Recorded, WAVE, Wave};
 use super::mrg::{DRAIN, Mrg, NodeKind, Point, Sphere};
 use super::{point_replacement, point_simplification};
-use crate::distance::MeshDistance;
 use crate::distance::facets::Facets;
 use crate::geom::TriMesh;
 use crate::progress::{Cancelled, Progress};
-use crate::simplify::projection::Projection;
-use crate::simplify::{CollapseOptions, EdgeCollapser};
+use crate::simplify::{CollapseOptions, EdgeCollapser, Original};
 
 /// Parameters of the hybrid build (§5.1, §5.3).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -170,9 +168,8 @@ pub fn build_observed(
         let (sent, all_sent) = (&sent, &all_sent);
         let worker = scope.spawn(move || {
             // The original's search structures are built here, beside the first collapses.
-            let original = MeshDistance::new(mesh);
-            let projection = Projection::new(mesh);
-            let mut bounds = NodeBounds::new(mesh, (&original, &projection), diagonal);
+            let original = Original::new(mesh);
+            let mut bounds = NodeBounds::new(&original, diagonal);
             for (k, wave) in waves.into_iter().enumerate() {
                 if progress.is_cancelled() {
                     break;
@@ -305,7 +302,7 @@ pub fn build_observed(
             let first = mrg.points.len() as u32;
             let mut error = mrg.nodes[producer as usize].error;
             for s in &rep.samples {
-                let center_error = original.distance(s.center);
+                let center_error = original.distance().distance(s.center);
                 error = error.max((s.radius + center_error) * (1.0 + 1e-5));
                 let color = colors.map_or(Vec3::splat(0.8), |c| {
                     c[0] * s.weights[0] + c[1] * s.weights[1] + c[2] * s.weights[2]
@@ -344,8 +341,9 @@ pub fn build_observed(
     // §5.4: octree merges of the points.
     progress.stage("hybrid: merging points");
     let samples = mrg.points.len();
-    let merges =
-        point_simplification::simplify(&mrg.points, &point_errors, &|c| original.distance(c));
+    let merges = point_simplification::simplify(&mrg.points, &point_errors, &|c| {
+        original.distance().distance(c)
+    });
     for m in merges {
         let mut balls = vec![Sphere {
             center: m.parent.center,

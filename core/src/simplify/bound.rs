@@ -390,6 +390,20 @@ impl<'a> Original<'a> {
             projection: Projection::new(mesh),
         }
     }
+
+    pub fn mesh(&self) -> &'a TriMesh {
+        self.mesh
+    }
+
+    /// Nearest-triangle distances to the original.
+    pub fn distance(&self) -> &MeshDistance<'a> {
+        &self.distance
+    }
+
+    /// The original's planar projection (module `projection`).
+    pub fn projection(&self) -> &Projection<'a> {
+        &self.projection
+    }
 }
 
 /// Certifies `simplified` against `original` (see the module doc).

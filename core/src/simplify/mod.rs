@@ -86,14 +86,12 @@ pub fn simplify(
     let diag = mesh.bounds().diagonal();
     let valid_fraction = |r: f32| r.is_finite() && (0.0..=1.0).contains(&r);
     let valid_error = |e: f32| e.is_finite() && e >= 0.0;
-    // A triangle count to run to, or an error bound to search for.
-    let (count, max_error) = match opts.target {
-        Target::Triangles(t) => (Some(t), 0.0),
-        Target::Ratio(r) if valid_fraction(r) => {
-            (Some((r as f64 * n as f64).round() as usize), 0.0)
-        }
-        Target::Error(e) if valid_error(e) => (None, e),
-        Target::RelativeError(e) if valid_error(e) => (None, e * diag),
+    // A triangle count to run to (Ok), or an error bound to search for (Err).
+    let goal: Result<usize, f32> = match opts.target {
+        Target::Triangles(t) => Ok(t),
+        Target::Ratio(r) if valid_fraction(r) => Ok((r as f64 * n as f64).round() as usize),
+        Target::Error(e) if valid_error(e) => Err(e),
+        Target::RelativeError(e) if valid_error(e) => Err(e * diag),
         Target::Ratio(r) => {
             return Err(SimplifyError::BadTarget(format!(
                 "ratio {r} is not in 0..=1"
@@ -153,12 +151,12 @@ pub fn simplify(
             })
         };
         let mut start = EdgeCollapser::new(mesh, opts.collapse);
-        match count {
-            Some(target) => {
+        match goal {
+            Ok(target) => {
                 collapse(&mut start, target)?;
                 certify(&start)
             }
-            None => to_error(start, max_error, collapse, certify),
+            Err(max_error) => to_error(start, max_error, collapse, certify),
         }
     })
 }
