@@ -63,9 +63,24 @@ impl Block {
         self.flat[l] = if n == Vec3::ZERO { f32::INFINITY } else { 0.0 };
     }
 
-    /// Squared distance from `q` to each lane's triangle.
+    /// Squared distance from `q` to each lane's triangle, eight lanes per
+    /// instruction where the CPU has AVX2 (FMA stays off: the same bits).
     #[inline(always)]
     fn distances(&self, q: Vec3, out: &mut [f32; LANES]) {
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx2") {
+            #[target_feature(enable = "avx2")]
+            fn wide(b: &Block, q: Vec3, out: &mut [f32; LANES]) {
+                b.lanes(q, out)
+            }
+            // SAFETY: the CPU has AVX2.
+            return unsafe { wide(self, q, out) };
+        }
+        self.lanes(q, out)
+    }
+
+    #[inline(always)]
+    fn lanes(&self, q: Vec3, out: &mut [f32; LANES]) {
         let q = [q.x, q.y, q.z];
         for l in 0..LANES {
             let dot = |v: &[[f32; LANES]; 3], o: &[[f32; LANES]; 3]| {
@@ -75,15 +90,28 @@ impl Block {
             let mut outside = self.flat[l];
             let mut edge = f32::INFINITY;
             for i in 0..3 {
-                outside = outside.max(dot(&self.m[i], &self.s[i]));
-                let t = (dot(&self.e[i], &self.s[i]) * self.inv[i][l]).clamp(0.0, 1.0);
+                outside = max(outside, dot(&self.m[i], &self.s[i]));
+                let t = min(max(dot(&self.e[i], &self.s[i]) * self.inv[i][l], 0.0), 1.0);
                 let d: [f32; 3] =
                     std::array::from_fn(|k| q[k] - self.s[i][k][l] - t * self.e[i][k][l]);
-                edge = edge.min(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+                edge = min(edge, d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
             }
             out[l] = if outside <= 0.0 { h * h } else { edge };
         }
     }
+}
+
+/// `f32::max` and `f32::min` without their NaN rules, which keep the
+/// compiler from using vector min/max; no input here is NaN, so the results
+/// are the same.
+#[inline(always)]
+fn max(a: f32, b: f32) -> f32 {
+    if a > b { a } else { b }
+}
+
+#[inline(always)]
+fn min(a: f32, b: f32) -> f32 {
+    if a < b { a } else { b }
 }
 
 /// A small set of triangles to measure points against.
@@ -117,7 +145,7 @@ impl Facets {
         let mut best = f32::INFINITY;
         for b in &self.blocks {
             b.distances(q, &mut d);
-            best = d.iter().fold(best, |m, x| m.min(*x));
+            best = d.iter().fold(best, |m, x| min(m, *x));
         }
         best
     }
@@ -126,23 +154,39 @@ impl Facets {
     /// smallest, with that value (the first on ties; `(0, ∞)` when empty).
     #[inline(always)]
     pub fn nearest_cover(&self, v: &[Vec3]) -> (usize, f32) {
+        let (best, cover, _) = self.cover_and_nearest(v, &mut []);
+        (best, cover)
+    }
+
+    /// [`Facets::nearest_cover`], and the largest over the points of their
+    /// squared distance to the nearest triangle, in one pass (at most 32
+    /// points; `nearest` is scratch of at least their number).
+    #[inline(always)]
+    pub fn cover_and_nearest(&self, v: &[Vec3], nearest: &mut [f32]) -> (usize, f32, f32) {
         let (mut d, mut worst) = ([0.0f32; LANES], [0.0f32; LANES]);
         let mut best = (0, f32::INFINITY);
+        let used_points = nearest.len().min(v.len());
+        let nearest = &mut nearest[..used_points];
+        nearest.fill(f32::INFINITY);
         for (k, b) in self.blocks.iter().enumerate() {
             worst.fill(0.0);
-            for q in v {
+            let used = self.len - k * LANES;
+            for (i, q) in v.iter().enumerate() {
                 b.distances(*q, &mut d);
                 for l in 0..LANES {
-                    worst[l] = worst[l].max(d[l]);
+                    worst[l] = max(worst[l], d[l]);
+                }
+                if let Some(n) = nearest.get_mut(i) {
+                    *n = d.iter().take(used).fold(*n, |m, x| min(m, *x));
                 }
             }
-            for (l, w) in worst.iter().enumerate().take(self.len - k * LANES) {
+            for (l, w) in worst.iter().enumerate().take(used) {
                 if *w < best.1 {
                     best = (k * LANES + l, *w);
                 }
             }
         }
-        best
+        (best.0, best.1, nearest.iter().fold(0.0, |m, x| max(m, *x)))
     }
 }
 
