@@ -357,7 +357,7 @@ pub fn build_observed(
         let node = mrg.add_node(
             NodeKind::PointSimplification,
             m.error,
-            Sphere::enclose(&balls),
+            Sphere::bounding(&balls),
         );
         mrg.consume(node, &[], &m.children, &tri_producer, &point_producer);
         mrg.points.push(m.parent);
@@ -427,7 +427,7 @@ fn spheres_of(mrg: &Mrg, own: Vec<Sphere>, children: &mut dyn Iterator<Item = u3
             .filter(|c| *c != DRAIN)
             .map(|c| mrg.nodes[c as usize].sphere),
     );
-    Sphere::enclose(&balls)
+    Sphere::bounding(&balls)
 }
 
 /// Buffers of the queue's cost, reused across its calls (about a dozen per
