@@ -14,26 +14,13 @@
 //! is empty every remaining triangle is point-replaced (κ > 1), and the points
 //! are merged through an octree (§5.4).
 //!
-//! Guaranteed node bounds. The cheap triangle-inequality bound (ε of a new
-//! star = H(new star, old star) + max ε of the removed triangles) adds up along
-//! every chain of collapses: on an icosphere it passed 70% of the diagonal
-//! before the triangles ran out. Instead each primitive gets both directions
-//! of the two-sided Hausdorff distance directly against the original O:
-//! - simplified → original: for a triangle, the branch and bound of
-//!   `simplify::bound` against O (planar projection, else its BVH); for a
-//!   ball of radius r around c, r + d(c, O) (exact distance);
-//! - original → simplified: every original triangle is attributed to one
-//!   triangle of each model it passes through (at a collapse, the originals
-//!   of the removed triangles go to the nearest new triangle); a triangle's
-//!   bound covers its originals (largest vertex distance, exact by convexity).
-//!   A replaced triangle is covered by its balls, and merged balls contain
-//!   their children, so originals stay within that distance of the points.
-//!
-//! A node's error is the largest over what it produces and its children
-//! (errors never decrease upwards), so a triangle's branch and bound stops
-//! once it is below what its node's error already is (the largest exact
-//! distance found under the node, a child's final error): every bound is
-//! still a true upper bound, and refining further could not lower any node's.
+//! Guaranteed node bounds. A collapse node's error is the bound the step API
+//! gives its collapse (`simplify::step_bounds`: both directions directly
+//! against the original O, at least its dependencies' bounds). A point's is
+//! r + d(c, O) for its ball of radius r around c (exact distance) and at least
+//! its triangle's: a replaced triangle is covered by its balls, and merged
+//! balls contain their children, so originals stay within that distance of
+//! the points. Errors never decrease upwards.
 //! For a cut, every point of a drawn primitive is within its bound of O, and
 //! every original point follows its attribution up to the first triangle on
 //! the cut, or to a triangle replaced below the cut whose balls (or their
@@ -41,18 +28,17 @@
 //! is at most its largest node error.
 
 use std::sync::Mutex;
-use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 
 use glam::Vec3;
 use rayon::prelude::*;
 
-use super::bounds::{NodeBounds, Recorded, WAVE, Wave};
 use super::mrg::{DRAIN, Mrg, NodeKind, Point, Sphere};
 use super::{point_replacement, point_simplification};
 use crate::distance::facets::Facets;
 use crate::geom::TriMesh;
 use crate::progress::{Cancelled, Progress};
-use crate::simplify::{CollapseOptions, EdgeCollapser, Original};
+use crate::simplify::step_bounds::{BoundedRun, run_bounded};
+use crate::simplify::{CollapseOptions, EdgeCollapser};
 
 /// Parameters of the hybrid build (§5.1, §5.3).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -158,117 +144,66 @@ pub fn build_observed(
     };
     let mut col = EdgeCollapser::with_star_cost(mesh, opts.collapse, Box::new(cost));
     let mut tri_producer: Vec<u32> = vec![DRAIN; n];
-    // Guaranteed bounds (module doc), on a worker, a wave behind the collapses.
-    let diagonal = mrg.diagonal;
-    // Waves sent; all sent once the collapses are done (the worker then reports progress).
-    let sent = AtomicUsize::new(0);
-    let all_sent = AtomicBool::new(false);
-    let (errors, original) = std::thread::scope(|scope| {
-        let (to_worker, waves) = std::sync::mpsc::channel::<Wave>();
-        let (sent, all_sent) = (&sent, &all_sent);
-        let worker = scope.spawn(move || {
-            // The original's search structures are built here, beside the first collapses.
-            let original = Original::new(mesh);
-            let mut bounds = NodeBounds::new(&original, diagonal);
-            for (k, wave) in waves.into_iter().enumerate() {
-                if progress.is_cancelled() {
-                    break;
-                }
-                bounds.wave(wave);
-                if all_sent.load(Ordering::Acquire) {
-                    progress.set_fraction((k + 1) as f32 / sent.load(Ordering::Relaxed) as f32);
-                }
+    // The collapse nodes, in collapse order.
+    let mut collapse_nodes: Vec<u32> = Vec::new();
+    let BoundedRun { bounds, original } = run_bounded(
+        &mut col,
+        mesh,
+        0,
+        progress,
+        "hybrid: bounding errors",
+        |col, c| {
+            sync(&mut mrg, col);
+            let balls = mrg.balls(&c.added, &[]);
+            let mut kids: Vec<u32> = c
+                .removed
+                .iter()
+                .map(|t| tri_producer[*t as usize])
+                .collect();
+            kids.sort_unstable();
+            kids.dedup();
+            let sphere = spheres_of(&mrg, balls, &mut kids.iter().copied());
+            let node = mrg.add_node(NodeKind::TriangleSimplification, 0.0, sphere);
+            tri_producer.resize(col.triangle_total(), DRAIN);
+            mrg.consume(node, &c.removed, &[], &tri_producer, &[]);
+            for t in &c.added {
+                tri_producer[*t as usize] = node;
             }
-            let errors = bounds.into_errors();
-            (errors, original)
-        });
-        let (mut sent_v, mut sent_t) = (0, 0);
-        let mut send = move |mrg: &Mrg, collapses: Vec<Recorded>| {
-            // A closed channel means the worker stopped: cancelled.
-            let _ = to_worker.send(Wave {
-                collapses,
-                positions: mrg.positions[sent_v..].to_vec(),
-                triangles: mrg.triangles[sent_t..].to_vec(),
-            });
-            (sent_v, sent_t) = (mrg.positions.len(), mrg.triangles.len());
-            sent.fetch_add(1, Ordering::Relaxed);
-        };
-        let mut collapses = Vec::with_capacity(WAVE);
-        let mut count = 0usize;
-        let collapsed = (|| {
-            while let Some(c) = col.step() {
-                sync(&mut mrg, &col);
-                let balls = mrg.balls(&c.added, &[]);
-                let mut kids: Vec<u32> = c
-                    .removed
-                    .iter()
-                    .map(|t| tri_producer[*t as usize])
-                    .collect();
-                kids.sort_unstable();
-                kids.dedup();
-                let sphere = spheres_of(&mrg, balls, &mut kids.iter().copied());
-                let node = mrg.add_node(NodeKind::TriangleSimplification, 0.0, sphere);
-                tri_producer.resize(col.triangle_total(), DRAIN);
-                mrg.consume(node, &c.removed, &[], &tri_producer, &[]);
-                for t in &c.added {
-                    tri_producer[*t as usize] = node;
-                }
-                collapses.push(Recorded {
-                    node,
-                    removed: c.removed,
-                    added: c.added,
-                    kids,
+            collapse_nodes.push(node);
+            let count = collapse_nodes.len();
+            if count.is_multiple_of(256) && progress.wants_preview() {
+                // Watching the build: the triangles left and the points made so far.
+                progress.publish(crate::cut::DrawSet {
+                    mesh: col.mesh().0,
+                    points: mrg
+                        .points
+                        .iter()
+                        .map(|p| crate::cut::CutPoint {
+                            center: p.center,
+                            radius: p.radius,
+                            color: p.color,
+                            normal: p.normal,
+                            error: p.center_error,
+                        })
+                        .collect(),
+                    ..Default::default()
                 });
-                count += 1;
-                if collapses.len() == WAVE {
-                    send(
-                        &mrg,
-                        std::mem::replace(&mut collapses, Vec::with_capacity(WAVE)),
-                    );
-                }
-                if count.is_multiple_of(256) && progress.wants_preview() {
-                    // Watching the build: the triangles left and the points made so far.
-                    progress.publish(crate::cut::DrawSet {
-                        mesh: col.mesh().0,
-                        points: mrg
-                            .points
-                            .iter()
-                            .map(|p| crate::cut::CutPoint {
-                                center: p.center,
-                                radius: p.radius,
-                                color: p.color,
-                                normal: p.normal,
-                                error: p.center_error,
-                            })
-                            .collect(),
-                        ..Default::default()
-                    });
-                }
-                if count.is_multiple_of(1024) {
-                    progress.set_fraction((n - col.triangle_count()) as f32 / n.max(1) as f32);
-                    progress.check()?;
-                    observe(&Snapshot {
-                        stage: "collapsing edges",
-                        triangles: col.triangle_count(),
-                        points: 0,
-                        nodes: mrg.nodes.len(),
-                    });
-                }
             }
-            progress.check()
-        })();
-        if collapsed.is_ok() {
-            sync(&mut mrg, &col);
-            send(&mrg, collapses);
-            progress.stage("hybrid: bounding errors");
-            all_sent.store(true, Ordering::Release);
-        }
-        drop(send);
-        collapsed.map(|()| worker.join().expect("the bounding worker panicked"))
-    })?;
-    progress.check()?;
-    for (node, error) in mrg.nodes.iter_mut().zip(errors) {
-        node.error = error;
+            if count.is_multiple_of(1024) {
+                progress.set_fraction((n - col.triangle_count()) as f32 / n.max(1) as f32);
+                observe(&Snapshot {
+                    stage: "collapsing edges",
+                    triangles: col.triangle_count(),
+                    points: 0,
+                    nodes: mrg.nodes.len(),
+                });
+            }
+            true
+        },
+    )?;
+    sync(&mut mrg, &col);
+    for (node, error) in collapse_nodes.iter().zip(bounds) {
+        mrg.nodes[*node as usize].error = error;
     }
     mrg.colors = vertex_attribute(&col, |v| col.color(v));
     mrg.normals = vertex_attribute(&col, |v| col.normal(v));

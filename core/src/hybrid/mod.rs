@@ -3,14 +3,12 @@
 //!
 //! - `mrg`: the graph (§4): nodes, arcs, primitives, invariants.
 //! - `build`: the queue of edge collapses and point replacements (§5.1–5.2), τ, κ.
-//! - `bounds`: the collapse nodes' guaranteed error bounds, a wave behind the queue.
 //! - `point_replacement`: §5.3 sampling and the optimal sampling distance.
 //! - `point_simplification`: §5.4 octree merging with tight enclosing spheres.
 //! - `cut`: view-dependent cuts, fresh and incremental (§4, §6).
 //! - `curve`: primitives versus error (Fig. 7–9).
 //! - `flythrough`: the fly-through of Fig. 10–11.
 
-mod bounds;
 pub mod build;
 pub mod curve;
 pub mod cut;

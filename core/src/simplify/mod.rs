@@ -2,16 +2,19 @@
 //! (hybrid paper §2.1, §5.2).
 //!
 //! `collapse` performs the collapses (the step API the hybrid and merge-tree
-//! methods build on); `bound` certifies the result: every output triangle
-//! carries a true upper bound on the two-sided Hausdorff distance between itself
-//! and the part of the original surface attributed to it, and `error_bound` is
-//! their maximum.
+//! methods build on) and `step_bounds` gives every collapse the guaranteed
+//! bound of its new triangles; `bound` certifies a result: every output
+//! triangle carries a true upper bound on the two-sided Hausdorff distance
+//! between itself and the part of the original surface attributed to it, and
+//! `error_bound` is their maximum.
 
+mod attribution;
 pub mod bound;
 pub mod collapse;
 pub mod projection;
 pub mod quadric;
 mod queue;
+pub mod step_bounds;
 
 pub use bound::{
     BoundOptions, Certificate, Original, certify, certify_against, certify_with_progress,
