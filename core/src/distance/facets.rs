@@ -151,22 +151,15 @@ impl Facets {
     }
 
     /// The triangle whose largest squared distance to the points `v` is
-    /// smallest, with that value (the first on ties; `(0, ∞)` when empty).
-    #[inline(always)]
-    pub fn nearest_cover(&self, v: &[Vec3]) -> (usize, f32) {
-        let (best, cover, _) = self.cover_and_nearest(v, &mut []);
-        (best, cover)
-    }
-
-    /// [`Facets::nearest_cover`], and the largest over the points of their
-    /// squared distance to the nearest triangle, in one pass (at most 32
-    /// points; `nearest` is scratch of at least their number).
+    /// smallest, with that value (the first on ties; `(0, ∞)` when empty),
+    /// and the largest over the points of their squared distance to the
+    /// nearest triangle, in one pass; `nearest` is scratch, one per point.
     #[inline(always)]
     pub fn cover_and_nearest(&self, v: &[Vec3], nearest: &mut [f32]) -> (usize, f32, f32) {
+        assert!(nearest.len() >= v.len(), "scratch for every point");
         let (mut d, mut worst) = ([0.0f32; LANES], [0.0f32; LANES]);
         let mut best = (0, f32::INFINITY);
-        let used_points = nearest.len().min(v.len());
-        let nearest = &mut nearest[..used_points];
+        let nearest = &mut nearest[..v.len()];
         nearest.fill(f32::INFINITY);
         for (k, b) in self.blocks.iter().enumerate() {
             worst.fill(0.0);
@@ -176,9 +169,7 @@ impl Facets {
                 for l in 0..LANES {
                     worst[l] = max(worst[l], d[l]);
                 }
-                if let Some(n) = nearest.get_mut(i) {
-                    *n = d.iter().take(used).fold(*n, |m, x| min(m, *x));
-                }
+                nearest[i] = d.iter().take(used).fold(nearest[i], |m, x| min(m, *x));
             }
             for (l, w) in worst.iter().enumerate().take(used) {
                 if *w < best.1 {
@@ -223,7 +214,12 @@ mod tests {
                 let got = f.nearest_squared(x);
                 assert!((got - min).abs() <= 1e-5 * (1.0 + min), "{got} vs {min}");
                 let pts = [x, v(), v()];
-                let (k, w) = f.nearest_cover(&pts);
+                let (k, w, far) = f.cover_and_nearest(&pts, &mut [0.0; 3]);
+                let farthest = pts
+                    .iter()
+                    .map(|q| f.nearest_squared(*q))
+                    .fold(0.0, f32::max);
+                assert_eq!(far, farthest);
                 let cover = |t: &[Vec3; 3]| {
                     pts.iter()
                         .map(|q| {
