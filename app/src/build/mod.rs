@@ -40,6 +40,7 @@ static EMPTY: TriMesh = TriMesh {
     uvs: None,
     parts: None,
     materials: None,
+    wedges: None,
 };
 
 /// One inspector row, with what it means when hovered.

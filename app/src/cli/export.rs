@@ -5,7 +5,7 @@ use std::path::Path;
 use super::*;
 use lodstudio_core::cut::DrawSet;
 use lodstudio_core::io::gltf::lod_screen_coverages;
-use lodstudio_core::io::gltf_writer::write_lod_chain;
+use lodstudio_core::io::gltf_writer::{PointsAs, write_lod_chain};
 use lodstudio_core::simplify;
 
 /// The LOD methods `export` can use.
@@ -72,6 +72,12 @@ pub struct ExportArgs {
     /// Voxel: finest pyramid resolution (voxels along the longest side).
     #[arg(long, default_value_t = 64)]
     resolution: usize,
+    /// How hybrid points are written: "points" (a POINTS primitive with the
+    /// per-point object-space radius `_RADIUS`, for renderers that splat),
+    /// "quads" or "discs" (a small double-sided mesh per point, facing its
+    /// normal and covering its disc, for clients that draw POINTS as pixels).
+    #[arg(long, value_name = "points|quads|discs", default_value = "points", value_parser = str::parse::<PointsAs>)]
+    points_as: PointsAs,
     #[command(flatten)]
     report: ReportArgs,
     #[command(flatten)]
@@ -343,7 +349,7 @@ fn export_one(
     let bounds: Vec<f32> = lods.iter().map(|l| l.bound).collect();
     let coverages = lod_screen_coverages(&bounds, radius, args.pixels, args.viewport_height);
     let sets: Vec<DrawSet> = lods.iter().map(|l| l.set.clone()).collect();
-    let glb = write_lod_chain(&sets, &coverages);
+    let glb = write_lod_chain(&sets, &coverages, args.points_as);
     let bytes = write_gltf(output, glb)?;
     let seconds = start.elapsed().as_secs_f64();
     let per_lod: Vec<serde_json::Value> = lods
@@ -360,6 +366,8 @@ fn export_one(
                 "error_bound": l.bound,
                 "error_bound_relative": l.bound / diag,
                 "screen_coverage": c,
+                // Geometric bounds say nothing of textures: how far the UVs moved.
+                "uv_error": lodstudio_core::distance::uv_error(&mesh, &l.set.mesh),
             })
         })
         .collect();

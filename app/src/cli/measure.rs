@@ -1,4 +1,5 @@
-//! `measure`: sampled two-sided Hausdorff distance between two meshes.
+//! `measure`: sampled two-sided Hausdorff distance between two meshes, and
+//! B's UV error against A when both are textured.
 
 use super::*;
 
@@ -29,6 +30,7 @@ pub fn run(args: MeasureArgs) -> Result<(), CliError> {
     };
     let r = hausdorff_mesh_mesh(&a, &b, &opts);
     let diag = a.bounds().diagonal();
+    let uv = lodstudio_core::distance::uv_error(&a, &b);
     if args.json {
         println!(
             "{}",
@@ -41,6 +43,7 @@ pub fn run(args: MeasureArgs) -> Result<(), CliError> {
                 "mean_b_to_a": r.mean_b_to_a,
                 "samples_a": r.samples_a,
                 "samples_b": r.samples_b,
+                "uv_error": uv,
                 "seconds": start.elapsed().as_secs_f64(),
             })
         );
@@ -54,6 +57,15 @@ pub fn run(args: MeasureArgs) -> Result<(), CliError> {
             r.samples_a,
             r.samples_b
         );
+        if let Some(uv) = uv {
+            println!(
+                "UV error of B: mean {:.5}, max {:.5}, {:.2}% of its area off by more than {}",
+                uv.mean,
+                uv.max,
+                100.0 * uv.area_over_threshold,
+                lodstudio_core::distance::UV_ERROR_THRESHOLD
+            );
+        }
     }
     Ok(())
 }

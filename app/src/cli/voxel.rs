@@ -55,7 +55,7 @@ enum VoxelInput {
     Solid(Box<dyn lodstudio_core::implicit::Implicit>),
     Volume(lodstudio_core::Volume, f32),
     /// A mesh, inside where its generalised winding number is ≥ ½.
-    Mesh(lodstudio_core::TriMesh),
+    Mesh(Box<lodstudio_core::TriMesh>),
 }
 
 fn voxel_input(args: &VoxelArgs) -> Result<VoxelInput, CliError> {
@@ -77,7 +77,7 @@ fn voxel_input(args: &VoxelArgs) -> Result<VoxelInput, CliError> {
             }
             Ok(VoxelInput::Volume(v, iso))
         }
-        Model::Mesh(m) if !m.triangles.is_empty() => Ok(VoxelInput::Mesh(m)),
+        Model::Mesh(m) if !m.triangles.is_empty() => Ok(VoxelInput::Mesh(Box::new(m))),
         other => Err(CliError::BadInput(format!(
             "{}: the voxel method samples solids (meshes, implicit built-ins, volumes), not {} input",
             args.file.display(),

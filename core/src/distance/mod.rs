@@ -1,11 +1,12 @@
 //! Distance measurement: a BVH over triangles or spheres, exact point-to-triangle
 //! distance, and the sampled two-sided Hausdorff distance that every method's
-//! guaranteed error bound is checked against.
+//! guaranteed error bound is checked against; the UV error of a LOD.
 
 pub mod bvh;
 pub mod facets;
 pub mod hausdorff;
 pub mod triangle;
+pub mod uv;
 pub mod winding;
 
 pub use bvh::{Bvh, MeshDistance, SphereSetDistance};
@@ -13,4 +14,5 @@ pub use hausdorff::{
     HausdorffReport, SamplingOptions, hausdorff_mesh_mesh, hausdorff_mesh_spheres, sample_surface,
 };
 pub use triangle::closest_point_on_triangle;
+pub use uv::{UV_ERROR_THRESHOLD, UvError, uv_error};
 pub use winding::WindingNumber;

@@ -43,6 +43,28 @@ pub struct Material {
     pub double_sided: bool,
     /// Sampled with `TEXCOORD_0`.
     pub base_color_texture: Option<Image>,
+    /// The vertex attributes the input gave this material's vertices.
+    pub vertex_attributes: VertexAttributes,
+}
+
+/// Which optional vertex attributes a material's vertices came with. Parts
+/// are merged into one mesh, whose attribute arrays cover every vertex, so
+/// exports write a part's `COLOR_0` and `TEXCOORD_0` only where the input had
+/// them, never the filler another part's attributes left.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub struct VertexAttributes {
+    pub colors: bool,
+    pub uvs: bool,
+}
+
+impl Default for VertexAttributes {
+    /// Unknown (not read from a glTF primitive): whatever the mesh has.
+    fn default() -> Self {
+        Self {
+            colors: true,
+            uvs: true,
+        }
+    }
 }
 
 impl Default for Material {
@@ -57,6 +79,7 @@ impl Default for Material {
             alpha_mode: AlphaMode::Opaque,
             double_sided: false,
             base_color_texture: None,
+            vertex_attributes: VertexAttributes::default(),
         }
     }
 }

@@ -3,15 +3,18 @@
 
 pub mod adjacency;
 pub mod material;
+pub mod normals;
 pub mod repair;
 pub mod topology;
+pub mod wedges;
 
 use glam::{Vec2, Vec3};
 
 pub use adjacency::Adjacency;
-pub use material::{AlphaMode, Image, Material, Materials};
+pub use material::{AlphaMode, Image, Material, Materials, VertexAttributes};
 pub use repair::{RepairOptions, RepairReport, Weld};
 pub use topology::{ComponentTopology, Topology};
+pub use wedges::Wedges;
 
 /// Axis-aligned bounding box.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -87,6 +90,9 @@ pub struct TriMesh {
     pub parts: Option<Vec<u32>>,
     /// The input's materials, one per part; `None` when it had none.
     pub materials: Option<Materials>,
+    /// Each corner's own attributes where welded vertices' corners differ
+    /// (UV and normal seams, parts' colours); `None`: the per-vertex ones hold.
+    pub wedges: Option<Wedges>,
 }
 
 impl TriMesh {
@@ -151,6 +157,18 @@ impl TriMesh {
         let part_base = self.part_count();
         let n_self_v = self.positions.len();
         let n_self_t = self.triangles.len();
+        if self.wedges.is_some() || other.wedges.is_some() {
+            let mut w = self
+                .wedges
+                .take()
+                .unwrap_or_else(|| Wedges::per_vertex(self));
+            let theirs = other
+                .wedges
+                .clone()
+                .unwrap_or_else(|| Wedges::per_vertex(other));
+            w.append(&theirs, base);
+            self.wedges = Some(w);
+        }
         merge_attr(
             &mut self.normals,
             n_self_v,
@@ -191,7 +209,7 @@ impl TriMesh {
     }
 
     /// The triangles `keep` (in that order) with only the vertices they use, and
-    /// their attributes; a single part, no materials.
+    /// their attributes and wedges; a single part, no materials.
     pub fn subset(&self, keep: &[u32]) -> TriMesh {
         let mut remap = vec![u32::MAX; self.positions.len()];
         let mut order = Vec::new();
@@ -219,6 +237,13 @@ impl TriMesh {
                 .map(|u| order.iter().map(|&v| u[v]).collect()),
             parts: None,
             materials: None,
+            wedges: self.wedges.as_ref().map(|w| Wedges {
+                corners: keep.iter().map(|&t| w.corners[t as usize]).collect(),
+                vertex: w.vertex.iter().map(|v| remap[*v as usize]).collect(),
+                normals: w.normals.clone(),
+                colors: w.colors.clone(),
+                uvs: w.uvs.clone(),
+            }),
         }
     }
 

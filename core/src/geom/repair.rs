@@ -12,7 +12,7 @@ use glam::Vec3;
 
 use super::adjacency::Adjacency;
 use super::topology::UnionFind;
-use super::{PointSet, TriMesh};
+use super::{PointSet, TriMesh, Wedges};
 
 /// How coincident vertices are merged.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
@@ -101,6 +101,16 @@ pub fn repair_mesh(mut mesh: TriMesh, opts: &RepairOptions) -> (TriMesh, RepairR
             .filter(|(i, r)| **r as usize != *i && !bad[*i])
             .count();
         report.add(WELDED_VERTICES, merged);
+        // Corners welded across a seam keep their own attributes as wedges.
+        mesh.wedges = match mesh.wedges.take() {
+            Some(mut w) => {
+                for v in &mut w.vertex {
+                    *v = remap[*v as usize];
+                }
+                Some(w)
+            }
+            None => Wedges::of_welded(&mesh, &remap),
+        };
         for t in &mut mesh.triangles {
             *t = t.map(|v| remap[v as usize]);
         }
@@ -171,6 +181,9 @@ fn retain_triangles(mesh: &mut TriMesh, keep: impl Fn(&[u32; 3]) -> bool) {
     filter_by(&mut mesh.triangles, &flags);
     if let Some(p) = &mut mesh.parts {
         filter_by(p, &flags);
+    }
+    if let Some(w) = &mut mesh.wedges {
+        filter_by(&mut w.corners, &flags);
     }
 }
 
@@ -251,6 +264,11 @@ fn drop_unused_vertices(mesh: &mut TriMesh) -> usize {
     }
     for t in &mut mesh.triangles {
         *t = t.map(|v| new_index[v as usize]);
+    }
+    if let Some(w) = &mut mesh.wedges {
+        for v in &mut w.vertex {
+            *v = new_index[*v as usize];
+        }
     }
     filter_by(&mut mesh.positions, &used);
     if let Some(v) = &mut mesh.normals {

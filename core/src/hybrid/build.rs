@@ -209,6 +209,7 @@ pub fn build_observed(
     mrg.normals = vertex_attribute(&col, |v| col.normal(v));
     mrg.uvs = vertex_attribute(&col, |v| col.uv(v));
     mrg.materials = col.materials().cloned();
+    mrg.wedges = col.wedges().cloned();
 
     // §5.3: every remaining triangle is point-replaced.
     let remaining: Vec<u32> = col.alive_triangles().collect();

@@ -20,7 +20,7 @@ use glam::Vec3;
 
 use super::mrg::{DRAIN, Mrg, NodeKind};
 use crate::cut::{CutPoint, DrawSet, Hierarchy};
-use crate::geom::TriMesh;
+use crate::geom::{TriMesh, Wedges};
 use crate::id_set::{Columns, IdSet};
 use crate::view::{NarrowTest, SphereTest, Tolerance, View};
 
@@ -140,6 +140,9 @@ pub struct HybridCut {
     /// `u32::MAX`), and the vertices numbered.
     remap: Vec<u32>,
     order: Vec<u32>,
+    /// The same for the cut's wedges.
+    wedge_remap: Vec<u32>,
+    wedge_order: Vec<u32>,
     /// The last frame's view constants, whose projection part the next frame
     /// reuses when the lens is the same.
     last_test: Option<SphereTest>,
@@ -256,6 +259,8 @@ impl HybridCut {
             primed: false,
             remap: Vec::new(),
             order: Vec::new(),
+            wedge_remap: Vec::new(),
+            wedge_order: Vec::new(),
             last_test: None,
         }
     }
@@ -433,6 +438,14 @@ impl HybridCut {
         let mut parts = Vec::with_capacity(nt);
         let remap = &mut self.remap;
         remap.resize(mrg.positions.len(), u32::MAX);
+        // Its wedges the same way, when the input has seams.
+        let (wedge_remap, wedge_order) = (&mut self.wedge_remap, &mut self.wedge_order);
+        wedge_order.clear();
+        let mut corners = Vec::new();
+        if let Some(w) = &mrg.wedges {
+            wedge_remap.resize(w.len(), u32::MAX);
+            corners.reserve(nt);
+        }
         // The cut's vertices: the MRG's, each taken once.
         let order = &mut self.order;
         order.clear();
@@ -450,6 +463,16 @@ impl HybridCut {
                     *slot
                 });
                 mesh.triangles.push(tri);
+                if let Some(w) = &mrg.wedges {
+                    corners.push(w.corners[*t as usize].map(|x| {
+                        let slot = &mut wedge_remap[x as usize];
+                        if *slot == u32::MAX {
+                            *slot = wedge_order.len() as u32;
+                            wedge_order.push(x);
+                        }
+                        *slot
+                    }));
+                }
                 parts.push(mrg.parts.get(*t as usize).copied().unwrap_or(0));
                 out.triangle_errors.push(error);
             }
@@ -464,8 +487,15 @@ impl HybridCut {
                 }
             }));
         }
+        mesh.wedges = mrg
+            .wedges
+            .as_ref()
+            .map(|w| Wedges::gathered(w, wedge_order, corners, |v| remap[v as usize]));
         for &v in order.iter() {
             remap[v as usize] = u32::MAX;
+        }
+        for &x in wedge_order.iter() {
+            wedge_remap[x as usize] = u32::MAX;
         }
         let gather = |a: &[Vec3]| order.iter().map(|&v| a[v as usize]).collect::<Vec<_>>();
         mesh.positions = order.iter().map(|&v| mrg.positions[v as usize]).collect();

@@ -13,7 +13,7 @@
 
 use glam::{DVec3, Vec2, Vec3};
 
-use crate::geom::Materials;
+use crate::geom::{Materials, Wedges};
 
 /// A ball.
 #[derive(Debug, Clone, Copy, PartialEq, Default, serde::Serialize, serde::Deserialize)]
@@ -235,6 +235,9 @@ pub struct Mrg {
     /// The part of every triangle (parts keep the input's materials).
     pub parts: Vec<u32>,
     pub materials: Option<Materials>,
+    /// The collapser's wedges: every triangle's corners keep their own
+    /// side's UVs and colours (`geom::wedges`).
+    pub wedges: Option<Wedges>,
     pub points: Vec<Point>,
     pub nodes: Vec<Node>,
     pub arcs: Vec<Arc>,

@@ -12,7 +12,7 @@ use std::path::Path;
 use glam::{Mat3, Mat4, Vec2, Vec3};
 
 use super::error::{ParseError, ParseResult};
-use crate::geom::{AlphaMode, Image, Material, Materials, TriMesh};
+use crate::geom::{AlphaMode, Image, Material, Materials, TriMesh, VertexAttributes};
 
 pub fn read(data: &[u8], base: Option<&Path>) -> ParseResult<TriMesh> {
     let g = gltf::Gltf::from_slice(data)
@@ -57,7 +57,11 @@ pub fn read(data: &[u8], base: Option<&Path>) -> ParseResult<TriMesh> {
                     let part = match keys.iter().position(|k| *k == key) {
                         Some(p) => p,
                         None => {
-                            let material = read_material(&prim.material(), &buffers, base)?;
+                            let mut material = read_material(&prim.material(), &buffers, base)?;
+                            material.vertex_attributes = VertexAttributes {
+                                colors: prim.get(&gltf::Semantic::Colors(0)).is_some(),
+                                uvs: prim.get(&gltf::Semantic::TexCoords(0)).is_some(),
+                            };
                             let i = materials.intern(&material);
                             materials.of_part.push(i);
                             keys.push(key);
@@ -309,6 +313,7 @@ fn read_material(
         },
         double_sided: m.double_sided(),
         base_color_texture: texture,
+        vertex_attributes: VertexAttributes::default(),
     })
 }
 
@@ -492,6 +497,7 @@ mod tests {
                 wrap_s: 10497,
                 wrap_t: 33648,
             }),
+            vertex_attributes: Default::default(),
         };
         let glass = Material {
             name: Some("glass".into()),
@@ -625,7 +631,7 @@ mod tests {
             crate::builtins::torus(1.0, 0.3, 8, 4),
         ];
         let coverages = lod_screen_coverages(&[0.001, 0.01, 0.1], 1.3, 2.0, 1080.0);
-        let glb = write_lod_chain(&sets(&lods), &coverages);
+        let glb = write_lod_chain(&sets(&lods), &coverages, Default::default());
         let doc = glb_json(&glb);
         assert_eq!(doc["extensionsUsed"], serde_json::json!(["MSFT_lod"]));
         assert_eq!(doc["scenes"][0]["nodes"], serde_json::json!([0]));
@@ -657,14 +663,14 @@ mod tests {
         assert_eq!(back.triangles, lods[0].triangles);
         assert_eq!(back.positions, lods[0].positions);
         // One LOD: the plain file, no extension.
-        let single = write_lod_chain(&sets(&lods[..1]), &coverages[..1]);
+        let single = write_lod_chain(&sets(&lods[..1]), &coverages[..1], Default::default());
         assert_eq!(single, write_glb(&lods[0]));
     }
 
     #[test]
     fn lod_chain_without_triangles_in_a_lod_stays_readable() {
         let lods = [crate::builtins::torus(1.0, 0.3, 8, 4), TriMesh::default()];
-        let glb = write_lod_chain(&sets(&lods), &[0.5, 0.1]);
+        let glb = write_lod_chain(&sets(&lods), &[0.5, 0.1], Default::default());
         let doc = glb_json(&glb);
         assert!(doc["nodes"][1].get("mesh").is_none());
         assert_eq!(read(&glb, None).unwrap().triangles, lods[0].triangles);

@@ -2,12 +2,15 @@
 //! points, splats, translucent layers) becomes a node whose mesh holds one
 //! primitive per kind, and LOD chains stack such nodes under `MSFT_lod`.
 //!
-//! - triangles: positions, normals (area-weighted when the mesh has none),
+//! - triangles: one vertex per wedge (`geom::wedges`), positions, normals
+//!   (area-weighted when the mesh has none; every one facing its faces' front),
 //!   `COLOR_0` and `TEXCOORD_0` when present, 32-bit indices; a mesh with the
 //!   input's materials gets one primitive per material, wearing it (factors and
 //!   the embedded base-colour image), `COLOR_0` divided back by the base colour;
 //! - points (hybrid paper §5.3): mode POINTS with `COLOR_0` and the custom
-//!   attribute `_RADIUS` (object space);
+//!   attribute `_RADIUS` (object space; said in the primitive's `extras`),
+//!   or, for clients that draw POINTS as one-pixel dots ([`PointsAs`]), a
+//!   small mesh per point facing its normal and covering its disc;
 //! - splats (AMG paper §3): textured quads, one alpha-blended unlit material
 //!   per texture, the texture embedded as PNG (colour, Ψ in alpha);
 //! - layers (voxel paper §3): one primitive per layer with a material whose
@@ -26,9 +29,39 @@ const ELEMENT_ARRAY_BUFFER: u32 = 34963;
 const FLOAT: u32 = 5126;
 const UNSIGNED_INT: u32 = 5125;
 
+/// How a cut's points are written.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum PointsAs {
+    /// A POINTS primitive with `_RADIUS`: compact, for renderers that splat.
+    #[default]
+    Points,
+    /// The square around each disc (a fan of four triangles).
+    Quads,
+    /// The octagon around each disc (a fan of eight triangles).
+    Discs,
+}
+
+impl std::str::FromStr for PointsAs {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s {
+            "points" => Ok(PointsAs::Points),
+            "quads" => Ok(PointsAs::Quads),
+            "discs" => Ok(PointsAs::Discs),
+            _ => Err(format!("{s:?} is not one of points, quads, discs")),
+        }
+    }
+}
+
+/// What `_RADIUS` means, written beside it in the file.
+const RADIUS_NOTE: &str = "_RADIUS: object-space radius of each point; draw each point as a disc of \
+     that radius facing its normal (lodstudio hybrid LOD, hybrid paper 5.3). Clients that draw POINTS \
+     as pixels see a sparse cloud: export with --points-as quads|discs for a covering surface.";
+
 /// Accumulates buffers, accessors, materials and nodes, then packs a GLB.
 #[derive(Default)]
 pub struct GltfWriter {
+    points_as: PointsAs,
     bin: Vec<u8>,
     views: Vec<Value>,
     accessors: Vec<Value>,
@@ -56,6 +89,14 @@ fn flat3(v: &[Vec3]) -> Vec<f32> {
 impl GltfWriter {
     pub fn new() -> Self {
         Self::default()
+    }
+
+    /// A writer that writes points as `points_as`.
+    pub fn with_points_as(points_as: PointsAs) -> Self {
+        Self {
+            points_as,
+            ..Self::default()
+        }
     }
 
     /// Appends `bytes` as a buffer view (4-byte aligned).
@@ -135,6 +176,8 @@ impl GltfWriter {
     /// The triangle primitives of a cut's surface: one with the shared surface
     /// material, or one per material of the input's that it wears.
     fn surface_primitives(&mut self, mesh: &TriMesh) -> Vec<Value> {
+        // glTF stores attributes per vertex: one vertex per wedge.
+        let mesh = &mesh.unwelded();
         let Some(materials) = &mesh.materials else {
             let m = self.surface_material();
             return self.triangles(mesh, m).into_iter().collect();
@@ -150,6 +193,13 @@ impl GltfWriter {
                 continue;
             }
             let mut piece = mesh.subset(&tris);
+            // Only the attributes the input gave this material's vertices.
+            if !m.vertex_attributes.uvs {
+                piece.uvs = None;
+            }
+            if !m.vertex_attributes.colors {
+                piece.colors = None;
+            }
             // Display colours are base colour × COLOR_0 (see io::gltf): divide
             // the factor back out, and leave out a COLOR_0 that is white.
             let factor = Vec3::from_slice(&m.base_color[..3]);
@@ -184,16 +234,17 @@ impl GltfWriter {
         if mesh.triangles.is_empty() || mesh.positions.is_empty() {
             return None;
         }
+        // Every mesh shades (meshes without normals get area-weighted ones),
+        // and from the front: no normal points away from a face it shades.
+        let mut mesh = mesh.clone();
+        mesh.orient_normals_to_winding();
         let mut attributes = serde_json::Map::new();
         let pos = self.floats(&flat3(&mesh.positions), "VEC3", Some(mesh.bounds()));
         attributes.insert("POSITION".into(), pos.into());
-        // Every mesh shades: meshes without normals get area-weighted ones.
-        let normals: Vec<Vec3> = match &mesh.normals {
-            Some(n) => n.clone(),
-            None => mesh.vertex_normals(),
-        };
-        let unit: Vec<Vec3> = normals
+        let unit: Vec<Vec3> = mesh
+            .normals
             .iter()
+            .flatten()
             .map(|v| v.try_normalize().unwrap_or(Vec3::Z))
             .collect();
         let nrm = self.floats(&flat3(&unit), "VEC3", None);
@@ -213,10 +264,14 @@ impl GltfWriter {
         Some(json!({"attributes": attributes, "indices": indices, "mode": 4, "material": material}))
     }
 
-    /// The points of a cut as a POINTS primitive with `_RADIUS`.
+    /// The points of a cut as a POINTS primitive with `_RADIUS`, or as
+    /// meshes ([`PointsAs`]).
     fn points(&mut self, set: &DrawSet) -> Option<Value> {
         if set.points.is_empty() {
             return None;
+        }
+        if self.points_as != PointsAs::Points {
+            return self.point_meshes(set);
         }
         let centers: Vec<Vec3> = set.points.iter().map(|p| p.center).collect();
         let bounds = Aabb::from_points(&centers);
@@ -229,7 +284,57 @@ impl GltfWriter {
         let col = self.floats(&flat3(&colors), "VEC3", None);
         let radii: Vec<f32> = set.points.iter().map(|p| p.radius.max(0.0)).collect();
         let rad = self.floats(&radii, "SCALAR", None);
-        Some(json!({"attributes": {"POSITION": pos, "COLOR_0": col, "_RADIUS": rad}, "mode": 0}))
+        Some(json!({
+            "attributes": {"POSITION": pos, "COLOR_0": col, "_RADIUS": rad},
+            "mode": 0,
+            "extras": {"_RADIUS": RADIUS_NOTE},
+        }))
+    }
+
+    /// Each point as a small mesh in the plane of its normal, covering its
+    /// disc (a square, or an octagon whose inscribed circle is the disc),
+    /// wearing its colour; double-sided, as a point has no back.
+    fn point_meshes(&mut self, set: &DrawSet) -> Option<Value> {
+        let sides: usize = match self.points_as {
+            PointsAs::Discs => 8,
+            _ => 4,
+        };
+        // The polygon's corners lie at r / cos(π / sides) so its edges touch the disc.
+        let reach = 1.0 / (std::f32::consts::PI / sides as f32).cos();
+        let mut mesh = TriMesh::default();
+        let (mut normals, mut colors) = (Vec::new(), Vec::new());
+        for p in &set.points {
+            let n = p.normal.try_normalize().unwrap_or(Vec3::Z);
+            let (u, v) = n.any_orthonormal_pair();
+            // Counter-clockwise around the normal: the front faces along it.
+            let (u, v) = if u.cross(v).dot(n) < 0.0 {
+                (v, u)
+            } else {
+                (u, v)
+            };
+            let base = mesh.positions.len() as u32;
+            mesh.positions.push(p.center);
+            for k in 0..sides {
+                let a = std::f32::consts::TAU * (k as f32 + 0.5) / sides as f32;
+                let r = p.radius.max(0.0) * reach;
+                mesh.positions
+                    .push(p.center + r * (a.cos() * u + a.sin() * v));
+            }
+            for k in 0..sides as u32 {
+                let next = (k + 1) % sides as u32;
+                mesh.triangles.push([base, base + 1 + k, base + 1 + next]);
+            }
+            normals.extend(std::iter::repeat_n(n, sides + 1));
+            colors.extend(std::iter::repeat_n(p.color, sides + 1));
+        }
+        mesh.normals = Some(normals);
+        mesh.colors = Some(colors);
+        let m = self.material(json!({
+            "name": "points",
+            "pbrMetallicRoughness": {"baseColorFactor": [1.0, 1.0, 1.0, 1.0], "metallicFactor": 0.0, "roughnessFactor": 0.8},
+            "doubleSided": true
+        }));
+        self.triangles(&mesh, m)
     }
 
     /// The splats of a cut: textured quads, one material per texture.
@@ -419,14 +524,14 @@ pub fn write_draw_set_glb(set: &DrawSet) -> Vec<u8> {
 ///
 /// # Panics
 /// If `lods` is empty or `coverages.len() != lods.len()`.
-pub fn write_lod_chain(lods: &[DrawSet], coverages: &[f32]) -> Vec<u8> {
+pub fn write_lod_chain(lods: &[DrawSet], coverages: &[f32], points_as: PointsAs) -> Vec<u8> {
     assert!(!lods.is_empty(), "an LOD chain needs LOD0");
     assert_eq!(
         coverages.len(),
         lods.len(),
         "one screen coverage per LOD, LOD0's included"
     );
-    let mut w = GltfWriter::new();
+    let mut w = GltfWriter::with_points_as(points_as);
     let ids: Vec<usize> = lods
         .iter()
         .enumerate()

@@ -26,6 +26,8 @@ pub const MAX_DECOMPRESSED: u64 = 4 << 30;
 
 /// What a file holds.
 #[derive(Debug, Clone, PartialEq)]
+// One per load, moved rather than copied: boxing the mesh buys nothing.
+#[allow(clippy::large_enum_variant)]
 pub enum Model {
     Mesh(TriMesh),
     Points(PointSet),
@@ -320,6 +322,8 @@ pub const MESH_WRITE_FORMATS: &str = "obj, ply, glb";
 
 /// Encodes a mesh for `path`'s extension (`obj`, `ply` binary, `glb`).
 pub fn encode_mesh(path: &Path, mesh: &TriMesh) -> Result<Vec<u8>, String> {
+    // The formats store attributes per vertex: one vertex per wedge.
+    let mesh = &mesh.unwelded();
     match extension(path).as_str() {
         "obj" => Ok(obj::write(mesh)),
         "ply" => Ok(ply::write_mesh(mesh, ply::Encoding::BinaryLittleEndian)),

@@ -294,6 +294,7 @@ pub fn read(data: &[u8], progress: &Progress) -> ParseResult<Model> {
             uvs,
             parts: None,
             materials: None,
+            wedges: None,
         })
     })
 }

@@ -387,6 +387,7 @@ impl MergeTreeView {
                     .collect()
             }),
             materials: src.materials.clone(),
+            wedges: None,
             triangles,
         };
         DrawSet {

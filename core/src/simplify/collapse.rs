@@ -4,7 +4,11 @@
 //! triangles that flip or fold, optionally reject slivers (merge-tree paper
 //! eq. 3 quality), and never join separate parts: part seams, borders and
 //! non-manifold edges are constrained edges whose vertices move only along them
-//! (or not at all with `lock_borders`). Each collapse kills both endpoints and
+//! (or not at all with `lock_borders`). UV and colour seams (edges whose two
+//! sides' corners show different surfaces, `geom::wedges`) are constrained the
+//! same way, and every corner keeps its own side's wedge through each
+//! collapse, so no face ever takes a UV or a colour from across a seam;
+//! normals follow their wedges softly. Each collapse kills both endpoints and
 //! every triangle around them and creates a new vertex and new triangles, so a
 //! caller building a hierarchy (the hybrid MRG) gets distinct ids for every
 //! primitive. The order comes from a caller-supplied cost; by default
@@ -17,7 +21,7 @@ use glam::{Vec2, Vec3};
 use super::quadric::Quadric;
 use super::queue::CollapseQueue;
 use crate::distance::closest_point_on_triangle;
-use crate::geom::{Adjacency, Materials, TriMesh};
+use crate::geom::{Adjacency, Materials, TriMesh, Wedges};
 
 /// Legality rules for collapses.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -113,6 +117,8 @@ pub struct EdgeCollapser {
     uvs: Option<Vec<Vec2>>,
     /// Parts keep their materials: collapses never join parts.
     materials: Option<Materials>,
+    /// The input's wedges, with `corners` for every triangle ever made.
+    wedges: Option<Wedges>,
     tris: Vec<[u32; 3]>,
     tri_part: Vec<u32>,
     tri_alive: Vec<bool>,
@@ -250,11 +256,33 @@ pub(crate) fn link_condition(
     !(shared == 2 && o1 != u32::MAX && has_face(a) && has_face(b))
 }
 
-/// Whether corner `c` faces a border or part-seam edge (or a non-manifold one,
-/// which the corner table leaves unpaired).
-pub(crate) fn constrained_corner(adj: &Adjacency, tri_part: &[u32], c: usize) -> bool {
+/// Whether corner `c` faces a border, part-seam or attribute-seam edge (or a
+/// non-manifold one, which the corner table leaves unpaired).
+pub(crate) fn constrained_corner(
+    mesh: &TriMesh,
+    adj: &Adjacency,
+    tri_part: &[u32],
+    c: usize,
+) -> bool {
     let o = adj.opposite[c];
-    o == crate::geom::adjacency::NONE || tri_part[o as usize / 3] != tri_part[c / 3]
+    if o == crate::geom::adjacency::NONE || tri_part[o as usize / 3] != tri_part[c / 3] {
+        return true;
+    }
+    let Some(w) = &mesh.wedges else {
+        return false;
+    };
+    let (t, u) = (c / 3, o as usize / 3);
+    let wedge_at = |t: usize, v: u32| {
+        let k = mesh.triangles[t].iter().position(|x| *x == v);
+        k.map(|k| w.corners[t][k])
+    };
+    let tri = mesh.triangles[t];
+    [tri[(c + 1) % 3], tri[(c + 2) % 3]]
+        .iter()
+        .any(|&v| match (wedge_at(t, v), wedge_at(u, v)) {
+            (Some(x), Some(y)) => !w.same_surface(x, y),
+            _ => true,
+        })
 }
 
 /// Vertices on the mesh's own borders (and non-manifold or mis-oriented
@@ -272,7 +300,7 @@ pub(crate) fn constrained_vertices(mesh: &TriMesh, adj: &Adjacency, tri_part: &[
     let triangles = &mesh.triangles;
     let mut constrained = vec![false; mesh.positions.len()];
     for c in 0..adj.opposite.len() {
-        if constrained_corner(adj, tri_part, c) {
+        if constrained_corner(mesh, adj, tri_part, c) {
             let tri = triangles[c / 3];
             constrained[tri[(c + 1) % 3] as usize] = true;
             constrained[tri[(c + 2) % 3] as usize] = true;
@@ -354,7 +382,7 @@ impl EdgeCollapser {
         let adj = Adjacency::new(&mesh.triangles);
         let constrained = constrained_vertices(mesh, &adj, &tri_part);
         for c in 0..adj.opposite.len() {
-            if !constrained_corner(&adj, &tri_part, c) {
+            if !constrained_corner(mesh, &adj, &tri_part, c) {
                 continue;
             }
             let t = c / 3;
@@ -377,6 +405,7 @@ impl EdgeCollapser {
             normals: mesh.normals.clone(),
             colors: mesh.colors.clone(),
             materials: mesh.materials.clone(),
+            wedges: mesh.wedges.clone(),
             uvs: mesh.uvs.clone(),
             tris: mesh.triangles.clone(),
             tri_part,
@@ -448,6 +477,11 @@ impl EdgeCollapser {
     /// The part of triangle `t` (collapses never join parts).
     pub fn triangle_part(&self, t: u32) -> u32 {
         self.tri_part[t as usize]
+    }
+
+    /// The wedges, with the corners of every triangle ever made (ids never change).
+    pub fn wedges(&self) -> Option<&Wedges> {
+        self.wedges.as_ref()
     }
 
     /// The input's materials, one per part.
@@ -523,13 +557,63 @@ impl EdgeCollapser {
         out.dedup();
     }
 
-    /// Edge on a border or seam: not exactly two triangles of one part share it.
+    /// Edge on a border or seam: not exactly two triangles of one part share
+    /// it, or their corners hold different wedges at either end.
     fn is_constrained_edge(&self, a: u32, b: u32) -> bool {
         let mut shared = self.shared(a, b);
         match (shared.next(), shared.next(), shared.next()) {
-            (Some(t0), Some(t1), None) => self.tri_part[t0 as usize] != self.tri_part[t1 as usize],
+            (Some(t0), Some(t1), None) => {
+                self.tri_part[t0 as usize] != self.tri_part[t1 as usize]
+                    || self.wedges.as_ref().is_some_and(|w| {
+                        [a, b].iter().any(|&v| {
+                            !w.same_surface(self.wedge_at(w, t0, v), self.wedge_at(w, t1, v))
+                        })
+                    })
+            }
             _ => true,
         }
+    }
+
+    /// The wedge of triangle `t`'s corner at vertex `v`.
+    fn wedge_at(&self, w: &Wedges, t: u32, v: u32) -> u32 {
+        let tri = self.tris[t as usize];
+        let k = tri.iter().position(|x| *x == v).unwrap_or(0);
+        w.corners[t as usize][k]
+    }
+
+    /// The wedge pairs (at a, at b) across the triangles on edge (a, b); more
+    /// than four (a non-manifold fan) gives `None`.
+    fn wedge_pairs(&self, w: &Wedges, a: u32, b: u32) -> Option<([(u32, u32); 4], usize)> {
+        let mut pairs = [(u32::MAX, u32::MAX); 4];
+        let mut n = 0;
+        for t in self.shared(a, b) {
+            *pairs.get_mut(n)? = (self.wedge_at(w, t, a), self.wedge_at(w, t, b));
+            n += 1;
+        }
+        Some((pairs, n))
+    }
+
+    /// Whether `a`'s corners can slide towards `b`: each of its surfaces
+    /// (UV, colour) meets exactly one of b's across the edge, so it knows what
+    /// to interpolate with. Where one does not (three seams meet at `a`, or a seam ends at
+    /// `a` while the edge's sides differ at `b`), `a` must stay put.
+    fn wedges_follow(&self, w: &Wedges, a: u32, b: u32) -> bool {
+        let Some((pairs, n)) = self.wedge_pairs(w, a, b) else {
+            return false;
+        };
+        let pairs = &pairs[..n];
+        let unique = |wa: u32| {
+            let mut partners = pairs
+                .iter()
+                .filter(|p| w.same_surface(p.0, wa))
+                .map(|p| p.1);
+            partners
+                .next()
+                .is_some_and(|first| partners.all(|p| w.same_surface(p, first)))
+        };
+        self.vtris[a as usize]
+            .iter()
+            .all(|&t| unique(self.wedge_at(w, t, a)))
     }
 
     /// Placements allowed by the border rules, best quadric error first; with
@@ -557,6 +641,19 @@ impl EdgeCollapser {
             (true, false) => add(pa),
             (false, true) => add(pb),
             _ if self.opts.lock_borders && (ca || cb) => return None,
+            // Seam vertices whose wedges cannot follow the edge stay put.
+            (true, true)
+                if self.wedges.as_ref().is_some_and(|w| {
+                    !self.wedges_follow(w, a, b) || !self.wedges_follow(w, b, a)
+                }) =>
+            {
+                let w = self.wedges.as_ref()?;
+                match (self.wedges_follow(w, a, b), self.wedges_follow(w, b, a)) {
+                    (false, false) => return None,
+                    (false, true) => add(pa),
+                    _ => add(pb),
+                }
+            }
             _ => {
                 // The optimum only when it stays near the edge (ill-conditioned otherwise).
                 let len = pa.distance(pb);
@@ -746,11 +843,18 @@ impl EdgeCollapser {
         // Attributes: interpolate by where p projects onto the edge.
         let (pa, pb) = (self.pos[a as usize], self.pos[b as usize]);
         let ab = pb - pa;
-        let s = if ab.length_squared() > 0.0 {
-            ((p - pa).dot(ab) / ab.length_squared()).clamp(0.0, 1.0)
-        } else {
+        let s = if p == pa || ab.length_squared() == 0.0 {
             0.0
+        } else if p == pb {
+            1.0
+        } else {
+            ((p - pa).dot(ab) / ab.length_squared()).clamp(0.0, 1.0)
         };
+        let mut wedges = self.wedges.take();
+        let mut wedge_map = Vec::new();
+        if let Some(w) = &mut wedges {
+            self.map_wedges(w, [a, b], c, s, &mut wedge_map);
+        }
         self.pos.push(p);
         if let Some(n) = &mut self.normals {
             n.push(n[a as usize].lerp(n[b as usize], s).normalize_or_zero());
@@ -787,6 +891,16 @@ impl EdgeCollapser {
             }
             let id = self.tris.len() as u32;
             let new = tri.map(|w| if w == a || w == b { c } else { w });
+            if let Some(w) = &mut wedges {
+                let k = tri.iter().position(|v| *v == a || *v == b).unwrap_or(0);
+                let mut corners = w.corners[t as usize];
+                let old = corners[k];
+                corners[k] = wedge_map
+                    .iter()
+                    .find(|(o, _)| *o == old)
+                    .map_or(old, |m| m.1);
+                w.corners.push(corners);
+            }
             self.tris.push(new);
             self.tri_part.push(self.tri_part[t as usize]);
             self.tri_alive.push(true);
@@ -798,6 +912,7 @@ impl EdgeCollapser {
             star.push(id);
             added.push(id);
         }
+        self.wedges = wedges;
         self.alive_triangles -= removed.len() - added.len();
         self.vtris[a as usize] = Vec::new();
         self.vtris[b as usize] = Vec::new();
@@ -817,6 +932,62 @@ impl EdgeCollapser {
             removed,
             added,
             cost,
+        }
+    }
+
+    /// Each wedge at `a` or `b` (old → new, into `map`) becomes one at the new
+    /// vertex `c`: interpolated by `s` with its partner across the edge (the
+    /// other end's wedge of the same surface), or kept where it has none (a
+    /// surface without one is left at its end by `best_candidate`; a normal
+    /// without one is kept as it is).
+    /// New wedges with equal attributes are one: a seam that ended here closes.
+    fn map_wedges(
+        &self,
+        w: &mut Wedges,
+        [a, b]: [u32; 2],
+        c: u32,
+        s: f32,
+        map: &mut Vec<(u32, u32)>,
+    ) {
+        let (pairs, n) = self
+            .wedge_pairs(w, a, b)
+            .unwrap_or(([(u32::MAX, u32::MAX); 4], 0));
+        let pairs = &pairs[..n];
+        let first_new = w.len() as u32;
+        for (end, side) in [(a, 0), (b, 1)] {
+            for &t in &self.vtris[end as usize] {
+                let old = self.wedge_at(w, t, end);
+                if map.iter().any(|(o, _)| *o == old) {
+                    continue;
+                }
+                // Its own wedge's pair first, else one of the same surface.
+                let ours = |p: &(u32, u32)| if side == 0 { p.0 } else { p.1 };
+                let theirs = |p: &(u32, u32)| if side == 0 { p.1 } else { p.0 };
+                let partner = match pairs.iter().find(|p| ours(p) == old) {
+                    Some(p) => Some(theirs(p)),
+                    None => {
+                        let mut same = pairs.iter().filter(|p| w.same_surface(ours(p), old));
+                        let first = same.next();
+                        first
+                            .filter(|f| same.all(|p| w.same_surface(theirs(p), theirs(f))))
+                            .map(theirs)
+                    }
+                };
+                let new = match (partner, side) {
+                    (Some(p), 0) => w.push_lerp(c, old, p, s),
+                    (Some(p), _) => w.push_lerp(c, p, old, s),
+                    (None, _) => w.push_lerp(c, old, old, 0.0),
+                };
+                let same = (first_new..new).find(|&x| w.same_attributes(x, new));
+                let new = match same {
+                    Some(x) => {
+                        w.pop();
+                        x
+                    }
+                    None => new,
+                };
+                map.push((old, new));
+            }
         }
     }
 
@@ -856,6 +1027,24 @@ impl EdgeCollapser {
             out.parts = Some(parts);
         }
         out.materials = self.materials.clone();
+        out.wedges = self.wedges.as_ref().map(|w| {
+            let mut wremap = vec![u32::MAX; w.len()];
+            let mut worder = Vec::new();
+            let corners = ids
+                .iter()
+                .map(|&t| {
+                    w.corners[t as usize].map(|x| {
+                        let slot = &mut wremap[x as usize];
+                        if *slot == u32::MAX {
+                            *slot = worder.len() as u32;
+                            worder.push(x);
+                        }
+                        *slot
+                    })
+                })
+                .collect();
+            Wedges::gathered(w, &worder, corners, |v| remap[v as usize])
+        });
         (out, ids)
     }
 }
@@ -960,6 +1149,74 @@ mod tests {
             // A floor above the deviation is what comes back.
             assert_eq!(s.deviation_squared(&cand, 1.0), 1.0);
         }
+    }
+
+    /// A torus read as a textured file stores it: a grid of (n+1) × (m+1)
+    /// vertex records, the last row and column repeating the first at u = 1
+    /// and v = 1 (a UV seam around each way), welded on load.
+    fn seamed_torus(n: u32, m: u32) -> (TriMesh, TriMesh) {
+        use crate::geom::{RepairOptions, repair::repair_mesh};
+        let mut records = TriMesh::default();
+        let mut uvs = Vec::new();
+        for i in 0..=n {
+            for j in 0..=m {
+                let (u, v) = (i as f32 / n as f32, j as f32 / m as f32);
+                let (a, b) = (u * std::f32::consts::TAU, v * std::f32::consts::TAU);
+                let ring = Vec3::new(a.cos(), a.sin(), 0.0);
+                let p = ring * (1.0 + 0.3 * b.cos()) + Vec3::Z * 0.3 * b.sin();
+                // Snap the seam's copies onto the first row's bits.
+                let (i0, j0) = (i % n, j % m);
+                let snap = |k: u32, l: u32| {
+                    let (a, b) = (
+                        k as f32 / n as f32 * std::f32::consts::TAU,
+                        l as f32 / m as f32 * std::f32::consts::TAU,
+                    );
+                    Vec3::new(a.cos(), a.sin(), 0.0) * (1.0 + 0.3 * b.cos())
+                        + Vec3::Z * 0.3 * b.sin()
+                };
+                records
+                    .positions
+                    .push(if (i0, j0) != (i, j) { snap(i0, j0) } else { p });
+                uvs.push(Vec2::new(u, v));
+            }
+        }
+        for i in 0..n {
+            for j in 0..m {
+                let at = |i: u32, j: u32| i * (m + 1) + j;
+                let (a, b, c, d) = (at(i, j), at(i + 1, j), at(i + 1, j + 1), at(i, j + 1));
+                records.triangles.extend([[a, b, c], [a, c, d]]);
+            }
+        }
+        records.uvs = Some(uvs);
+        let (welded, _) = repair_mesh(records.clone(), &RepairOptions::default());
+        (records, welded)
+    }
+
+    #[test]
+    fn collapses_keep_each_side_of_a_uv_seam() {
+        use crate::distance::uv_error;
+        let (records, welded) = seamed_torus(48, 24);
+        assert_eq!(welded.positions.len(), 48 * 24, "the seams are welded");
+        assert!(welded.wedges.is_some());
+        let run = |mesh: &TriMesh| {
+            let mut s = EdgeCollapser::new(mesh, CollapseOptions::default());
+            s.run(mesh.triangles.len() / 8, |_, _| true);
+            s.mesh().0
+        };
+        let out = run(&welded);
+        assert!(out.triangles.len() <= welded.triangles.len() / 8 + 8);
+        let t = Topology::of(&out);
+        assert_eq!((t.genus, t.components.len(), t.boundary_loops), (1, 1, 0));
+        // Away from the seams a coarse LOD's interpolated UVs drift a little
+        // from the original's at the nearest point; a face across a seam
+        // would be off by up to a whole texture (0 against 1).
+        let e = uv_error(&records, &out).unwrap();
+        assert!(e.max < 0.15 && e.area_over_threshold < 0.1, "{e:?}");
+        // Without wedges faces along both seams do take the other side's UVs.
+        let mut bare = welded.clone();
+        bare.wedges = None;
+        let e = uv_error(&records, &run(&bare)).unwrap();
+        assert!(e.max > 0.5 && e.area_over_threshold > 0.2, "{e:?}");
     }
 
     #[test]

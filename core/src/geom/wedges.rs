@@ -1,0 +1,322 @@
+//! Wedges (Hoppe, "Efficient implementation of progressive meshes", 1998, §3):
+//! the attribute sets of a welded vertex's corners where they differ — the
+//! two sides of a UV seam, a crease's two normals, two parts' own colours.
+//! Welding joins the surface for topology and the certificate; wedges keep
+//! every face's own side of each seam, so LODs and exports never take a UV
+//! or a normal from across one.
+
+use std::collections::HashMap;
+
+use glam::{Vec2, Vec3};
+
+use super::TriMesh;
+
+/// Per-corner attribute sets of a welded mesh. The mesh's own per-vertex
+/// attributes stay one representative per vertex (for methods that shade
+/// by vertex); these are what exports write.
+#[derive(Debug, Clone, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct Wedges {
+    /// Per triangle, the wedge of each corner.
+    pub corners: Vec<[u32; 3]>,
+    /// Per wedge, its vertex.
+    pub vertex: Vec<u32>,
+    pub normals: Option<Vec<Vec3>>,
+    pub colors: Option<Vec<Vec3>>,
+    pub uvs: Option<Vec<Vec2>>,
+}
+
+/// A wedge's attributes as bits, for finding equal ones.
+type Key = (u32, [u32; 3], [u32; 3], [u32; 2]);
+
+fn bits<const N: usize>(v: [f32; N]) -> [u32; N] {
+    // +0.0 and -0.0 are the same value.
+    v.map(|x| (x + 0.0).to_bits())
+}
+
+impl Wedges {
+    /// The wedges of `records` (one attribute set per vertex record, as read)
+    /// once records are welded by `remap` (record → vertex): equal attribute
+    /// sets of one vertex share a wedge. `None` when every vertex keeps a
+    /// single set (nothing welded across a seam).
+    pub fn of_welded(records: &TriMesh, remap: &[u32]) -> Option<Wedges> {
+        if records.normals.is_none() && records.colors.is_none() && records.uvs.is_none() {
+            return None;
+        }
+        let key = |i: usize| -> Key {
+            (
+                remap[i],
+                bits(
+                    records
+                        .normals
+                        .as_ref()
+                        .map_or([0.0; 3], |n| n[i].to_array()),
+                ),
+                bits(
+                    records
+                        .colors
+                        .as_ref()
+                        .map_or([0.0; 3], |c| c[i].to_array()),
+                ),
+                bits(records.uvs.as_ref().map_or([0.0; 2], |u| u[i].to_array())),
+            )
+        };
+        let mut ids: HashMap<Key, u32> = HashMap::new();
+        let mut first = Vec::new();
+        let mut wedge_of = vec![u32::MAX; records.positions.len()];
+        let corners: Vec<[u32; 3]> = records
+            .triangles
+            .iter()
+            .map(|t| {
+                t.map(|r| {
+                    let r = r as usize;
+                    if wedge_of[r] == u32::MAX {
+                        wedge_of[r] = *ids.entry(key(r)).or_insert_with(|| {
+                            first.push(r);
+                            first.len() as u32 - 1
+                        });
+                    }
+                    wedge_of[r]
+                })
+            })
+            .collect();
+        let mut vertices: Vec<u32> = first.iter().map(|r| remap[*r]).collect();
+        vertices.sort_unstable();
+        vertices.dedup();
+        if vertices.len() == first.len() {
+            return None;
+        }
+        let gather = |a: &[_]| first.iter().map(|&r| a[r]).collect::<Vec<_>>();
+        Some(Wedges {
+            corners,
+            vertex: first.iter().map(|r| remap[*r]).collect(),
+            normals: records.normals.as_deref().map(gather),
+            colors: records.colors.as_deref().map(gather),
+            uvs: records
+                .uvs
+                .as_ref()
+                .map(|u| first.iter().map(|&r| u[r]).collect()),
+        })
+    }
+
+    /// One wedge per vertex, holding its attributes (a mesh without seams).
+    pub fn per_vertex(mesh: &TriMesh) -> Wedges {
+        Wedges {
+            corners: mesh.triangles.clone(),
+            vertex: (0..mesh.positions.len() as u32).collect(),
+            normals: mesh.normals.clone(),
+            colors: mesh.colors.clone(),
+            uvs: mesh.uvs.clone(),
+        }
+    }
+
+    pub fn len(&self) -> usize {
+        self.vertex.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.vertex.is_empty()
+    }
+
+    /// Appends a wedge at `vertex` with the attributes of `from` interpolated
+    /// towards `to` by `s` (normals renormalised); returns its id.
+    pub fn push_lerp(&mut self, vertex: u32, from: u32, to: u32, s: f32) -> u32 {
+        // The ends exactly: a wedge that stays where it was keeps its bits.
+        let (f, t, s) = match s {
+            0.0 => (from as usize, from as usize, 0.0),
+            1.0 => (to as usize, to as usize, 0.0),
+            _ => (from as usize, to as usize, s),
+        };
+        if let Some(n) = &mut self.normals {
+            let v = n[f].lerp(n[t], s).normalize_or(n[f]);
+            n.push(v);
+        }
+        if let Some(c) = &mut self.colors {
+            c.push(c[f].lerp(c[t], s));
+        }
+        if let Some(u) = &mut self.uvs {
+            u.push(u[f].lerp(u[t], s));
+        }
+        self.vertex.push(vertex);
+        self.vertex.len() as u32 - 1
+    }
+
+    /// Drops the last wedge (one just pushed that turned out to be a copy).
+    pub fn pop(&mut self) {
+        self.vertex.pop();
+        for a in [&mut self.normals, &mut self.colors].into_iter().flatten() {
+            a.pop();
+        }
+        if let Some(u) = &mut self.uvs {
+            u.pop();
+        }
+    }
+
+    /// The wedges `order` of `w` (in that order) with `corners` indexing
+    /// them and their vertices renumbered by `vertex`.
+    pub fn gathered(
+        w: &Wedges,
+        order: &[u32],
+        corners: Vec<[u32; 3]>,
+        vertex: impl Fn(u32) -> u32,
+    ) -> Wedges {
+        let gather = |a: &[Vec3]| order.iter().map(|&x| a[x as usize]).collect::<Vec<_>>();
+        Wedges {
+            corners,
+            vertex: order
+                .iter()
+                .map(|&x| vertex(w.vertex[x as usize]))
+                .collect(),
+            normals: w.normals.as_deref().map(gather),
+            colors: w.colors.as_deref().map(gather),
+            uvs: w
+                .uvs
+                .as_ref()
+                .map(|u| order.iter().map(|&x| u[x as usize]).collect()),
+        }
+    }
+
+    /// Whether wedges `a` and `b` show the same surface: equal UVs and
+    /// colours. Only those seams constrain collapses: a texture or colour
+    /// taken from across one is plainly wrong, while a normal is carried
+    /// softly (interpolated, or kept, then oriented on export), so a
+    /// faceted model, whose every edge is a normal seam, still simplifies.
+    pub fn same_surface(&self, a: u32, b: u32) -> bool {
+        let (a, b) = (a as usize, b as usize);
+        a == b
+            || self.colors.as_ref().is_none_or(|c| c[a] == c[b])
+                && self.uvs.as_ref().is_none_or(|u| u[a] == u[b])
+    }
+
+    /// Whether wedges `a` and `b` hold the same attributes.
+    pub fn same_attributes(&self, a: u32, b: u32) -> bool {
+        let (a, b) = (a as usize, b as usize);
+        self.normals.as_ref().is_none_or(|n| n[a] == n[b])
+            && self.colors.as_ref().is_none_or(|c| c[a] == c[b])
+            && self.uvs.as_ref().is_none_or(|u| u[a] == u[b])
+    }
+
+    /// Appends `other` (its vertices offset by `vertex_base`); an attribute
+    /// only one side has is filled with `fill`'s for the other.
+    pub fn append(&mut self, other: &Wedges, vertex_base: u32) {
+        let base = self.len() as u32;
+        let (n_self, n_other) = (self.len(), other.len());
+        super::merge_attr(&mut self.normals, n_self, &other.normals, n_other, Vec3::Z);
+        super::merge_attr(&mut self.colors, n_self, &other.colors, n_other, Vec3::ONE);
+        super::merge_attr(&mut self.uvs, n_self, &other.uvs, n_other, Vec2::ZERO);
+        self.vertex
+            .extend(other.vertex.iter().map(|v| v + vertex_base));
+        self.corners
+            .extend(other.corners.iter().map(|c| c.map(|w| w + base)));
+    }
+}
+
+impl TriMesh {
+    /// The corner wedges of triangle `t` (its vertices when the mesh has no wedges).
+    pub fn corner_wedges(&self, t: usize) -> [u32; 3] {
+        match &self.wedges {
+            Some(w) => w.corners[t],
+            None => self.triangles[t],
+        }
+    }
+
+    /// The mesh with one vertex per wedge its triangles use (positions
+    /// repeated along seams), as vertex-attribute formats (glTF, PLY) store
+    /// it: every corner gets its own side's attributes. Parts and materials
+    /// are kept; a mesh without wedges comes back as it is.
+    pub fn unwelded(&self) -> TriMesh {
+        let Some(w) = &self.wedges else {
+            return self.clone();
+        };
+        let mut remap = vec![u32::MAX; w.len()];
+        let mut order = Vec::new();
+        let triangles = w
+            .corners
+            .iter()
+            .map(|c| {
+                c.map(|x| {
+                    let slot = &mut remap[x as usize];
+                    if *slot == u32::MAX {
+                        *slot = order.len() as u32;
+                        order.push(x as usize);
+                    }
+                    *slot
+                })
+            })
+            .collect();
+        let gather = |a: &[_]| order.iter().map(|&x| a[x]).collect::<Vec<_>>();
+        TriMesh {
+            positions: order
+                .iter()
+                .map(|&x| self.positions[w.vertex[x] as usize])
+                .collect(),
+            triangles,
+            normals: w.normals.as_deref().map(gather),
+            colors: w.colors.as_deref().map(gather),
+            uvs: w
+                .uvs
+                .as_ref()
+                .map(|u| order.iter().map(|&x| u[x]).collect()),
+            parts: self.parts.clone(),
+            materials: self.materials.clone(),
+            wedges: None,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geom::{RepairOptions, repair::repair_mesh};
+
+    /// A unit square of two triangles whose diagonal is a UV seam: the two
+    /// records of each diagonal vertex share a position but not a UV.
+    pub(crate) fn square_with_uv_seam() -> TriMesh {
+        let mut m = TriMesh::new(
+            vec![
+                Vec3::ZERO,
+                Vec3::X,
+                Vec3::new(1.0, 1.0, 0.0),
+                Vec3::ZERO,
+                Vec3::new(1.0, 1.0, 0.0),
+                Vec3::Y,
+            ],
+            vec![[0, 1, 2], [3, 4, 5]],
+        );
+        m.uvs = Some(vec![
+            Vec2::ZERO,
+            Vec2::X,
+            Vec2::ONE,
+            Vec2::new(0.5, 0.0),
+            Vec2::new(0.5, 0.5),
+            Vec2::new(0.0, 0.5),
+        ]);
+        m
+    }
+
+    #[test]
+    fn welding_keeps_each_side_of_a_seam_and_unwelding_restores_it() {
+        let records = square_with_uv_seam();
+        let (m, _) = repair_mesh(records.clone(), &RepairOptions::default());
+        assert_eq!(m.positions.len(), 4, "the diagonal's vertices are welded");
+        let w = m.wedges.as_ref().expect("the seam needs wedges");
+        assert_eq!(w.len(), 6);
+        let back = m.unwelded();
+        // Every corner has the UV it was read with.
+        for t in 0..2 {
+            for k in 0..3 {
+                let read = records.uvs.as_ref().unwrap()[records.triangles[t][k] as usize];
+                let written = back.uvs.as_ref().unwrap()[back.triangles[t][k] as usize];
+                assert_eq!(read, written, "triangle {t} corner {k}");
+                assert_eq!(
+                    records.positions[records.triangles[t][k] as usize],
+                    back.positions[back.triangles[t][k] as usize]
+                );
+            }
+        }
+        // Without a seam, no wedges.
+        let mut plain = records;
+        plain.uvs = Some(plain.positions.iter().map(|p| p.truncate()).collect());
+        let (m, _) = repair_mesh(plain, &RepairOptions::default());
+        assert!(m.wedges.is_none());
+    }
+}
