@@ -149,7 +149,7 @@ fn truck_textures_stay_on_their_side_of_every_seam() {
     let (src_doc, _) = read_gltf(&truck);
     let src_meshes: Vec<usize> = (0..src_doc["meshes"].as_array().unwrap().len()).collect();
     let src_attrs = attributes_by_material(&src_doc, &src_meshes);
-    for method in ["simplify", "hybrid"] {
+    for method in ["simplify", "hybrid", "mergetree"] {
         let out = temp(&format!("truck-{method}.glb"));
         let report = export("CesiumMilkTruck.glb", method, &out, &[]);
         let (doc, bin) = read_gltf(&out);

@@ -210,6 +210,79 @@ impl Wedges {
     }
 }
 
+/// Which wedge of a vertex a face takes when the face stands for an input
+/// triangle that did not have that vertex (a merge moved one of its corners
+/// onto it, merge-tree paper §4): the vertex's wedge in the input triangle's
+/// chart (triangles joined across edges without a UV or colour seam), the one
+/// nearest in UV where a chart meets itself along a seam.
+pub struct WedgeSides {
+    chart: Vec<u32>,
+    /// Per vertex, its wedges with their charts.
+    of_vertex: Vec<Vec<(u32, u32)>>,
+}
+
+impl WedgeSides {
+    pub fn new(mesh: &TriMesh) -> Option<WedgeSides> {
+        let w = mesh.wedges.as_ref()?;
+        let adj = super::Adjacency::new(&mesh.triangles);
+        let mut uf = super::topology::UnionFind::new(mesh.triangles.len());
+        for (c, &o) in adj.opposite.iter().enumerate() {
+            if o == super::adjacency::NONE {
+                continue;
+            }
+            let (t, u) = (c / 3, o as usize / 3);
+            let tri = mesh.triangles[t];
+            let same = [tri[(c + 1) % 3], tri[(c + 2) % 3]].iter().all(|&v| {
+                let k = mesh.triangles[u].iter().position(|x| *x == v);
+                let j = tri.iter().position(|x| *x == v).unwrap_or(0);
+                k.is_some_and(|k| w.same_surface(w.corners[t][j], w.corners[u][k]))
+            });
+            if same {
+                uf.union(t as u32, u as u32);
+            }
+        }
+        let chart: Vec<u32> = (0..mesh.triangles.len() as u32)
+            .map(|t| uf.find(t))
+            .collect();
+        let mut of_vertex = vec![Vec::new(); mesh.positions.len()];
+        for (t, tri) in mesh.triangles.iter().enumerate() {
+            for k in 0..3 {
+                let entry = (w.corners[t][k], chart[t]);
+                let list: &mut Vec<(u32, u32)> = &mut of_vertex[tri[k] as usize];
+                if !list.contains(&entry) {
+                    list.push(entry);
+                }
+            }
+        }
+        Some(WedgeSides { chart, of_vertex })
+    }
+
+    /// The wedge of vertex `v` for a face standing for input triangle `t`.
+    pub fn wedge(&self, mesh: &TriMesh, t: usize, v: u32) -> u32 {
+        let w = mesh.wedges.as_ref().expect("WedgeSides::new had wedges");
+        if let Some(k) = mesh.triangles[t].iter().position(|x| *x == v) {
+            return w.corners[t][k];
+        }
+        let list = &self.of_vertex[v as usize];
+        let centre = w
+            .uvs
+            .as_ref()
+            .map(|u| w.corners[t].iter().map(|c| u[*c as usize]).sum::<Vec2>() / 3.0);
+        let far = |x: u32| match (centre, &w.uvs) {
+            (Some(c), Some(u)) => u[x as usize].distance_squared(c),
+            _ => 0.0,
+        };
+        let in_chart = list.iter().filter(|(_, c)| *c == self.chart[t]);
+        let pick = |it: &mut dyn Iterator<Item = &(u32, u32)>| {
+            it.map(|(x, _)| *x)
+                .min_by(|a, b| far(*a).total_cmp(&far(*b)))
+        };
+        pick(&mut in_chart.clone())
+            .or_else(|| pick(&mut list.iter()))
+            .unwrap_or(w.corners[t][0])
+    }
+}
+
 impl TriMesh {
     /// The corner wedges of triangle `t` (its vertices when the mesh has no wedges).
     pub fn corner_wedges(&self, t: usize) -> [u32; 3] {

@@ -527,7 +527,14 @@ mod tests {
             serde_json::json!({"magFilter": 9729, "wrapS": 10497, "wrapT": 33648})
         );
         let back = read(&glb, None).unwrap();
-        assert_eq!(back.materials, m.materials);
+        // Read back, each material says which attributes its primitive has:
+        // the textured part's white COLOR_0 was left out.
+        let mut expected = m.materials.clone().unwrap();
+        expected.table[0].vertex_attributes = VertexAttributes {
+            colors: false,
+            uvs: true,
+        };
+        assert_eq!(back.materials, Some(expected));
         assert_eq!(back.triangles.len(), m.triangles.len());
         assert_eq!(back.part_count(), 2);
         // The textured part's vertex colour is white: no COLOR_0 was written for it.

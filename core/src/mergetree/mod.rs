@@ -135,6 +135,9 @@ pub struct MergeTree {
     pub(crate) triangles: Vec<[u32; 3]>,
     /// The input triangle each one stands for (its orientation and part).
     pub(crate) origin: Vec<u32>,
+    /// Each one's corner wedges, on its input triangle's side of every seam
+    /// (`geom::wedges`); `None` when the input has no wedges.
+    pub(crate) corner_wedges: Option<Vec<[u32; 3]>>,
     pub(crate) merges: Vec<Merge>,
     pub(crate) nodes: Vec<Node>,
     /// Per merge, the node its parent vertex had before it ([`NONE`]: leaf).
@@ -176,6 +179,11 @@ pub fn build(
             ),
             ..mesh.clone()
         },
+        corner_wedges: crate::geom::wedges::WedgeSides::new(mesh).map(|sides| {
+            (built.triangles.iter().zip(&built.origin))
+                .map(|(tri, o)| tri.map(|v| sides.wedge(mesh, *o as usize, v)))
+                .collect()
+        }),
         triangles: built.triangles,
         origin: built.origin,
         merges: built.merges,

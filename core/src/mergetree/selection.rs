@@ -13,7 +13,7 @@ use fixedbitset::FixedBitSet;
 use super::criteria::Frame;
 use super::{Criteria, MergeTree, NONE, Node};
 use crate::cut::{DrawSet, Hierarchy};
-use crate::geom::TriMesh;
+use crate::geom::{TriMesh, Wedges};
 use crate::id_set::IdSet;
 use crate::view::{Tolerance, View};
 
@@ -373,6 +373,27 @@ impl MergeTreeView {
                 self.remap[v as usize]
             }));
         }
+        // The display triangles' wedges, numbered in order of use.
+        let wedges = src
+            .wedges
+            .as_ref()
+            .zip(tree.corner_wedges.as_ref())
+            .map(|(w, cw)| {
+                let mut wremap = vec![NONE; w.len()];
+                let mut worder = Vec::new();
+                let corners = (self.display.ones())
+                    .map(|t| {
+                        cw[t].map(|x| {
+                            if wremap[x as usize] == NONE {
+                                wremap[x as usize] = worder.len() as u32;
+                                worder.push(x);
+                            }
+                            wremap[x as usize]
+                        })
+                    })
+                    .collect();
+                Wedges::gathered(w, &worder, corners, |v| self.remap[v as usize])
+            });
         for &v in &order {
             self.remap[v as usize] = NONE;
         }
@@ -387,7 +408,7 @@ impl MergeTreeView {
                     .collect()
             }),
             materials: src.materials.clone(),
-            wedges: None,
+            wedges,
             triangles,
         };
         DrawSet {
