@@ -30,6 +30,37 @@ mod voxel;
 struct Cli {
     #[command(subcommand)]
     pub command: Option<Command>,
+    #[command(flatten)]
+    limits: LimitArgs,
+}
+
+/// Hard limits on what an input may make lodstudio allocate (io::limits).
+#[derive(Args, Debug)]
+struct LimitArgs {
+    /// Most bytes a gzip input may inflate to, e.g. 512M (default: a quarter
+    /// of the machine's memory; env LODSTUDIO_MAX_DECOMPRESSED).
+    #[arg(long, global = true, value_name = "SIZE", value_parser = io::limits::parse_size)]
+    max_decompressed: Option<u64>,
+    /// Memory budget that counts read from file headers are checked against
+    /// before anything is reserved, e.g. 8G (default: half the machine's
+    /// memory; env LODSTUDIO_MAX_MEMORY).
+    #[arg(long, global = true, value_name = "SIZE", value_parser = io::limits::parse_size)]
+    max_memory: Option<u64>,
+}
+
+impl LimitArgs {
+    /// Puts the limits in force: the options, else the environment, else the machine's.
+    fn apply(&self) -> Result<(), CliError> {
+        let mut limits = io::limits::Limits::from_env().map_err(CliError::BadInput)?;
+        if let Some(v) = self.max_decompressed {
+            limits.max_decompressed = v;
+        }
+        if let Some(v) = self.max_memory {
+            limits.memory_budget = v;
+        }
+        io::limits::set(limits);
+        Ok(())
+    }
 }
 
 #[derive(Subcommand, Debug)]
@@ -196,6 +227,7 @@ pub fn run() -> Result<(), CliError> {
             return Err(CliError::BadInput(format!("{line} (see --help)")));
         }
     };
+    cli.limits.apply()?;
     match cli.command {
         None => studio(None),
         Some(Command::Open { file }) => studio(Some(file)),

@@ -8,6 +8,7 @@ mod error;
 pub mod gltf;
 pub mod gltf_writer;
 pub mod hierarchy_file;
+pub mod limits;
 pub mod obj;
 pub mod off;
 pub mod ply;
@@ -20,9 +21,6 @@ pub use volume::{RawSpec, ScalarType};
 
 use crate::geom::{PointSet, RepairOptions, RepairReport, TriMesh, Volume};
 use crate::progress::Progress;
-
-/// Largest decompressed size accepted from a gzip stream (a bomb is an error, not an OOM).
-pub const MAX_DECOMPRESSED: u64 = 4 << 30;
 
 /// What a file holds.
 #[derive(Debug, Clone, PartialEq)]
@@ -122,7 +120,7 @@ pub fn load_bytes(
     let mut data = bytes;
     if is_gzip(data) {
         progress.stage("decompressing");
-        unzipped = gunzip(data, MAX_DECOMPRESSED).map_err(malformed)?;
+        unzipped = inflate_model(path, data, opts.raw.is_some())?;
         data = &unzipped;
     }
     progress.check()?;
@@ -205,18 +203,69 @@ pub fn is_gzip(data: &[u8]) -> bool {
     data.starts_with(&[0x1f, 0x8b])
 }
 
-/// Decompresses a gzip stream, refusing to produce more than `limit` bytes.
+/// Bytes of a gzip model inflated before its content is checked.
+const GZIP_HEAD: u64 = 64 << 10;
+
+/// Inflates a gzipped model: the first [`GZIP_HEAD`] bytes, which must start
+/// like a model format (by content, or text for a format named by the
+/// extension), then the rest up to the decompression cap. A bomb of zeros is
+/// refused after 64 KiB, a well-formed one at the cap, never by exhausting memory.
+fn inflate_model(path: &Path, data: &[u8], raw_given: bool) -> Result<Vec<u8>, LoadError> {
+    use std::io::Read;
+    let malformed = |e: ParseError| LoadError::malformed(path, e);
+    let cap = limits::current().max_decompressed;
+    let mut dec = flate2::read::MultiGzDecoder::new(data);
+    let mut out = Vec::new();
+    (&mut dec)
+        .take(GZIP_HEAD.min(cap + 1))
+        .read_to_end(&mut out)
+        .map_err(|e| malformed(bad_gzip(e)))?;
+    if !raw_given && detect_content(&out).is_none() {
+        let format = detect(path, &out, false)?;
+        let text = matches!(format, Format::Obj | Format::Off | Format::Gltf);
+        if !text || out.contains(&0) {
+            let start: Vec<String> = out.iter().take(8).map(|b| format!("{b:02x}")).collect();
+            return Err(malformed(ParseError::file(format!(
+                "expected a {} file inside the gzip stream, but its first bytes are {}",
+                format.name(),
+                start.join(" ")
+            ))));
+        }
+    }
+    dec.take(cap + 1 - out.len() as u64)
+        .read_to_end(&mut out)
+        .map_err(|e| malformed(bad_gzip(e)))?;
+    check_cap(out.len() as u64, cap).map_err(malformed)?;
+    Ok(out)
+}
+
+fn bad_gzip(e: std::io::Error) -> ParseError {
+    ParseError::file(format!("expected a valid gzip stream ({e})"))
+}
+
+fn check_cap(len: u64, cap: u64) -> ParseResult<()> {
+    if len <= cap {
+        return Ok(());
+    }
+    Err(ParseError::file(format!(
+        "expected at most {} after decompression, the cap (raise it with \
+         --max-decompressed or {})",
+        limits::format_size(cap),
+        limits::MAX_DECOMPRESSED_ENV
+    )))
+}
+
+/// Decompresses a gzip stream (inside a file, e.g. NRRD's gzip encoding),
+/// refusing to produce more than the decompression cap or `limit`.
 pub fn gunzip(data: &[u8], limit: u64) -> ParseResult<Vec<u8>> {
     use std::io::Read;
+    let cap = limit.min(limits::current().max_decompressed);
     let mut out = Vec::new();
-    let mut dec = flate2::read::MultiGzDecoder::new(data).take(limit + 1);
-    dec.read_to_end(&mut out)
-        .map_err(|e| ParseError::file(format!("expected a valid gzip stream ({e})")))?;
-    if out.len() as u64 > limit {
-        return Err(ParseError::file(format!(
-            "expected at most {limit} bytes after decompression"
-        )));
-    }
+    flate2::read::MultiGzDecoder::new(data)
+        .take(cap + 1)
+        .read_to_end(&mut out)
+        .map_err(bad_gzip)?;
+    check_cap(out.len() as u64, cap)?;
     Ok(out)
 }
 
@@ -235,44 +284,14 @@ pub fn detect(path: &Path, data: &[u8], raw_given: bool) -> Result<Format, LoadE
     if raw_given {
         return Ok(Format::Raw);
     }
-    if data.starts_with(b"glTF") {
-        return Ok(Format::Glb);
-    }
-    if data.starts_with(b"ply") && matches!(data.get(3), Some(b'\n' | b'\r')) {
-        return Ok(Format::Ply);
-    }
-    if data.starts_with(b"NRRD000") {
-        return Ok(Format::Nrrd);
-    }
-    if data.starts_with(b"#INRIMAGE-4#{") {
-        return Ok(Format::Inr);
-    }
-    if volume::is_nifti(data) {
-        return Ok(Format::Nifti);
-    }
-    let head = &data[..data.len().min(4096)];
-    let first_token = head
-        .split(|b| b.is_ascii_whitespace())
-        .find(|t| !t.is_empty() && !t.starts_with(b"#"))
-        .unwrap_or(&[]);
-    if matches!(
-        first_token,
-        b"OFF" | b"COFF" | b"NOFF" | b"CNOFF" | b"STOFF" | b"NCOFF"
-    ) {
-        return Ok(Format::Off);
-    }
-    if hierarchy_file::is_hierarchy(data) {
-        return Ok(Format::Hierarchy);
-    }
-    let trimmed = head.trim_ascii_start();
-    if trimmed.starts_with(b"{") && head.windows(7).any(|w| w == b"\"asset\"") {
-        return Ok(Format::Gltf);
+    if let Some(format) = detect_content(data) {
+        return Ok(format);
     }
     let ext = extension(path);
     if let Some(&(_, format)) = EXTENSIONS.iter().find(|(e, _)| *e == ext) {
         return Ok(format);
     }
-    if obj::looks_like_obj(head) {
+    if obj::looks_like_obj(&data[..data.len().min(4096)]) {
         return Ok(Format::Obj);
     }
     if ext == "raw" {
@@ -283,6 +302,45 @@ pub fn detect(path: &Path, data: &[u8], raw_given: bool) -> Result<Format, LoadE
     Err(unknown(
         "not OBJ, glTF/GLB, PLY, OFF, NRRD, NIfTI-1 or INRIMAGE-4 by content or extension",
     ))
+}
+
+/// The format `data` announces by its first bytes (a magic, a header token
+/// or glTF's JSON), if any.
+fn detect_content(data: &[u8]) -> Option<Format> {
+    if data.starts_with(b"glTF") {
+        return Some(Format::Glb);
+    }
+    if data.starts_with(b"ply") && matches!(data.get(3), Some(b'\n' | b'\r')) {
+        return Some(Format::Ply);
+    }
+    if data.starts_with(b"NRRD000") {
+        return Some(Format::Nrrd);
+    }
+    if data.starts_with(b"#INRIMAGE-4#{") {
+        return Some(Format::Inr);
+    }
+    if volume::is_nifti(data) {
+        return Some(Format::Nifti);
+    }
+    let head = &data[..data.len().min(4096)];
+    let first_token = head
+        .split(|b| b.is_ascii_whitespace())
+        .find(|t| !t.is_empty() && !t.starts_with(b"#"))
+        .unwrap_or(&[]);
+    if matches!(
+        first_token,
+        b"OFF" | b"COFF" | b"NOFF" | b"CNOFF" | b"STOFF" | b"NCOFF"
+    ) {
+        return Some(Format::Off);
+    }
+    if hierarchy_file::is_hierarchy(data) {
+        return Some(Format::Hierarchy);
+    }
+    let trimmed = head.trim_ascii_start();
+    if trimmed.starts_with(b"{") && head.windows(7).any(|w| w == b"\"asset\"") {
+        return Some(Format::Gltf);
+    }
+    None
 }
 
 /// Model formats by file extension (after any `.gz`).

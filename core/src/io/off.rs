@@ -141,6 +141,9 @@ pub fn read(data: &[u8], progress: &Progress) -> ParseResult<Model> {
         ));
     }
 
+    super::limits::check_items("vertices", nv, 12 * (1 + 2) + 8)
+        .and_then(|()| super::limits::check_items("faces", nf, 12))
+        .map_err(|e| ParseError::line(counts_line, e.expected))?;
     let mut positions = Vec::with_capacity(nv);
     let mut normals = lay.normals.then(|| Vec::with_capacity(nv));
     let mut colors = lay.colors.then(|| Vec::with_capacity(nv));
