@@ -36,8 +36,9 @@ pub fn run(args: InfoArgs) -> Result<(), CliError> {
     if let Ok(bytes) = std::fs::read(&file)
         && io::hierarchy_file::is_hierarchy(&bytes)
     {
-        // A saved hierarchy: what it holds, checked whole.
-        let h = io::hierarchy_file::peek(&bytes)
+        // A saved hierarchy: what it holds, checked whole (decoded and its
+        // invariants verified, as a cut would reopen it).
+        let (h, _) = io::hierarchy_file::reopen(&bytes)
             .map_err(|e| CliError::BadInput(format!("{}: {e}", file.display())))?;
         let j = serde_json::json!({
             "file": file.display().to_string(),

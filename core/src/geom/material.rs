@@ -92,6 +92,12 @@ pub struct Materials {
 }
 
 impl Materials {
+    /// Index ranges for triangles of `parts` (for materials read from a saved file).
+    pub fn check(&self, parts: &[u32]) -> Result<(), String> {
+        super::check_indices("material", self.of_part.iter().copied(), self.table.len())?;
+        super::check_indices("part", parts.iter().copied(), self.of_part.len())
+    }
+
     /// One material for a mesh of one part.
     pub fn single(m: Material) -> Self {
         Self {

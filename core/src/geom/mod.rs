@@ -16,6 +16,27 @@ pub use repair::{RepairOptions, RepairReport, Weld};
 pub use topology::{ComponentTopology, Topology};
 pub use wedges::Wedges;
 
+/// Refuses an index of `what` at or past `len` (a structure read from a
+/// file is checked before anything indexes with it).
+pub fn check_indices(
+    what: &str,
+    ids: impl IntoIterator<Item = u32>,
+    len: usize,
+) -> Result<(), String> {
+    match ids.into_iter().find(|&i| i as usize >= len) {
+        Some(i) => Err(format!("{what} {i} out of range (only {len})")),
+        None => Ok(()),
+    }
+}
+
+/// Refuses per-item attributes whose count is not `len`.
+pub fn check_len<T>(what: &str, items: Option<&Vec<T>>, len: usize) -> Result<(), String> {
+    match items {
+        Some(v) if v.len() != len => Err(format!("{} {what} for {len} items", v.len())),
+        _ => Ok(()),
+    }
+}
+
 /// Axis-aligned bounding box.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Aabb {
@@ -102,6 +123,24 @@ impl TriMesh {
             triangles,
             ..Self::default()
         }
+    }
+
+    /// Every index in range and every attribute the size of what it
+    /// describes (for a mesh read from a saved file, before any use).
+    pub fn check(&self) -> Result<(), String> {
+        let (nv, nt) = (self.positions.len(), self.triangles.len());
+        check_indices("vertex", self.triangles.iter().flatten().copied(), nv)?;
+        check_len("normals", self.normals.as_ref(), nv)?;
+        check_len("colours", self.colors.as_ref(), nv)?;
+        check_len("UVs", self.uvs.as_ref(), nv)?;
+        check_len("parts", self.parts.as_ref(), nt)?;
+        if let Some(m) = &self.materials {
+            m.check(self.parts.as_deref().unwrap_or(&[0]))?;
+        }
+        if let Some(w) = &self.wedges {
+            w.check(nt, nv)?;
+        }
+        Ok(())
     }
 
     pub fn bounds(&self) -> Aabb {

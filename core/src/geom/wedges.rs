@@ -34,6 +34,23 @@ fn bits<const N: usize>(v: [f32; N]) -> [u32; N] {
 }
 
 impl Wedges {
+    /// Index ranges and sizes against a mesh of `triangles` on `vertices`
+    /// vertices (for wedges read from a saved file).
+    pub fn check(&self, triangles: usize, vertices: usize) -> Result<(), String> {
+        if self.corners.len() != triangles {
+            return Err(format!(
+                "{} wedge corners for {triangles} triangles",
+                self.corners.len()
+            ));
+        }
+        let n = self.vertex.len();
+        super::check_indices("wedge", self.corners.iter().flatten().copied(), n)?;
+        super::check_indices("wedge vertex", self.vertex.iter().copied(), vertices)?;
+        super::check_len("wedge normals", self.normals.as_ref(), n)?;
+        super::check_len("wedge colours", self.colors.as_ref(), n)?;
+        super::check_len("wedge UVs", self.uvs.as_ref(), n)
+    }
+
     /// The wedges of `records` (one attribute set per vertex record, as read)
     /// once records are welded by `remap` (record → vertex): equal attribute
     /// sets of one vertex share a wedge. `None` when every vertex keeps a

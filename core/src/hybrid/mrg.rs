@@ -426,6 +426,7 @@ impl Mrg {
     /// produced by the drain, errors not decreasing upwards, node spheres
     /// containing their children's and arc spheres their primitives.
     pub fn check(&self) -> Result<(), String> {
+        self.check_ranges()?;
         let n = self.nodes.len();
         if n < 2 || self.nodes[0].kind != NodeKind::Drain {
             return Err("node 0 is not the drain".into());
@@ -486,6 +487,41 @@ impl Mrg {
         }
         if let Some(q) = pt_seen.iter().position(|s| s[0] != 1) {
             return Err(format!("point {q} on {} arcs", pt_seen[q][0]));
+        }
+        Ok(())
+    }
+
+    /// Every index in range and every attribute the size of what it
+    /// describes, before [`Mrg::check`] follows any of them.
+    fn check_ranges(&self) -> Result<(), String> {
+        use crate::geom::{check_indices, check_len};
+        let (nv, nt) = (self.positions.len(), self.triangles.len());
+        check_len("colours", self.colors.as_ref(), nv)?;
+        check_len("normals", self.normals.as_ref(), nv)?;
+        check_len("UVs", self.uvs.as_ref(), nv)?;
+        check_indices("vertex", self.triangles.iter().flatten().copied(), nv)?;
+        // No parts: every triangle is in part 0.
+        if !self.parts.is_empty() {
+            check_len("parts", Some(&self.parts), nt)?;
+        }
+        if let Some(m) = &self.materials {
+            m.check(if self.parts.is_empty() { &[0] } else { &self.parts })?;
+        }
+        if let Some(w) = &self.wedges {
+            w.check(nt, nv)?;
+        }
+        if self.input_triangles > nt {
+            return Err(format!("{} input triangles of {nt}", self.input_triangles));
+        }
+        for a in &self.arcs {
+            check_indices("triangle", a.triangles.iter().copied(), nt)?;
+            check_indices("point", a.points.iter().copied(), self.points.len())?;
+            check_indices("node", [a.producer, a.consumer], self.nodes.len())?;
+        }
+        let arcs = self.nodes.iter().flat_map(|n| n.children.iter().chain(&n.parents));
+        check_indices("arc", arcs.copied(), self.arcs.len())?;
+        if !(self.diagonal.is_finite() && self.diagonal >= 0.0 && self.kappa.is_finite()) {
+            return Err("diagonal or kappa not finite".into());
         }
         Ok(())
     }

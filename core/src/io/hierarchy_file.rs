@@ -48,6 +48,8 @@ pub enum HierarchyFileError {
     WrongMethod { found: String, expected: String },
     #[error("corrupted {what}: {why}")]
     Corrupt { what: &'static str, why: String },
+    #[error("{0}")]
+    OverBudget(String),
 }
 
 /// What a file says about itself before its body is read.
@@ -163,6 +165,9 @@ pub fn load<T: DeserializeOwned>(
             expected: method.to_string(),
         });
     }
+    // The decoded structures are about the size of their encoding.
+    super::limits::check_budget("the saved hierarchy's body", body.len() as u64)
+        .map_err(|e| HierarchyFileError::OverBudget(e.expected))?;
     let value =
         codec(body.len() as u64)
             .deserialize(body)
@@ -191,6 +196,8 @@ pub fn reopen(
         }
         "mergetree" => {
             let (_, tree) = load::<crate::mergetree::MergeTree>(bytes, "mergetree")?;
+            tree.check()
+                .map_err(|why| HierarchyFileError::Corrupt { what: "tree", why })?;
             Box::new(crate::mergetree::MergeTreeView::new(
                 Arc::new(tree),
                 Default::default(),

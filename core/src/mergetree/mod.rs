@@ -104,6 +104,18 @@ impl Csr {
         self.items.len()
     }
 
+    /// `rows` rows with items below `len`, offsets rising to the item count.
+    fn check(&self, what: &str, rows: usize, len: usize) -> Result<(), String> {
+        let offsets_fit = self.start.len() == rows + 1
+            && self.start.first() == Some(&0)
+            && self.start.windows(2).all(|w| w[0] <= w[1])
+            && self.start.last().map(|&e| e as usize) == Some(self.items.len());
+        if !offsets_fit {
+            return Err(format!("{what}: rows do not match the merges"));
+        }
+        crate::geom::check_indices(what, self.items.iter().copied(), len)
+    }
+
     /// Rows `0..rows` from `(row, item)` pairs.
     pub(crate) fn from_pairs(rows: usize, pairs: &mut [(u32, u32)]) -> Csr {
         pairs.sort_unstable();
@@ -201,6 +213,39 @@ pub fn build(
 impl MergeTree {
     /// Vertices present at each level, finest first; its length is the tree's
     /// depth (§6, Table 1).
+    /// Every index in range and every per-merge table one row per merge
+    /// (a tree read from a saved file is checked before any cut).
+    pub fn check(&self) -> Result<(), String> {
+        use crate::geom::{check_indices, check_len};
+        self.mesh.check()?;
+        let (nv, nm, nt) = (
+            self.mesh.positions.len(),
+            self.merges.len(),
+            self.triangles.len(),
+        );
+        check_indices("vertex", self.triangles.iter().flatten().copied(), nv)?;
+        check_len("origins", Some(&self.origin), nt)?;
+        check_indices("input triangle", self.origin.iter().copied(), self.mesh.triangles.len())?;
+        if let Some(c) = &self.corner_wedges {
+            let wedges = self.mesh.wedges.as_ref().map_or(0, |w| w.vertex.len());
+            check_len("corner wedges", Some(c), nt)?;
+            check_indices("wedge", c.iter().flatten().copied(), wedges)?;
+        }
+        check_indices("merge vertex", self.merges.iter().flat_map(|m| [m.child, m.parent]), nv)?;
+        check_len("nodes", Some(&self.nodes), nm)?;
+        check_len("previous nodes", Some(&self.previous), nm)?;
+        let previous = self.previous.iter().copied().filter(|&p| p != NONE);
+        check_indices("previous node", previous, nm)?;
+        self.removed.check("removed triangle", nm, nt)?;
+        self.added.check("added triangle", nm, nt)?;
+        self.requires.check("required merge", nm, nm)?;
+        self.dependents.check("dependent merge", nm, nm)?;
+        if !(self.diagonal.is_finite() && self.diagonal >= 0.0) {
+            return Err("diagonal not finite".into());
+        }
+        Ok(())
+    }
+
     pub fn levels(&self) -> &[usize] {
         &self.levels
     }
@@ -272,6 +317,27 @@ mod tests {
         (0..tree.merges().len()).all(|k| {
             !view.is_merged(k) || tree.requires(k).iter().all(|j| view.is_merged(*j as usize))
         })
+    }
+
+    /// A built tree passes the reopen check; each kind of damage a file can
+    /// carry is refused by it.
+    #[test]
+    fn check_accepts_built_trees_and_refuses_broken_indices() {
+        let mesh = icosphere(Vec3::ZERO, 1.0, 2);
+        let tree = build(&mesh, &MergeTreeOptions::default(), &Progress::new()).unwrap();
+        assert_eq!(tree.check(), Ok(()));
+        let damaged: [fn(&mut MergeTree); 5] = [
+            |t| t.merges[0].child = u32::MAX,
+            |t| t.triangles[3][1] = t.mesh.positions.len() as u32,
+            |t| t.previous.pop().map(drop).unwrap_or(()),
+            |t| t.added.start[1] = u32::MAX,
+            |t| t.requires.items.push(t.merges.len() as u32),
+        ];
+        for (k, damage) in damaged.iter().enumerate() {
+            let mut t = tree.clone();
+            damage(&mut t);
+            assert!(t.check().is_err(), "damage {k} passed the check");
+        }
     }
 
     #[test]
