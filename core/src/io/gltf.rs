@@ -14,7 +14,26 @@ use glam::{Mat3, Mat4, Vec2, Vec3};
 use super::error::{ParseError, ParseResult};
 use crate::geom::{AlphaMode, Image, Material, Materials, TriMesh, VertexAttributes};
 
+/// The gltf crate subtracts the 12-byte header from a GLB's declared length
+/// unchecked (an overflow panic under debug assertions, found by fuzzing), so
+/// a declared length shorter than the header is refused here first.
+fn check_glb_length(data: &[u8]) -> ParseResult<()> {
+    if let Some(length) = data
+        .strip_prefix(b"glTF")
+        .and_then(|rest| rest.get(4..8))
+        .map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+    {
+        if length < 12 {
+            return Err(ParseError::file(format!(
+                "expected a GLB length of at least its 12-byte header, found {length}"
+            )));
+        }
+    }
+    Ok(())
+}
+
 pub fn read(data: &[u8], base: Option<&Path>) -> ParseResult<TriMesh> {
+    check_glb_length(data)?;
     let g = gltf::Gltf::from_slice(data)
         .map_err(|e| ParseError::file(format!("expected valid glTF 2.0 ({e})")))?;
     let buffers = gltf::import_buffers(&g.document, base, g.blob.clone())
