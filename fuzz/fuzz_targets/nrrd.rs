@@ -1,0 +1,6 @@
+//! The NRRD reader (raw, ascii and gzip encodings, both byte orders).
+#![no_main]
+libfuzzer_sys::fuzz_target!(|data: &[u8]| {
+    lodstudio_fuzz::setup();
+    let _ = lodstudio_core::io::volume::read_nrrd(data);
+});
