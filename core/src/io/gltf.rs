@@ -22,20 +22,47 @@ fn check_glb_length(data: &[u8]) -> ParseResult<()> {
         .strip_prefix(b"glTF")
         .and_then(|rest| rest.get(4..8))
         .map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+        && length < 12
     {
-        if length < 12 {
-            return Err(ParseError::file(format!(
-                "expected a GLB length of at least its 12-byte header, found {length}"
-            )));
-        }
+        return Err(ParseError::file(format!(
+            "expected a GLB length of at least its 12-byte header, found {length}"
+        )));
     }
     Ok(())
 }
 
-pub fn read(data: &[u8], base: Option<&Path>) -> ParseResult<TriMesh> {
+/// Parses and validates `data`. The crate's validation reads each primitive's
+/// `POSITION` accessor before it checks that index (a panic on a hostile
+/// file, found by fuzzing), so those indices are checked here first.
+fn parse(data: &[u8]) -> ParseResult<gltf::Gltf> {
     check_glb_length(data)?;
-    let g = gltf::Gltf::from_slice(data)
-        .map_err(|e| ParseError::file(format!("expected valid glTF 2.0 ({e})")))?;
+    let invalid = |e: gltf::Error| ParseError::file(format!("expected valid glTF 2.0 ({e})"));
+    let gltf::Gltf { document, blob } =
+        gltf::Gltf::from_slice_without_validation(data).map_err(invalid)?;
+    let root = document.as_json();
+    for (m, mesh) in root.meshes.iter().enumerate() {
+        for (p, prim) in mesh.primitives.iter().enumerate() {
+            let position = gltf::json::validation::Checked::Valid(gltf::Semantic::Positions);
+            if let Some(index) = prim.attributes.get(&position)
+                && index.value() >= root.accessors.len()
+            {
+                return Err(ParseError::item(
+                    format!("mesh {m} primitive {p}"),
+                    format!(
+                        "expected a POSITION accessor among the {} accessors, found index {}",
+                        root.accessors.len(),
+                        index.value()
+                    ),
+                ));
+            }
+        }
+    }
+    let document = gltf::Document::from_json(document.into_json()).map_err(invalid)?;
+    Ok(gltf::Gltf { document, blob })
+}
+
+pub fn read(data: &[u8], base: Option<&Path>) -> ParseResult<TriMesh> {
+    let g = parse(data)?;
     let buffers = gltf::import_buffers(&g.document, base, g.blob.clone())
         .map_err(|e| ParseError::file(format!("expected readable glTF buffers ({e})")))?;
     let mut mesh = TriMesh::default();
@@ -127,8 +154,9 @@ fn check_accessor(acc: &gltf::Accessor, buffers: &[gltf::buffer::Data]) -> Parse
     let elem = acc.size();
     let stride = view.stride().unwrap_or(elem);
     let count = acc.count();
+    // glTF 2.0 requires count ≥ 1, and the gltf crate's reader subtracts 1 from it.
     if count == 0 {
-        return Ok(());
+        return Err(ParseError::item(what(), "expected at least one element"));
     }
     let end = (count - 1)
         .checked_mul(stride)
