@@ -157,6 +157,7 @@ pub fn load_bytes(
     progress.check()?;
     let loaded = finish(model, format, opts);
     check_not_empty(path, &loaded)?;
+    check_extent(path, &loaded)?;
     Ok(loaded)
 }
 
@@ -184,6 +185,27 @@ fn finish(model: Model, format: Format, opts: &LoadOptions) -> Loaded {
             repairs: RepairReport::default(),
         },
     }
+}
+
+/// Finite coordinates can still span more than f32 holds: a bounding box
+/// whose diagonal overflows leaves no tolerance, bound or grid meaningful (a
+/// fuzz find: such a mesh broke the hybrid build's invariants).
+fn check_extent(path: &Path, loaded: &Loaded) -> Result<(), LoadError> {
+    let bounds = match &loaded.model {
+        Model::Mesh(m) => m.bounds(),
+        Model::Points(p) => p.bounds(),
+        Model::Volume(v) => v.bounds(),
+    };
+    if bounds.diagonal().is_finite() {
+        return Ok(());
+    }
+    Err(LoadError::malformed(
+        path,
+        ParseError::file(format!(
+            "expected coordinates within f32 range of each other, found a bounding box from {} to {} whose diagonal overflows",
+            bounds.min, bounds.max
+        )),
+    ))
 }
 
 fn check_not_empty(path: &Path, loaded: &Loaded) -> Result<(), LoadError> {
@@ -401,7 +423,11 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
         .filter(|d| !d.as_os_str().is_empty())
         .unwrap_or(Path::new("."));
     let name = path.file_name().unwrap_or_default().to_string_lossy();
-    let tmp: PathBuf = dir.join(format!(".{name}.tmp{}", std::process::id()));
+    // Unique per process and per write, so concurrent writes of one path
+    // (an autosave and an export, two studios) never share a temporary.
+    static WRITES: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
+    let n = WRITES.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    let tmp: PathBuf = dir.join(format!(".{name}.tmp{}-{n}", std::process::id()));
     let result = (|| {
         let mut f = std::fs::File::create(&tmp)?;
         f.write_all(bytes)?;
