@@ -125,6 +125,12 @@ pub fn build_observed(
         let mut guard = queue.lock().unwrap_or_else(|e| e.into_inner());
         let q = &mut *guard;
         col.star_into(cand.edge, &mut q.star);
+        // A collapse that removes its whole star (a closed pillow of two
+        // triangles) would make a node that produces nothing: the piece stays
+        // for point replacement or the source instead of vanishing.
+        if q.star.len() <= cand.triangles_removed {
+            return f64::INFINITY;
+        }
         let value = tau * q.deviation(col, cand) / cand.triangles_removed.max(1) as f64;
         if kappa > 1.0 {
             if q.replacement.len() < col.triangle_total() {
@@ -540,6 +546,18 @@ pub(crate) mod tests {
         watcher.join().unwrap();
         assert!(r.is_err());
         assert_eq!(progress.stage_name(), "hybrid: collapsing edges");
+    }
+
+    /// Two triangles on the same three vertices (a closed "pillow", the
+    /// smallest closed surface; fuzz find) still make a valid graph.
+    #[test]
+    fn a_pillow_of_two_triangles_makes_a_valid_graph() {
+        for scale in [1.0, 2.2e18] {
+            let p = [Vec3::ZERO, Vec3::X * scale, Vec3::Y * scale];
+            let mesh = TriMesh::new(p.to_vec(), vec![[0, 1, 2], [0, 2, 1]]);
+            let mrg = build(&mesh, &HybridOptions::default(), &Progress::new()).unwrap();
+            assert_eq!(mrg.check(), Ok(()), "scale {scale}");
+        }
     }
 
     #[test]

@@ -224,6 +224,21 @@ pub fn smallest_distance(tri: &[Vec3; 3], s: usize) -> f32 {
     hi
 }
 
+/// The triangle moved to its first vertex and scaled so its largest
+/// coordinate offset is 1, with that scale: the construction is
+/// scale-invariant, and areas of triangles near f32's range would overflow.
+fn unit(tri: &[Vec3; 3]) -> ([Vec3; 3], f32) {
+    let scale = (1..3)
+        .map(|i| (tri[i] - tri[0]).abs().max_element())
+        .fold(0.0, f32::max);
+    let scale = if scale > 0.0 && scale.is_finite() {
+        scale
+    } else {
+        1.0
+    };
+    (tri.map(|p| (p - tri[0]) / scale), scale)
+}
+
 /// Sample counts worth trying: 1 ≤ s < κ (s ≤ ⌊κ⌋ and a positive benefit).
 fn counts(kappa: f32) -> impl Iterator<Item = usize> {
     let max = if kappa.is_finite() && kappa > 1.0 {
@@ -237,9 +252,11 @@ fn counts(kappa: f32) -> impl Iterator<Item = usize> {
 /// The optimisation value of replacing `tri` (nominal r = d/√2, §5.3.2), or
 /// infinity when κ ≤ 1 (no replacement can reduce the primitive count).
 pub fn value(tri: &[Vec3; 3], kappa: f32) -> f64 {
+    let (tri, scale) = unit(tri);
     counts(kappa)
         .map(|s| {
-            let r = smallest_distance(tri, s) as f64 / std::f64::consts::SQRT_2;
+            let d = smallest_distance(&tri, s) as f64 * scale as f64;
+            let r = d / std::f64::consts::SQRT_2;
             r / (1.0 - s as f64 / kappa as f64)
         })
         .fold(f64::INFINITY, f64::min)
@@ -247,10 +264,20 @@ pub fn value(tri: &[Vec3; 3], kappa: f32) -> f64 {
 
 /// The replacement with the smallest cost/benefit, with its samples; None when κ ≤ 1.
 pub fn best(tri: &[Vec3; 3], kappa: f32) -> Option<Replacement> {
+    let (unit_tri, scale) = unit(tri);
     counts(kappa)
         .map(|s| {
-            let distance = smallest_distance(tri, s);
-            let samples = sample(tri, distance);
+            let d = smallest_distance(&unit_tri, s);
+            let distance = d * scale;
+            let samples: Vec<Sample> = sample(&unit_tri, d)
+                .into_iter()
+                .map(|q| Sample {
+                    center: tri[0] + q.center * scale,
+                    radius: q.radius * scale,
+                    area: q.area * scale * scale,
+                    ..q
+                })
+                .collect();
             let radius = samples.iter().map(|q| q.radius).fold(0.0, f32::max);
             let benefit = 1.0 - samples.len() as f64 / kappa as f64;
             Replacement {

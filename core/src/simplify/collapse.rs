@@ -805,15 +805,18 @@ impl EdgeCollapser {
                     // or a lower bound: if the real cost is above what is queued
                     // next, the edge waits its real turn.
                     let cost = (self.cost)(&cand, self);
+                    // An infinite cost forbids the collapse, even as the last
+                    // edge queued (as `push` never queues one).
+                    if !cost.is_finite() {
+                        continue;
+                    }
                     let alive = &self.v_alive;
                     let next = self
                         .queue
                         .peek(|e| alive[e.a as usize] && alive[e.b as usize])
                         .map_or(f64::INFINITY, |n| n.cost);
                     if cost > next * (1.0 + 1e-9) + f64::MIN_POSITIVE {
-                        if cost.is_finite() {
-                            self.queue.push(Entry { cost, ..e });
-                        }
+                        self.queue.push(Entry { cost, ..e });
                         continue;
                     }
                     return Some(self.collapse(&cand, cost));
