@@ -505,7 +505,11 @@ impl Mrg {
             check_len("parts", Some(&self.parts), nt)?;
         }
         if let Some(m) = &self.materials {
-            m.check(if self.parts.is_empty() { &[0] } else { &self.parts })?;
+            m.check(if self.parts.is_empty() {
+                &[0]
+            } else {
+                &self.parts
+            })?;
         }
         if let Some(w) = &self.wedges {
             w.check(nt, nv)?;
@@ -518,7 +522,10 @@ impl Mrg {
             check_indices("point", a.points.iter().copied(), self.points.len())?;
             check_indices("node", [a.producer, a.consumer], self.nodes.len())?;
         }
-        let arcs = self.nodes.iter().flat_map(|n| n.children.iter().chain(&n.parents));
+        let arcs = self
+            .nodes
+            .iter()
+            .flat_map(|n| n.children.iter().chain(&n.parents));
         check_indices("arc", arcs.copied(), self.arcs.len())?;
         if !(self.diagonal.is_finite() && self.diagonal >= 0.0 && self.kappa.is_finite()) {
             return Err("diagonal or kappa not finite".into());

@@ -113,7 +113,7 @@ pub fn check_budget(what: &str, bytes: u64) -> Result<(), ParseError> {
 
 /// `count` items of `each` bytes against the budget (overflow is over it).
 pub fn check_items(what: &str, count: usize, each: usize) -> Result<(), ParseError> {
-    let bytes = (count as u64).checked_mul(each as u64).unwrap_or(u64::MAX);
+    let bytes = (count as u64).saturating_mul(each as u64);
     check_budget(&format!("{count} {what}"), bytes)
 }
 
@@ -143,7 +143,9 @@ pub fn parse_size(text: &str) -> Result<u64, String> {
     };
     let bytes = value * scale as f64;
     if !(bytes >= 1.0 && bytes < u64::MAX as f64) {
-        return Err(format!("expected a size of at least one byte, got {text:?}"));
+        return Err(format!(
+            "expected a size of at least one byte, got {text:?}"
+        ));
     }
     Ok(bytes as u64)
 }

@@ -1457,11 +1457,7 @@ end_header\r
 
     #[test]
     fn reads_dragon_ascii_mesh() {
-        let data = super::super::gunzip(
-            &shared("dragon_vrip.ply.gz"),
-            u64::MAX,
-        )
-        .unwrap();
+        let data = super::super::gunzip(&shared("dragon_vrip.ply.gz"), u64::MAX).unwrap();
         let p = Progress::new();
         let m = match read(&data, &p).unwrap() {
             Model::Mesh(m) => m,

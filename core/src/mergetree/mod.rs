@@ -225,13 +225,21 @@ impl MergeTree {
         );
         check_indices("vertex", self.triangles.iter().flatten().copied(), nv)?;
         check_len("origins", Some(&self.origin), nt)?;
-        check_indices("input triangle", self.origin.iter().copied(), self.mesh.triangles.len())?;
+        check_indices(
+            "input triangle",
+            self.origin.iter().copied(),
+            self.mesh.triangles.len(),
+        )?;
         if let Some(c) = &self.corner_wedges {
             let wedges = self.mesh.wedges.as_ref().map_or(0, |w| w.vertex.len());
             check_len("corner wedges", Some(c), nt)?;
             check_indices("wedge", c.iter().flatten().copied(), wedges)?;
         }
-        check_indices("merge vertex", self.merges.iter().flat_map(|m| [m.child, m.parent]), nv)?;
+        check_indices(
+            "merge vertex",
+            self.merges.iter().flat_map(|m| [m.child, m.parent]),
+            nv,
+        )?;
         check_len("nodes", Some(&self.nodes), nm)?;
         check_len("previous nodes", Some(&self.previous), nm)?;
         let previous = self.previous.iter().copied().filter(|&p| p != NONE);
