@@ -7,6 +7,7 @@ pub mod heatmap;
 pub mod job;
 pub mod live_cut;
 pub mod panels;
+pub mod session;
 pub mod studio;
 pub mod viewport;
 

@@ -26,12 +26,9 @@ use crate::job::{Job, Poll};
 use crate::live_cut::{self, CutStyle};
 use crate::panels::voxel::VolumeGrid;
 use crate::panels::{BuildParams, Method, MethodSettings};
+use crate::session::{Autosave, Session};
 use crate::viewport::{Scene, SceneStyle, Viewport};
 
-/// Storage key of the recent-files list (JSON array of paths).
-const RECENT_KEY: &str = "lodstudio.recent";
-/// Storage key of the chosen method and all method parameters (JSON).
-const METHODS_KEY: &str = "lodstudio.methods";
 /// With auto rebuild, a build starts once parameters have been still this long
 /// (seconds), so dragging a slider does not start a build every frame.
 const REBUILD_DELAY: f64 = 0.4;
@@ -67,6 +64,14 @@ fn display_name(path: &Path) -> String {
     }
     path.file_name()
         .map_or_else(|| text.to_string(), |n| n.to_string_lossy().into_owned())
+}
+
+/// `path` from the root (a session may restart in another folder).
+fn absolute(path: &Path) -> PathBuf {
+    match is_builtin(path) {
+        true => path.to_path_buf(),
+        false => std::path::absolute(path).unwrap_or_else(|_| path.to_path_buf()),
+    }
 }
 
 fn is_builtin(path: &Path) -> bool {
@@ -187,32 +192,78 @@ pub struct StudioApp {
     /// Colour the simplified mesh by each triangle's certified bound.
     heat: bool,
     export: Option<Job<Saved>>,
+    autosave: Autosave,
 }
 
 impl StudioApp {
-    /// Called by eframe: restores recent files and opens `initial` (or the default model).
+    /// Called by eframe: reopens the last session (and its model unless
+    /// `initial` names one), or opens the default model.
     pub fn new(cc: &eframe::CreationContext<'_>, initial: Option<PathBuf>) -> Self {
+        let reopen_model = initial.is_none();
         let mut app = Self::with_render_state(cc.wgpu_render_state.as_ref(), initial);
-        if let Some(storage) = cc.storage {
-            app.restore(storage);
-        }
+        app.resume(Autosave::from_env(), reopen_model);
         app
     }
 
-    /// Takes the recent files and method settings that [`eframe::App::save`]
-    /// stored; anything missing or unreadable keeps its default.
-    pub fn restore(&mut self, storage: &dyn eframe::Storage) {
-        if let Some(recent) = storage
-            .get_string(RECENT_KEY)
-            .and_then(|json| serde_json::from_str::<Vec<PathBuf>>(&json).ok())
-        {
-            self.recent = recent.into_iter().take(MAX_RECENT).collect();
+    /// Takes the session `autosave` holds (recent files, method settings,
+    /// thresholds and, with `reopen_model`, the model) and autosaves into it
+    /// from now on. A damaged session is reported and left for the defaults.
+    pub fn resume(&mut self, autosave: Autosave, reopen_model: bool) {
+        match autosave.load() {
+            Ok(Some(session)) => {
+                self.recent = session.recent.into_iter().take(MAX_RECENT).collect();
+                self.methods = session.methods;
+                if let Some((volume, threshold)) = session.volume_threshold {
+                    self.methods.voxel.threshold = Some(threshold);
+                    self.threshold_volume = Some(volume);
+                }
+                match session.model {
+                    Some(model) if reopen_model && (is_builtin(&model) || model.is_file()) => {
+                        self.info(format!(
+                            "Reopening the last session ({})",
+                            display_name(&model)
+                        ));
+                        self.pending = Some(model);
+                    }
+                    Some(model) if reopen_model => self.error(format!(
+                        "The last session's model {} is gone; opening the default model",
+                        model.display()
+                    )),
+                    _ => {}
+                }
+            }
+            Ok(None) => {}
+            Err(e) => self.error(e),
         }
-        if let Some(methods) = storage
-            .get_string(METHODS_KEY)
-            .and_then(|json| MethodSettings::from_json(&json))
-        {
-            self.methods = methods;
+        self.autosave = autosave;
+    }
+
+    /// What the autosave keeps.
+    fn session(&self) -> Session {
+        Session {
+            model: self.current.as_ref().map(|c| absolute(&c.path)),
+            recent: self.recent.clone(),
+            methods: self.methods,
+            volume_threshold: self
+                .threshold_volume
+                .as_deref()
+                .map(absolute)
+                .zip(self.methods.voxel.threshold.filter(|t| t.is_finite())),
+        }
+    }
+
+    /// Autosaves when a check is due; otherwise asks for a frame when it will
+    /// be, so the last change before the studio goes idle is saved too.
+    fn autosave(&mut self, ctx: &egui::Context) {
+        match self.autosave.wait() {
+            Some(wait) if wait.is_zero() => {
+                let session = self.session();
+                if let Err(e) = self.autosave.offer(&session) {
+                    self.error(e);
+                }
+            }
+            Some(wait) => ctx.request_repaint_after(wait),
+            None => {}
         }
     }
 
@@ -248,6 +299,7 @@ impl StudioApp {
             view: View::Simplified,
             heat: false,
             export: None,
+            autosave: Autosave::off(),
         }
     }
 
@@ -346,6 +398,7 @@ impl StudioApp {
         self.poll_preview();
         self.poll_export();
         self.start_build_when_due(&ctx);
+        self.autosave(&ctx);
 
         egui::Panel::top("menu").show(ui, |ui| self.menu_bar(ui));
         egui::Panel::bottom("status")
@@ -1502,12 +1555,10 @@ impl eframe::App for StudioApp {
         self.show(ui);
     }
 
-    fn save(&mut self, storage: &mut dyn eframe::Storage) {
-        if let Ok(json) = serde_json::to_string(&self.recent) {
-            storage.set_string(RECENT_KEY, json);
-        }
-        if let Some(json) = self.methods.to_json() {
-            storage.set_string(METHODS_KEY, json);
+    fn on_exit(&mut self) {
+        let session = self.session();
+        if let Err(e) = self.autosave.save_now(&session) {
+            eprintln!("lodstudio: {e}");
         }
     }
 }

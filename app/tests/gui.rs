@@ -2,6 +2,7 @@
 //! (llvmpipe or lavapipe on machines without a GPU).
 
 use std::path::PathBuf;
+use std::time::{Duration, Instant};
 
 mod common;
 
@@ -11,6 +12,7 @@ use egui_kittest::kittest::Queryable as _;
 use lodstudio::panels::Method;
 use lodstudio::panels::simplify::TargetMode;
 use lodstudio::panels::voxel::FilterKind;
+use lodstudio::session::{Autosave, Session};
 use lodstudio::studio::StudioApp;
 
 /// Steps frames until the studio has no load running (bounded), then settles.
@@ -586,55 +588,76 @@ fn build_on_a_point_set_explains_instead_of_failing() {
     assert!(!harness.state().is_building());
 }
 
-/// eframe's key-value storage, in memory.
-#[derive(Default)]
-struct MemoryStorage(std::collections::HashMap<String, String>);
-
-impl eframe::Storage for MemoryStorage {
-    fn get_string(&self, key: &str) -> Option<String> {
-        self.0.get(key).cloned()
-    }
-
-    fn set_string(&mut self, key: &str, value: String) {
-        self.0.insert(key.to_string(), value);
-    }
-
-    fn remove_string(&mut self, key: &str) {
-        self.0.remove(key);
-    }
-
-    fn flush(&mut self) {}
-}
-
+/// A killed studio (never saved nor dropped: its state is leaked) comes back
+/// on the next start with its model, method settings and volume threshold,
+/// having lost at most one autosave interval; a damaged session file is
+/// reported and the defaults are used.
 #[test]
-fn method_settings_persist() {
-    let mut first = StudioApp::with_render_state(None, Some("builtin:sphere".into()));
-    let mut methods = *first.methods();
+fn autosave_restores_a_killed_session() {
+    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("autosave-killed");
+    let _ = std::fs::remove_dir_all(&dir);
+    let interval = Duration::from_millis(100);
+    let mut first = studio(Some(SKULL.into()));
+    let autosave = Autosave::in_dir(&dir).with_interval(interval);
+    let file = autosave.file().expect("autosave on").to_path_buf();
+    first.state_mut().resume(autosave, false);
+    wait_for_load(&mut first);
+    let mut methods = *first.state().methods();
     methods.auto_rebuild = false;
-    methods.edge_collapse.mode = TargetMode::Triangles;
-    methods.edge_collapse.triangles = 1234;
-    methods.edge_collapse.lock_borders = true;
-    methods.edge_collapse.min_quality = 0.3;
     methods.method = Method::Voxel;
     methods.voxel.filter = FilterKind::Cone;
-    methods.voxel.resolution = 100;
     methods.voxel.radius = 3.5;
-    methods.voxel.iso = 0.4;
-    first.set_methods(methods);
-    let mut storage = MemoryStorage::default();
-    eframe::App::save(&mut first, &mut storage);
+    methods.voxel.threshold = Some(2.9);
+    methods.edge_collapse.mode = TargetMode::Triangles;
+    methods.edge_collapse.triangles = 1234;
+    first.state_mut().set_methods(methods);
+    let changed = Instant::now();
+    let saved = |file: &std::path::Path| {
+        std::fs::read_to_string(file)
+            .ok()
+            .and_then(|json| Session::from_json(&json))
+            .is_some_and(|s| {
+                // The threshold is kept beside its volume, not in the settings.
+                let mut saved = s.methods;
+                saved.voxel.threshold = s.volume_threshold.map(|(_, t)| t);
+                saved == methods
+            })
+    };
+    while !saved(&file) {
+        assert!(
+            changed.elapsed() < Duration::from_secs(10),
+            "never autosaved"
+        );
+        std::thread::sleep(interval / 4);
+        first.step();
+    }
+    assert!(changed.elapsed() < interval * 4 + Duration::from_secs(1));
+    std::mem::forget(first);
 
-    let mut second = StudioApp::with_render_state(None, Some("builtin:sphere".into()));
-    assert_ne!(second.methods(), &methods);
-    second.restore(&storage);
-    assert_eq!(second.methods(), &methods);
+    let mut second = studio(None);
+    second.state_mut().resume(Autosave::in_dir(&dir), true);
+    wait_for_load(&mut second);
+    assert!(matches!(
+        second.state().loaded().map(|l| &l.model),
+        Some(lodstudio_core::Model::Volume(_))
+    ));
+    assert_eq!(second.state().methods(), &methods, "threshold included");
+    assert!(
+        second
+            .state()
+            .log_lines()
+            .any(|l| l == "Reopening the last session (skull_2.9.inr)")
+    );
 
-    // A damaged entry is ignored, not fatal.
-    eframe::Storage::set_string(&mut storage, "lodstudio.methods", "{ not json".into());
-    let mut third = StudioApp::with_render_state(None, Some("builtin:sphere".into()));
-    let defaults = *third.methods();
-    third.restore(&storage);
-    assert_eq!(third.methods(), &defaults);
+    std::fs::write(&file, "{ damaged").unwrap();
+    let mut third = studio(Some("builtin:sphere".into()));
+    third.state_mut().resume(Autosave::in_dir(&dir), true);
+    wait_for_load(&mut third);
+    assert_eq!(
+        third.state().methods(),
+        &lodstudio::panels::MethodSettings::default()
+    );
+    assert!(third.state().log_lines().any(|l| l.contains("damaged")));
 }
 
 /// Genus of the last voxel result.

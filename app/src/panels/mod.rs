@@ -153,17 +153,16 @@ impl Default for MethodSettings {
 }
 
 impl MethodSettings {
-    /// Settings restored from storage, with any value out of range (a hand-edited
-    /// or older file) replaced, so a build never starts from nonsense.
-    pub fn from_json(json: &str) -> Option<MethodSettings> {
-        let mut settings: MethodSettings = serde_json::from_str(json).ok()?;
-        settings.edge_collapse = settings.edge_collapse.sanitized();
-        settings.voxel = settings.voxel.sanitized();
-        settings.threshold = settings.threshold.sanitized();
-        settings.merge_tree = settings.merge_tree.sanitized();
-        settings.hybrid = settings.hybrid.sanitized();
-        settings.amg = settings.amg.sanitized();
-        Some(settings)
+    /// Settings with any value out of range (a hand-edited or older session)
+    /// replaced, so a build never starts from nonsense.
+    pub fn sanitized(mut self) -> MethodSettings {
+        self.edge_collapse = self.edge_collapse.sanitized();
+        self.voxel = self.voxel.sanitized();
+        self.threshold = self.threshold.sanitized();
+        self.merge_tree = self.merge_tree.sanitized();
+        self.hybrid = self.hybrid.sanitized();
+        self.amg = self.amg.sanitized();
+        self
     }
 
     /// What a build of the chosen method gets; `volume` is the grid of the
@@ -179,10 +178,6 @@ impl MethodSettings {
             Method::Hybrid => BuildParams::Hybrid(self.hybrid.sanitized()),
             Method::Amg => BuildParams::Amg(self.amg.build_params()),
         }
-    }
-
-    pub fn to_json(&self) -> Option<String> {
-        serde_json::to_string(self).ok()
     }
 
     /// The list of methods; true when the choice changed.
@@ -210,18 +205,20 @@ mod tests {
             },
             ..Default::default()
         };
-        let json = settings.to_json().expect("serialises");
-        assert_eq!(MethodSettings::from_json(&json), Some(settings));
+        let json = serde_json::to_string(&settings).expect("serialises");
+        let back: MethodSettings = serde_json::from_str(&json).expect("parses");
+        assert_eq!(back.sanitized(), settings);
 
         let odd = r#"{"edge_collapse": {"ratio": 7.0, "min_quality": -2.0},
                       "voxel": {"resolution": 9999, "iso": 0.0}}"#;
-        let restored = MethodSettings::from_json(odd).expect("partial settings parse");
+        let restored = serde_json::from_str::<MethodSettings>(odd)
+            .expect("partial settings parse")
+            .sanitized();
         assert!(restored.auto_rebuild, "missing fields take their defaults");
         assert_eq!(restored.edge_collapse.ratio, 1.0);
         assert_eq!(restored.edge_collapse.min_quality, 0.0);
         assert_eq!(restored.voxel.resolution, 256);
         assert_eq!(restored.voxel.iso, 0.05);
         assert_eq!(restored.voxel.radius, VoxelSettings::default().radius);
-        assert_eq!(MethodSettings::from_json("not json"), None);
     }
 }
