@@ -4,6 +4,8 @@ use lodstudio_tests::{lodstudio, lodstudio_json, malformed_dir};
 
 #[test]
 fn every_malformed_file_gives_exit_2_and_one_line() {
+    let out_dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("malformed-out");
+    let _ = std::fs::remove_dir_all(&out_dir);
     let mut seen = 0;
     for entry in std::fs::read_dir(malformed_dir()).unwrap() {
         let path = entry.unwrap().path();
@@ -23,9 +25,24 @@ fn every_malformed_file_gives_exit_2_and_one_line() {
             "the message names the file: {stderr}"
         );
         assert!(out.stdout.is_empty());
+
+        // A command that writes refuses before writing: nothing, not even a
+        // temporary file, is left in the output folder.
+        let dir = out_dir.join(name.as_ref());
+        std::fs::create_dir_all(&dir).unwrap();
+        let target = dir.join("lod.glb");
+        let out = lodstudio(&[
+            "simplify",
+            path.to_str().unwrap(),
+            "-o",
+            target.to_str().unwrap(),
+        ]);
+        assert_eq!(out.status.code(), Some(2), "simplify {}", path.display());
+        let left: Vec<_> = std::fs::read_dir(&dir).unwrap().collect();
+        assert!(left.is_empty(), "{}: {left:?} left behind", path.display());
         seen += 1;
     }
-    assert!(seen >= 20, "the corpus is all there ({seen} files)");
+    assert!(seen >= 28, "the corpus is all there ({seen} files)");
 }
 
 #[test]
