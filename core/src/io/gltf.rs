@@ -57,6 +57,18 @@ fn parse(data: &[u8]) -> ParseResult<gltf::Gltf> {
             }
         }
     }
+    // The crate unwraps the percent-decoding of relative buffer URIs.
+    for (b, buffer) in root.buffers.iter().enumerate() {
+        if let Some(uri) = buffer.uri.as_deref()
+            && !uri.contains(':')
+            && urlencoding::decode(uri).is_err()
+        {
+            return Err(ParseError::item(
+                format!("buffer {b}"),
+                "expected a URI that percent-decodes to UTF-8",
+            ));
+        }
+    }
     let document = gltf::Document::from_json(document.into_json()).map_err(invalid)?;
     Ok(gltf::Gltf { document, blob })
 }
