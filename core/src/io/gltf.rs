@@ -69,12 +69,22 @@ fn parse(data: &[u8]) -> ParseResult<gltf::Gltf> {
             ));
         }
     }
+    // The crate unwraps the URI of an image that has no buffer view.
+    for (i, image) in root.images.iter().enumerate() {
+        if image.uri.is_none() && image.buffer_view.is_none() {
+            return Err(ParseError::item(
+                format!("image {i}"),
+                "expected a uri or a bufferView",
+            ));
+        }
+    }
     let document = gltf::Document::from_json(document.into_json()).map_err(invalid)?;
     Ok(gltf::Gltf { document, blob })
 }
 
 pub fn read(data: &[u8], base: Option<&Path>) -> ParseResult<TriMesh> {
     let g = parse(data)?;
+    check_buffer_files(&g.document, base)?;
     let buffers = gltf::import_buffers(&g.document, base, g.blob.clone())
         .map_err(|e| ParseError::file(format!("expected readable glTF buffers ({e})")))?;
     let mut mesh = TriMesh::default();
@@ -144,6 +154,41 @@ pub fn read(data: &[u8], base: Option<&Path>) -> ParseResult<TriMesh> {
 }
 
 /// Checks that every element of the accessor lies inside its buffer view and buffer.
+/// Buffers in files must be regular files within the memory budget: the
+/// crate reads them whole (a buffer at `/dev/zero` would never end).
+fn check_buffer_files(document: &gltf::Document, base: Option<&Path>) -> ParseResult<()> {
+    let Some(base) = base else {
+        return Ok(()); // the crate refuses external buffers without a base
+    };
+    for buffer in document.buffers() {
+        let gltf::buffer::Source::Uri(uri) = buffer.source() else {
+            continue;
+        };
+        let what = || format!("buffer {}", buffer.index());
+        let path = match uri
+            .strip_prefix("file://")
+            .or_else(|| uri.strip_prefix("file:"))
+        {
+            Some(rest) => base.join(rest),
+            None if uri.contains(':') => continue,
+            None => match urlencoding::decode(uri) {
+                Ok(relative) => base.join(&*relative),
+                Err(_) => continue, // refused by `parse`
+            },
+        };
+        match std::fs::metadata(&path) {
+            Ok(m) if m.is_file() => super::limits::check_budget(&what(), m.len())?,
+            _ => {
+                return Err(ParseError::item(
+                    what(),
+                    format!("expected {uri:?} to be a regular file"),
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
 fn check_accessor(acc: &gltf::Accessor, buffers: &[gltf::buffer::Data]) -> ParseResult<()> {
     let what = || format!("accessor {}", acc.index());
     if acc.sparse().is_some() {
