@@ -203,7 +203,7 @@ fn engine_normals_face_their_triangles_and_gain_no_colours() {
         }
     }
     let src_attrs = attributes_by_material(&src_doc, &(0..n_meshes).collect::<Vec<_>>());
-    for method in ["simplify", "hybrid"] {
+    for method in ["simplify", "hybrid", "mergetree"] {
         let out = temp(&format!("engine-{method}.glb"));
         let report = export(
             "2CylinderEngine.gltf",
@@ -223,6 +223,32 @@ fn engine_normals_face_their_triangles_and_gain_no_colours() {
                     continue;
                 }
                 assert_eq!(Some(&a), src_attrs.get(&m), "{method} LOD {l} material {m}");
+            }
+        }
+    }
+}
+
+/// The horse carries per-vertex normals (PLY nx ny nz) and nothing else:
+/// every LOD's normals face its triangles and no LOD gains colours or UVs
+/// (the hybrid's points, as discs, are the method's own).
+#[test]
+fn horse_normals_face_their_triangles_and_gain_nothing() {
+    for method in ["simplify", "hybrid", "mergetree"] {
+        let out = temp(&format!("horse-{method}.glb"));
+        let report = export("horse.ply", method, &out, &["--points-as", "discs"]);
+        let (doc, bin) = read_gltf(&out);
+        let lods = report["lods"].as_array().unwrap().len();
+        assert_eq!(lods, 3, "{method}");
+        for l in 0..lods {
+            let mesh = doc["nodes"][lod_node(&doc, l)]["mesh"].as_u64().unwrap() as usize;
+            for p in doc["meshes"][mesh]["primitives"].as_array().unwrap() {
+                assert_eq!(p["mode"].as_u64().unwrap_or(4), 4, "{method} LOD {l}");
+                assert_eq!(area_against_winding(&doc, &bin, p), 0.0, "{method} LOD {l}");
+            }
+            for (m, a) in attributes_by_material(&doc, &[mesh]) {
+                if m != "points" {
+                    assert!(a.is_empty(), "{method} LOD {l} material {m}: {a:?}");
+                }
             }
         }
     }
@@ -320,4 +346,27 @@ fn points_say_what_radius_means_or_become_covering_meshes() {
         "blobs",
     ]);
     assert_eq!(o.status.code(), Some(2));
+}
+
+/// `measure` reports the share of B's area whose normals point against its
+/// winding: all of it for a square whose normals were flipped, none for the
+/// square itself (and no distance between the two).
+#[test]
+fn measure_reports_normals_against_winding() {
+    let square = |nz: i32| {
+        format!(
+            "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nvn 0 0 {nz}\n\
+             f 1//1 2//1 3//1\nf 1//1 3//1 4//1\n"
+        )
+    };
+    let good = temp("square-up.obj");
+    let flipped = temp("square-down.obj");
+    std::fs::write(&good, square(1)).unwrap();
+    std::fs::write(&flipped, square(-1)).unwrap();
+    let (g, f) = (good.to_str().unwrap(), flipped.to_str().unwrap());
+    let same = lodstudio_json(&["measure", g, g, "--samples", "1000"]);
+    assert_eq!(same["normals_against_winding"].as_f64(), Some(0.0));
+    let bad = lodstudio_json(&["measure", g, f, "--samples", "1000"]);
+    assert_eq!(bad["normals_against_winding"].as_f64(), Some(1.0));
+    assert!(bad["hausdorff"].as_f64().unwrap() < 1e-6, "{bad}");
 }

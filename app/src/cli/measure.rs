@@ -1,5 +1,6 @@
-//! `measure`: sampled two-sided Hausdorff distance between two meshes, and
-//! B's UV error against A when both are textured.
+//! `measure`: sampled two-sided Hausdorff distance between two meshes, B's
+//! UV error against A when both are textured, and the share of B's area whose
+//! normals point against its winding (what renders dark in a client).
 
 use super::*;
 
@@ -31,6 +32,7 @@ pub fn run(args: MeasureArgs) -> Result<(), CliError> {
     let r = hausdorff_mesh_mesh(&a, &b, &opts);
     let diag = a.bounds().diagonal();
     let uv = lodstudio_core::distance::uv_error(&a, &b);
+    let against = normals_against_winding(&args.b, &args.input)?;
     if args.json {
         println!(
             "{}",
@@ -44,6 +46,7 @@ pub fn run(args: MeasureArgs) -> Result<(), CliError> {
                 "samples_a": r.samples_a,
                 "samples_b": r.samples_b,
                 "uv_error": uv,
+                "normals_against_winding": against,
                 "seconds": start.elapsed().as_secs_f64(),
             })
         );
@@ -57,6 +60,10 @@ pub fn run(args: MeasureArgs) -> Result<(), CliError> {
             r.samples_a,
             r.samples_b
         );
+        println!(
+            "normals of B against its winding on {:.2}% of its area",
+            100.0 * against
+        );
         if let Some(uv) = uv {
             println!(
                 "UV error of B: mean {:.5}, max {:.5}, {:.2}% of its area off by more than {}",
@@ -68,4 +75,16 @@ pub fn run(args: MeasureArgs) -> Result<(), CliError> {
         }
     }
     Ok(())
+}
+
+/// The share of `file`'s area with normals against its winding, read as a
+/// client reads it: unwelded, each vertex with the normal the file gives it
+/// (welding would give a fold's two sides one normal).
+fn normals_against_winding(file: &std::path::Path, input: &InputArgs) -> Result<f64, CliError> {
+    let mut opts = input.load_options()?;
+    opts.repair.weld = Weld::Off;
+    match io::load(file, &opts, &Progress::new())?.model {
+        Model::Mesh(m) => Ok(m.area_with_normals_against_winding()),
+        _ => Ok(0.0),
+    }
 }
