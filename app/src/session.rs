@@ -59,13 +59,9 @@ pub struct Autosave {
 impl Autosave {
     /// Autosave into `dir` (created when first written).
     pub fn in_dir(dir: impl AsRef<Path>) -> Self {
-        Autosave {
-            file: Some(dir.as_ref().join(FILE_NAME)),
-            interval: INTERVAL,
-            checked: None,
-            written: String::new(),
-            writer: None,
-        }
+        let mut autosave = Self::off();
+        autosave.file = Some(dir.as_ref().join(FILE_NAME));
+        autosave
     }
 
     /// The folder named by [`STATE_DIR_ENV`], else eframe's storage folder.

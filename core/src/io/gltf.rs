@@ -153,7 +153,6 @@ pub fn read(data: &[u8], base: Option<&Path>) -> ParseResult<TriMesh> {
     Ok(mesh)
 }
 
-/// Checks that every element of the accessor lies inside its buffer view and buffer.
 /// Buffers in files must be regular files within the memory budget: the
 /// crate reads them whole (a buffer at `/dev/zero` would never end).
 fn check_buffer_files(document: &gltf::Document, base: Option<&Path>) -> ParseResult<()> {
@@ -189,6 +188,7 @@ fn check_buffer_files(document: &gltf::Document, base: Option<&Path>) -> ParseRe
     Ok(())
 }
 
+/// Checks that every element of the accessor lies inside its buffer view and buffer.
 fn check_accessor(acc: &gltf::Accessor, buffers: &[gltf::buffer::Data]) -> ParseResult<()> {
     let what = || format!("accessor {}", acc.index());
     if acc.sparse().is_some() {
