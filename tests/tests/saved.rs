@@ -144,3 +144,77 @@ fn damaged_hierarchies_are_refused_clearly() {
         assert!(err.contains(what), "{what}: {err}");
     }
 }
+
+/// `simplify --save` keeps the progressive collapse (issue 25): a cut to N
+/// triangles is byte for byte what `simplify --triangles N` writes, an
+/// error cut is the coarsest within the error with a bound a dense
+/// measurement never exceeds, and a tighter error never gives a larger bound.
+#[test]
+fn a_saved_edge_collapse_cuts_as_fresh_runs() {
+    let bunny = shared_model("stanford-bunny.obj");
+    let b = bunny.to_str().unwrap();
+    let (p, floor) = (temp("bunny-collapse.lodh"), temp("floor.ply"));
+    let run = lodstudio_json(&[
+        "simplify",
+        b,
+        "--ratio",
+        "0.05",
+        "-o",
+        floor.to_str().unwrap(),
+        "--save",
+        p.to_str().unwrap(),
+        "--force",
+    ]);
+    let p = p.to_str().unwrap();
+    let input = run["input_triangles"].as_u64().unwrap();
+    let floor_n = run["output_triangles"].as_u64().unwrap();
+    for n in [floor_n, input / 10, input / 3] {
+        let (fresh, cut) = (temp(&format!("fresh{n}.ply")), temp(&format!("cut{n}.ply")));
+        let n_arg = n.to_string();
+        let (fresh_s, cut_s) = (fresh.to_str().unwrap(), cut.to_str().unwrap());
+        let f = lodstudio_json(&[
+            "simplify",
+            b,
+            "--triangles",
+            &n_arg,
+            "-o",
+            fresh_s,
+            "--force",
+        ]);
+        let j = lodstudio_json(&["cut", p, "--triangles", &n_arg, "-o", cut_s, "--force"]);
+        assert_eq!(j["method"], "simplify");
+        assert_eq!(j["triangles"], f["output_triangles"], "{j}");
+        assert!(j["triangles"].as_u64().unwrap() <= n);
+        assert_eq!(
+            std::fs::read(&fresh).unwrap(),
+            std::fs::read(&cut).unwrap(),
+            "{n}"
+        );
+        let measured = lodstudio_json(&["measure", b, cut_s, "--samples", "200000"]);
+        let bound = j["error_bound"].as_f64().unwrap();
+        assert!(
+            measured["hausdorff"].as_f64().unwrap() <= bound,
+            "{n}: {measured} vs {j}"
+        );
+        let rel = j["error_bound_relative"].as_f64().unwrap();
+        assert!((rel * j["bbox_diagonal"].as_f64().unwrap() - bound).abs() <= 1e-6 * bound);
+    }
+    let mut last = (u64::MAX, f64::INFINITY);
+    for e in ["0.01%", "0.05%", "0.2%"] {
+        let j = lodstudio_json(&["cut", p, "--error", e]);
+        let limit = e.trim_end_matches('%').parse::<f64>().unwrap() / 100.0;
+        let rel = j["error_bound_relative"].as_f64().unwrap();
+        assert!(rel <= limit * 1.0001, "{e}: {j}");
+        let n = j["triangles"].as_u64().unwrap();
+        assert!(
+            n < last.0 && n >= floor_n,
+            "a looser error, fewer triangles: {e}"
+        );
+        last = (n, rel);
+    }
+    // An absolute error is a distance: the diagonal's 0.05% as a number cuts alike.
+    let rel = lodstudio_json(&["cut", p, "--error", "0.05%"]);
+    let abs = format!("{}", 0.0005 * rel["bbox_diagonal"].as_f64().unwrap());
+    let j = lodstudio_json(&["cut", p, "--error", &abs]);
+    assert_eq!(j["triangles"], rel["triangles"]);
+}

@@ -3,16 +3,28 @@
 use std::path::Path;
 
 use super::*;
+use lodstudio_core::cut::select_triangles;
 use lodstudio_core::io::hierarchy_file;
 use lodstudio_core::view::{Tolerance, View};
 
 #[derive(Args, Debug)]
 pub struct CutArgs {
-    /// A saved hierarchy (.lodh) from `hybrid`, `mergetree` or `voxel --pyramid` with --save.
+    /// A saved hierarchy (.lodh) from `simplify`, `hybrid`, `mergetree` or
+    /// `voxel --pyramid` with --save.
     file: PathBuf,
-    /// Object-space error of the cut, as a fraction of the diagonal ("1%" or 0.01).
-    #[arg(long, value_name = "E", default_value = "1%")]
+    /// Object-space error of the cut: a distance, or a percentage of the
+    /// bounding-box diagonal ("1%").
+    #[arg(
+        long,
+        value_name = "E",
+        default_value = "1%",
+        conflicts_with = "triangles"
+    )]
     error: String,
+    /// The finest cut with at most N triangles instead (a saved edge collapse:
+    /// exactly what `simplify FILE --triangles N` makes).
+    #[arg(long, value_name = "N")]
+    triangles: Option<usize>,
     /// Voxel pyramids: the continuous position to extract (0 = finest, §5).
     #[arg(long, value_name = "T", default_value_t = 0.0)]
     at: f32,
@@ -23,21 +35,8 @@ pub struct CutArgs {
     report: ReportArgs,
 }
 
-fn parse_fraction(e: &str) -> Option<f32> {
-    let v = match e.trim().strip_suffix('%') {
-        Some(p) => p.trim().parse::<f32>().ok()? / 100.0,
-        None => e.trim().parse::<f32>().ok()?,
-    };
-    (v.is_finite() && v >= 0.0).then_some(v)
-}
-
 pub fn run(args: CutArgs) -> Result<(), CliError> {
-    let fraction = parse_fraction(&args.error).ok_or_else(|| {
-        CliError::BadInput(format!(
-            "--error: expected a fraction or a percentage, got {:?}",
-            args.error
-        ))
-    })?;
+    let error = super::simplify::parse_error_target(&args.error)?;
     if !(args.at.is_finite() && args.at >= 0.0) {
         return Err(CliError::BadInput(format!(
             "--at must be >= 0, got {}",
@@ -54,7 +53,18 @@ pub fn run(args: CutArgs) -> Result<(), CliError> {
         .map_err(|e| CliError::BadInput(format!("{}: {e}", args.file.display())))?;
     hierarchy.set_runtime(&serde_json::json!({"position": args.at}));
     let view = View::orbit(glam::Vec3::ZERO, 1.0, 0.0, 0.0);
-    let set = hierarchy.select(&view, Tolerance::Relative(fraction));
+    let diagonal = hierarchy.diagonal();
+    let set = match args.triangles {
+        Some(n) => select_triangles(hierarchy.as_mut(), &view, n),
+        None => {
+            let fraction = match error {
+                Target::RelativeError(f) => f,
+                Target::Error(e) => e / diagonal.max(f32::MIN_POSITIVE),
+                Target::Triangles(_) | Target::Ratio(_) => unreachable!("an error target"),
+            };
+            hierarchy.select(&view, Tolerance::Relative(fraction))
+        }
+    };
     if let Some(out) = &args.output {
         write_cut(out, &set)?;
     }
@@ -66,6 +76,8 @@ pub fn run(args: CutArgs) -> Result<(), CliError> {
         "points": set.points.len(),
         "splats": set.splats.len(),
         "error_bound": set.error_bound,
+        "error_bound_relative": set.error_bound / diagonal.max(f32::MIN_POSITIVE),
+        "bbox_diagonal": diagonal,
         "seconds": start.elapsed().as_secs_f64(),
     });
     if args.report.json {

@@ -79,8 +79,9 @@ enum Command {
     /// Export an LOD chain as one GLB: the MSFT_lod node extension with
     /// MSFT_screencoverage thresholds from each LOD's guaranteed error bound.
     Export(export::ExportArgs),
-    /// Reopen a saved hierarchy (hybrid, mergetree, voxel --pyramid --save) and
-    /// write its cut at an object-space error, without rebuilding.
+    /// Reopen a saved hierarchy (simplify, hybrid, mergetree, voxel --pyramid
+    /// --save) and write its cut at an object-space error or a triangle count,
+    /// without rebuilding.
     Cut(cut::CutArgs),
     /// View-dependent merge tree: build it, replay a camera orbit (or zoom) and
     /// time the incremental update against a cold start (merge-tree paper Table 1).

@@ -32,6 +32,10 @@ pub struct SimplifyArgs {
     min_quality: f32,
     #[command(flatten)]
     report: ReportArgs,
+    /// Also save the progressive collapse, from the input down to this run's
+    /// result, each prefix with its certified bound (cut it with `cut`).
+    #[command(flatten)]
+    save: SaveArgs,
     #[command(flatten)]
     input: InputArgs,
 }
@@ -70,6 +74,7 @@ pub fn run(args: SimplifyArgs) -> Result<(), CliError> {
             args.min_quality
         )));
     }
+    args.save.check(args.report.force)?;
     let mut input = args.input;
     input.no_weld |= args.keep_seams;
     let mesh = load_mesh(&args.file, &input)?;
@@ -89,6 +94,21 @@ pub fn run(args: SimplifyArgs) -> Result<(), CliError> {
     })?;
     let seconds = start.elapsed().as_secs_f64();
     write_mesh(&args.output, &result.mesh)?;
+    if args.save.save.is_some() {
+        let floor = result.mesh.triangles.len();
+        let progressive =
+            simplify::progressive::record(&mesh, opts.collapse, floor, &Progress::new())
+                .map_err(|e| CliError::Failure(e.to_string()))?;
+        args.save.write(
+            &simplify::progressive::ProgressiveCut::new(std::sync::Arc::new(progressive)),
+            serde_json::json!({
+                "file": args.file.display().to_string(),
+                "floor": floor,
+                "lock_borders": opts.collapse.lock_borders,
+                "min_quality": opts.collapse.min_quality,
+            }),
+        )?;
+    }
     let diag = mesh.bounds().diagonal();
     let bound = result.error_bound();
     if args.report.json {

@@ -336,6 +336,10 @@ impl Multiscale {
 }
 
 impl Hierarchy for AmgHierarchy {
+    fn diagonal(&self) -> f32 {
+        self.multiscale.points.bounds().diagonal()
+    }
+
     fn method(&self) -> &'static str {
         "amg"
     }

@@ -2,6 +2,7 @@
 //! (components, boundary loops, genus) and load-time repair.
 
 pub mod adjacency;
+pub mod gather;
 pub mod material;
 pub mod normals;
 pub mod repair;
@@ -11,6 +12,7 @@ pub mod wedges;
 use glam::{Vec2, Vec3};
 
 pub use adjacency::Adjacency;
+pub use gather::MeshArrays;
 pub use material::{AlphaMode, Image, Material, Materials, VertexAttributes};
 pub use repair::{RepairOptions, RepairReport, Weld};
 pub use topology::{ComponentTopology, Topology};

@@ -518,6 +518,10 @@ impl HybridCut {
 }
 
 impl Hierarchy for HybridCut {
+    fn diagonal(&self) -> f32 {
+        self.mrg.diagonal
+    }
+
     fn method(&self) -> &'static str {
         "hybrid"
     }

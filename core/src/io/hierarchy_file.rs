@@ -1,6 +1,7 @@
-//! Saved hierarchies: a built MRG, merge tree, voxel pyramid or AMG multiscale
-//! with its parameters, in a versioned, checksummed file, so the studio reopens
-//! it without rebuilding and cuts it exactly as before.
+//! Saved hierarchies: a progressive edge collapse, a built MRG, merge tree,
+//! voxel pyramid or AMG multiscale with its parameters, in a versioned,
+//! checksummed file, so the studio reopens it without rebuilding and cuts it
+//! exactly as before.
 //!
 //! Layout (little endian): magic `LODSTHRY`, format version (u32), method name
 //! (u16 length + UTF-8), parameters (u32 length + JSON), body (u64 length +
@@ -178,7 +179,8 @@ pub fn load<T: DeserializeOwned>(
     Ok((header, value))
 }
 
-/// Reopens any saved hierarchy, ready to cut: a hybrid MRG, a merge tree
+/// Reopens any saved hierarchy, ready to cut: a progressive edge collapse,
+/// a hybrid MRG, a merge tree
 /// (with the default criteria; the studio sets its own), a voxel pyramid or
 /// an AMG multiscale.
 pub fn reopen(
@@ -187,6 +189,16 @@ pub fn reopen(
     use std::sync::Arc;
     let header = peek(bytes)?;
     let hierarchy: Box<dyn crate::cut::Hierarchy> = match header.method.as_str() {
+        "simplify" => {
+            use crate::simplify::progressive::{Progressive, ProgressiveCut, Record};
+            let (_, record) = load::<Record>(bytes, "simplify")?;
+            let progressive =
+                Progressive::new(record).map_err(|why| HierarchyFileError::Corrupt {
+                    what: "collapse sequence",
+                    why,
+                })?;
+            Box::new(ProgressiveCut::new(Arc::new(progressive)))
+        }
         "hybrid" => {
             let (_, mrg) = load::<crate::hybrid::Mrg>(bytes, "hybrid")?;
             // The graph's invariants (ids in range, arcs consistent) before any cut.
@@ -244,7 +256,7 @@ pub fn reopen(
         other => {
             return Err(HierarchyFileError::WrongMethod {
                 found: other.to_string(),
-                expected: "hybrid, mergetree, voxel or amg".into(),
+                expected: "simplify, hybrid, mergetree, voxel or amg".into(),
             });
         }
     };

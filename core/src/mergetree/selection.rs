@@ -429,6 +429,10 @@ fn gather<T: Copy>(attribute: &Option<Vec<T>>, order: &[u32]) -> Option<Vec<T>> 
 }
 
 impl Hierarchy for MergeTreeView {
+    fn diagonal(&self) -> f32 {
+        self.tree.diagonal
+    }
+
     fn method(&self) -> &'static str {
         "mergetree"
     }

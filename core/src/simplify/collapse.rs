@@ -21,7 +21,7 @@ use glam::{Vec2, Vec3};
 use super::quadric::Quadric;
 use super::queue::CollapseQueue;
 use crate::distance::closest_point_on_triangle;
-use crate::geom::{Adjacency, Materials, TriMesh, Wedges};
+use crate::geom::{Adjacency, Materials, MeshArrays, TriMesh, Wedges};
 
 /// Legality rules for collapses.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -994,61 +994,25 @@ impl EdgeCollapser {
         }
     }
 
+    /// Every vertex and triangle ever made, dead ones included (ids as the
+    /// collapser's), borrowed.
+    pub fn arrays(&self) -> MeshArrays<'_> {
+        MeshArrays {
+            positions: &self.pos,
+            triangles: &self.tris,
+            normals: self.normals.as_deref(),
+            colors: self.colors.as_deref(),
+            uvs: self.uvs.as_deref(),
+            parts: Some(&self.tri_part),
+            materials: self.materials.as_ref(),
+            wedges: self.wedges.as_ref(),
+        }
+    }
+
     /// The current mesh, compacted; also the internal id of each output triangle.
     pub fn mesh(&self) -> (TriMesh, Vec<u32>) {
-        let mut remap = vec![u32::MAX; self.pos.len()];
-        let mut out = TriMesh::default();
-        let mut ids = Vec::with_capacity(self.alive_triangles);
-        let mut parts = Vec::with_capacity(self.alive_triangles);
-        let mut order = Vec::new();
-        for t in self.alive_triangles() {
-            let tri = self.tris[t as usize].map(|v| {
-                if remap[v as usize] == u32::MAX {
-                    remap[v as usize] = order.len() as u32;
-                    order.push(v);
-                }
-                remap[v as usize]
-            });
-            out.triangles.push(tri);
-            parts.push(self.tri_part[t as usize]);
-            ids.push(t);
-        }
-        out.positions = order.iter().map(|v| self.pos[*v as usize]).collect();
-        out.normals = self
-            .normals
-            .as_ref()
-            .map(|n| order.iter().map(|v| n[*v as usize]).collect());
-        out.colors = self
-            .colors
-            .as_ref()
-            .map(|n| order.iter().map(|v| n[*v as usize]).collect());
-        out.uvs = self
-            .uvs
-            .as_ref()
-            .map(|n| order.iter().map(|v| n[*v as usize]).collect());
-        if parts.iter().any(|p| *p != 0) {
-            out.parts = Some(parts);
-        }
-        out.materials = self.materials.clone();
-        out.wedges = self.wedges.as_ref().map(|w| {
-            let mut wremap = vec![u32::MAX; w.len()];
-            let mut worder = Vec::new();
-            let corners = ids
-                .iter()
-                .map(|&t| {
-                    w.corners[t as usize].map(|x| {
-                        let slot = &mut wremap[x as usize];
-                        if *slot == u32::MAX {
-                            *slot = worder.len() as u32;
-                            worder.push(x);
-                        }
-                        *slot
-                    })
-                })
-                .collect();
-            Wedges::gathered(w, &worder, corners, |v| remap[v as usize])
-        });
-        (out, ids)
+        let ids: Vec<u32> = self.alive_triangles().collect();
+        (self.arrays().gather(ids.iter().copied()), ids)
     }
 }
 

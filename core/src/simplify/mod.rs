@@ -6,11 +6,14 @@
 //! bound of its new triangles; `bound` certifies a result: every output
 //! triangle carries a true upper bound on the two-sided Hausdorff distance
 //! between itself and the part of the original surface attributed to it, and
-//! `error_bound` is their maximum.
+//! `error_bound` is their maximum. `progressive` records the collapses once
+//! as a hierarchy whose every prefix carries a certified bound, for cuts
+//! that move with a slider instead of re-running.
 
 mod attribution;
 pub mod bound;
 pub mod collapse;
+pub mod progressive;
 pub mod projection;
 pub mod quadric;
 mod queue;

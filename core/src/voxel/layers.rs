@@ -177,6 +177,13 @@ impl Hierarchy for Layered {
         "voxel layers"
     }
 
+    /// The layers' own extent (they are what the level keeps of the object).
+    fn diagonal(&self) -> f32 {
+        let points = self.layers.iter().flat_map(|l| &l.mesh.positions);
+        let b = crate::geom::Aabb::from_points(points);
+        if b.is_empty() { 0.0 } else { b.diagonal() }
+    }
+
     /// The layers are one level: the tolerance does not change them, the view
     /// orders them.
     fn select(&mut self, view: &View, _tolerance: Tolerance) -> DrawSet {

@@ -160,6 +160,14 @@ impl PyramidCut {
 }
 
 impl Hierarchy for PyramidCut {
+    /// The finest grid's (the object's bounds, padded for the filter).
+    fn diagonal(&self) -> f32 {
+        self.pyramid
+            .levels
+            .first()
+            .map_or(0.0, |l| l.density.bounds().diagonal())
+    }
+
     fn method(&self) -> &'static str {
         "voxel pyramid"
     }
