@@ -893,7 +893,7 @@ impl StudioApp {
                 "backface": mt.backface,
                 "silhouette": mt.silhouette,
                 "lighting": mt.lighting,
-                "position": self.methods.voxel.position,
+                "position": self.methods.voxel.runtime_position().unwrap_or(-1.0),
                 "amg_level": self.methods.amg.runtime_level(),
             }));
             live.update(&view, self.methods.threshold.tolerance());

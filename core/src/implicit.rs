@@ -18,6 +18,11 @@ pub trait Implicit: Send + Sync {
         let v = self.value(center);
         (v.abs() > half.length()).then_some(v < 0.0)
     }
+    /// The surface itself, where the solid is a mesh's (what simplified
+    /// levels are certified against).
+    fn surface(&self) -> Option<&crate::geom::TriMesh> {
+        None
+    }
 }
 
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -265,6 +270,7 @@ pub fn csg_part() -> Csg {
 /// keeps the [`Implicit`] contract the sampler relies on.
 pub struct MeshSolid<'a> {
     winding: crate::distance::WindingNumber<'a>,
+    mesh: &'a crate::geom::TriMesh,
     bounds: Aabb,
 }
 
@@ -272,6 +278,7 @@ impl<'a> MeshSolid<'a> {
     pub fn new(mesh: &'a crate::geom::TriMesh) -> Self {
         Self {
             winding: crate::distance::WindingNumber::new(mesh),
+            mesh,
             bounds: mesh.bounds(),
         }
     }
@@ -288,6 +295,9 @@ impl Implicit for MeshSolid<'_> {
     }
     fn bounds(&self) -> Aabb {
         self.bounds
+    }
+    fn surface(&self) -> Option<&crate::geom::TriMesh> {
+        Some(self.mesh)
     }
 }
 

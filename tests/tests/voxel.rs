@@ -216,3 +216,104 @@ fn the_mri_head_pyramid_and_in_between_levels() {
     let t = mid["triangles"].as_i64().unwrap();
     assert!(triangles[1] < t && t < triangles[0], "{t} in {triangles:?}");
 }
+
+/// Every non-empty pyramid level carries a certified bound against the input
+/// surface that a dense measurement of its written mesh never exceeds; cuts
+/// of the saved pyramid pick the coarsest level within the error, so
+/// different errors pick different levels (issue 25).
+#[test]
+fn pyramid_levels_carry_certified_bounds_and_cuts_follow_the_error() {
+    let horse = shared_model("horse.ply");
+    let h = horse.to_str().unwrap();
+    let dir = std::env::temp_dir().join(format!("lodstudio-pyr-bounds-{}", std::process::id()));
+    let saved = dir.with_extension("lodh");
+    let j = lodstudio_json(&[
+        "voxel",
+        h,
+        "--pyramid",
+        "--resolution",
+        "32",
+        "-o",
+        dir.to_str().unwrap(),
+        "--save",
+        saved.to_str().unwrap(),
+        "--force",
+    ]);
+    assert_eq!(j["error_bound_against"], "input surface");
+    assert_eq!(j["vanishes_at"], serde_json::Value::Null);
+    let levels = j["levels"].as_array().unwrap();
+    let mut bounds = Vec::new();
+    for (i, l) in levels.iter().enumerate() {
+        assert_eq!(l["empty"], false);
+        let bound = l["error_bound"].as_f64().unwrap();
+        let file = dir.join(format!("level{i}_{}.ply", l["resolution"]));
+        let m = lodstudio_json(&["measure", h, file.to_str().unwrap(), "--samples", "100000"]);
+        assert!(
+            m["hausdorff"].as_f64().unwrap() <= bound,
+            "level {i}: {m} vs {l}"
+        );
+        bounds.push(l["error_bound_relative"].as_f64().unwrap());
+    }
+    let saved = saved.to_str().unwrap();
+    let mut picked = std::collections::BTreeSet::new();
+    for b in &bounds {
+        // Just above this level's bound: level i or a coarser one within it.
+        let e = format!("{}%", 100.0 * b * 1.001);
+        let cut = lodstudio_json(&["cut", saved, "--error", &e]);
+        let got = cut["error_bound_relative"].as_f64().unwrap();
+        assert!(got <= b * 1.001 + 1e-9, "{e}: {cut}");
+        let level = bounds.iter().rposition(|x| *x <= b * 1.001).unwrap();
+        assert_eq!(cut["triangles"], levels[level]["triangles"], "{e}");
+        picked.insert(level);
+    }
+    assert!(
+        picked.len() >= 2,
+        "different errors, different levels: {picked:?}"
+    );
+    // The position stays an explicit override.
+    let at = lodstudio_json(&["cut", saved, "--error", "100%", "--at", "0"]);
+    assert_eq!(at["triangles"], levels[0]["triangles"]);
+}
+
+/// A thin plate vanishes once the filter is wider than it: the levels from
+/// there on are reported empty, without a bound, and the pyramid says where.
+#[test]
+fn a_pyramid_says_where_a_thin_part_vanishes() {
+    let plate = std::env::temp_dir().join(format!("lodstudio-plate-{}.obj", std::process::id()));
+    let (x, y, z) = (1.0, 1.0, 0.02);
+    let mut obj = String::new();
+    for i in 0..8 {
+        let c = |bit: usize, v: f64| if i & bit != 0 { v } else { 0.0 };
+        obj += &format!("v {} {} {}\n", c(1, x), c(2, y), c(4, z));
+    }
+    for f in [
+        [1, 3, 4, 2],
+        [5, 6, 8, 7],
+        [1, 2, 6, 5],
+        [3, 7, 8, 4],
+        [1, 5, 7, 3],
+        [2, 4, 8, 6],
+    ] {
+        obj += &format!(
+            "f {} {} {}\nf {} {} {}\n",
+            f[0], f[1], f[2], f[0], f[2], f[3]
+        );
+    }
+    std::fs::write(&plate, obj).unwrap();
+    let j = lodstudio_json(&[
+        "voxel",
+        plate.to_str().unwrap(),
+        "--pyramid",
+        "--resolution",
+        "64",
+    ]);
+    let levels = j["levels"].as_array().unwrap();
+    let gone = j["vanishes_at"].as_u64().expect("the plate vanishes") as usize;
+    assert!(gone > 0, "{j}");
+    for (i, l) in levels.iter().enumerate() {
+        let empty = l["triangles"] == 0;
+        assert_eq!(l["empty"], empty, "level {i}");
+        assert_eq!(l.get("error_bound").is_none(), empty, "level {i}");
+        assert_eq!(i >= gone, empty, "level {i}: {j}");
+    }
+}

@@ -481,13 +481,14 @@ fn voxel_pyramid(
     start: Instant,
     progress: &Progress,
 ) -> Result<Result<Built, String>, Cancelled> {
-    let pyramid = Pyramid::build(
+    let mut pyramid = Pyramid::build(
         source,
         resolution,
         settings.radius,
         settings.filter.filter(),
         progress,
     )?;
+    pyramid.certify(source.surface(), progress)?;
     progress.stage("extracting the levels");
     let mut levels = Vec::with_capacity(pyramid.levels.len());
     for i in 0..pyramid.levels.len() {
@@ -541,7 +542,7 @@ fn voxel_pyramid(
     let bounds = finest.mesh.bounds();
     let view = View::orbit(bounds.center(), bounds.diagonal(), 0.6, 0.4);
     let live = LiveCut::new(
-        Box::new(PyramidCut::new(pyramid, settings.position)),
+        Box::new(PyramidCut::new(pyramid, settings.runtime_position())),
         &view,
         Tolerance::Pixels(1.0),
     );

@@ -25,9 +25,10 @@ pub struct CutArgs {
     /// exactly what `simplify FILE --triangles N` makes).
     #[arg(long, value_name = "N")]
     triangles: Option<usize>,
-    /// Voxel pyramids: the continuous position to extract (0 = finest, §5).
-    #[arg(long, value_name = "T", default_value_t = 0.0)]
-    at: f32,
+    /// Voxel pyramids: extract this continuous position (0 = finest, §5)
+    /// instead of the coarsest level within the error.
+    #[arg(long, value_name = "T")]
+    at: Option<f32>,
     /// The cut as glTF (.glb: triangles, points, layers, splats) or a mesh file.
     #[arg(short = 'o', long = "output", value_name = "OUT")]
     output: Option<PathBuf>,
@@ -37,11 +38,10 @@ pub struct CutArgs {
 
 pub fn run(args: CutArgs) -> Result<(), CliError> {
     let error = super::simplify::parse_error_target(&args.error)?;
-    if !(args.at.is_finite() && args.at >= 0.0) {
-        return Err(CliError::BadInput(format!(
-            "--at must be >= 0, got {}",
-            args.at
-        )));
+    if let Some(t) = args.at
+        && !(t.is_finite() && t >= 0.0)
+    {
+        return Err(CliError::BadInput(format!("--at must be >= 0, got {t}")));
     }
     if let Some(out) = &args.output {
         check_output(out, args.report.force)?;
@@ -51,7 +51,9 @@ pub fn run(args: CutArgs) -> Result<(), CliError> {
     let start = std::time::Instant::now();
     let (header, mut hierarchy) = hierarchy_file::reopen(&bytes)
         .map_err(|e| CliError::BadInput(format!("{}: {e}", args.file.display())))?;
-    hierarchy.set_runtime(&serde_json::json!({"position": args.at}));
+    if let Some(t) = args.at {
+        hierarchy.set_runtime(&serde_json::json!({ "position": t }));
+    }
     let view = View::orbit(glam::Vec3::ZERO, 1.0, 0.0, 0.0);
     let diagonal = hierarchy.diagonal();
     let set = match args.triangles {

@@ -147,10 +147,26 @@ pub fn run(args: VoxelArgs) -> Result<(), CliError> {
     let failed = |_| CliError::Failure("cancelled".into());
     if args.pyramid || args.at.is_some() {
         args.save.check(args.report.force)?;
-        let pyramid = Pyramid::build(source, args.resolution, args.radius, filter, &progress)
+        let mut pyramid = Pyramid::build(source, args.resolution, args.radius, filter, &progress)
             .map_err(failed)?;
+        let reference = source.surface();
+        pyramid.certify(reference, &progress).map_err(failed)?;
+        let against = if pyramid.against_input {
+            "input surface"
+        } else {
+            "finest level"
+        };
+        let diagonal = pyramid.diagonal;
+        let with_bound = |mut j: serde_json::Value, bound: f32| {
+            if bound.is_finite() {
+                j["error_bound"] = bound.into();
+                j["error_bound_relative"] = (bound / diagonal.max(f32::MIN_POSITIVE)).into();
+            }
+            j["empty"] = bound.is_infinite().into();
+            j
+        };
         let pyramid = {
-            let cut = lodstudio_core::voxel::pyramid::PyramidCut::new(pyramid, 0.0);
+            let cut = lodstudio_core::voxel::pyramid::PyramidCut::new(pyramid, None);
             args.save.write(
                 &cut,
                 serde_json::json!({"resolution": args.resolution, "radius": args.radius, "file": args.file.display().to_string()}),
@@ -162,7 +178,14 @@ pub fn run(args: VoxelArgs) -> Result<(), CliError> {
             if let Some(out) = &args.output {
                 write_mesh(out, &l.mesh)?;
             }
-            let mut j = level_json(&l);
+            let finest = pyramid.level(0, &progress).map_err(failed)?.mesh;
+            let reference = reference.unwrap_or(&finest);
+            let original = lodstudio_core::simplify::Original::new(reference);
+            let opts = lodstudio_core::simplify::BoundOptions::for_diagonal(pyramid.diagonal);
+            let bound = voxel::pyramid::level_bound(&original, &l.mesh, &opts, &progress)
+                .map_err(failed)?;
+            let mut j = with_bound(level_json(&l), bound);
+            j["error_bound_against"] = against.into();
             j["at"] = t.into();
             j["layers"] = 1.into();
             j["seconds"] = start.elapsed().as_secs_f64().into();
@@ -181,15 +204,17 @@ pub fn run(args: VoxelArgs) -> Result<(), CliError> {
                 check_output(&path, args.report.force)?;
                 write_mesh(&path, &l.mesh)?;
             }
-            let j = level_json(&l);
+            let j = with_bound(level_json(&l), pyramid.error_bounds[i]);
             if !args.report.json {
                 println!(
-                    "resolution {:>5}  radius {:>7.2}  triangles {:>8}  components {:>4}  genus {:>4}",
+                    "resolution {:>5}  radius {:>7.2}  triangles {:>8}  components {:>4}  genus {:>4}  bound {}",
                     j["resolution"],
                     j["radius"].as_f64().unwrap_or(0.0),
                     j["triangles"],
                     j["components"],
-                    j["genus"]
+                    j["genus"],
+                    j.get("error_bound")
+                        .map_or("— (empty)".into(), |b| b.to_string()),
                 );
             }
             levels.push(j);
@@ -197,7 +222,13 @@ pub fn run(args: VoxelArgs) -> Result<(), CliError> {
         if args.report.json {
             println!(
                 "{}",
-                serde_json::json!({ "levels": levels, "seconds": start.elapsed().as_secs_f64() })
+                serde_json::json!({
+                    "levels": levels,
+                    "error_bound_against": against,
+                    "vanishes_at": pyramid.vanishes_at(),
+                    "bbox_diagonal": pyramid.diagonal,
+                    "seconds": start.elapsed().as_secs_f64(),
+                })
             );
         }
         return Ok(());

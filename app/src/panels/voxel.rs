@@ -52,6 +52,9 @@ const PYRAMID_HINT: &str = "Build the whole multi-resolution pyramid of §2 (Tab
 const POSITION_HINT: &str = "Continuous position in the pyramid (0 = finest level, 1 = \
     the next, ...): between two levels the two filtered buffers are interpolated into an \
     in-between resolution and extracted on the fly (§5). No rebuild.";
+const FOLLOW_HINT: &str = "Show the coarsest pyramid level whose certified two-sided \
+    Hausdorff bound (against the input surface) is within the error threshold, as every \
+    other method does. Off: the pyramid position below chooses.";
 const ISO_HINT: &str = "The iso-density at which marching cubes extracts the surface \
     f = iso, on the normalised density scale 0 (empty) to 1 (solid). The paper uses \
     0.5; lower grows the object, higher shrinks it.";
@@ -103,8 +106,11 @@ pub struct VoxelSettings {
     pub layers_error: f32,
     /// Build the whole pyramid (Tables 1–3) and browse it continuously.
     pub pyramid: bool,
-    /// Run time: the continuous pyramid position shown (0 = finest, §5).
+    /// Run time: the continuous pyramid position shown (0 = finest, §5) ...
     pub position: f32,
+    /// ... unless the pyramid follows the error threshold: the coarsest
+    /// level whose certified bound is within it.
+    pub follow_threshold: bool,
 }
 
 /// What the voxel controls and a volume build need to know of a volume,
@@ -150,6 +156,7 @@ impl Default for VoxelSettings {
             layers_error: 0.5,
             pyramid: false,
             position: 0.0,
+            follow_threshold: true,
         }
     }
 }
@@ -178,7 +185,13 @@ impl VoxelSettings {
             layers_error: clamp_or(self.layers_error, LAYERS_RANGE, d.layers_error),
             pyramid: self.pyramid,
             position: clamp_or(self.position, POSITION_RANGE, d.position),
+            follow_threshold: self.follow_threshold,
         }
+    }
+
+    /// The pyramid position a cut shows: `None` follows the threshold.
+    pub fn runtime_position(&self) -> Option<f32> {
+        (!self.follow_threshold).then_some(self.sanitized().position)
     }
 
     /// What a build of an implicit solid depends on: the threshold has no effect.
@@ -186,6 +199,7 @@ impl VoxelSettings {
         VoxelSettings {
             threshold: None,
             position: 0.0,
+            follow_threshold: true,
             ..self.sanitized()
         }
     }
@@ -200,6 +214,7 @@ impl VoxelSettings {
             iso: d.iso,
             threshold: Some(grid.threshold(self.threshold)),
             position: 0.0,
+            follow_threshold: true,
             ..self.sanitized()
         }
     }
@@ -253,17 +268,21 @@ impl VoxelSettings {
         ui.checkbox(&mut self.pyramid, "whole pyramid")
             .on_hover_text(PYRAMID_HINT);
         if self.pyramid {
-            ui.add(egui::Slider::new(&mut self.position, POSITION_RANGE).text("pyramid position"))
-                .on_hover_text(POSITION_HINT);
+            ui.checkbox(&mut self.follow_threshold, "level follows the threshold")
+                .on_hover_text(FOLLOW_HINT);
+            ui.add_enabled(
+                !self.follow_threshold,
+                egui::Slider::new(&mut self.position, POSITION_RANGE).text("pyramid position"),
+            )
+            .on_hover_text(POSITION_HINT);
         }
         // The position is cut live: it never makes a build stale.
-        VoxelSettings {
+        let build = |s: &VoxelSettings| VoxelSettings {
             position: 0.0,
-            ..*self
-        } != VoxelSettings {
-            position: 0.0,
-            ..before
-        }
+            follow_threshold: true,
+            ..*s
+        };
+        build(self) != build(&before)
     }
 }
 
@@ -282,9 +301,12 @@ mod tests {
             layers_error: 7.0,
             pyramid: true,
             position: f32::INFINITY,
+            follow_threshold: false,
         }
         .sanitized();
         assert_eq!((odd.pyramid, odd.position), (true, 6.0));
+        assert_eq!(odd.runtime_position(), Some(6.0));
+        assert_eq!(VoxelSettings::default().runtime_position(), None);
         assert_eq!(odd.layers_error, 0.5);
         assert_eq!(odd.threshold, None);
         assert_eq!(odd.filter.filter(), Filter::Cone);

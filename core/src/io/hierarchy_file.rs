@@ -17,7 +17,7 @@ use serde::de::DeserializeOwned;
 
 const MAGIC: &[u8; 8] = b"LODSTHRY";
 /// Bumped whenever a saved structure changes shape.
-pub const VERSION: u32 = 4;
+pub const VERSION: u32 = 5;
 
 /// The body codec: fixed-width little-endian integers, no trailing bytes, and
 /// never reading (or allocating for) more than `limit` bytes.
@@ -229,7 +229,17 @@ pub fn reopen(
                     why: "levels missing or grids not matching their samples".into(),
                 });
             }
-            Box::new(crate::voxel::pyramid::PyramidCut::new(pyramid, 0.0))
+            let bounds_fit = [0, pyramid.levels.len()].contains(&pyramid.error_bounds.len())
+                && pyramid.error_bounds.iter().all(|b| *b >= 0.0)
+                && pyramid.diagonal.is_finite()
+                && pyramid.diagonal >= 0.0;
+            if !bounds_fit {
+                return Err(HierarchyFileError::Corrupt {
+                    what: "pyramid",
+                    why: "level bounds not one non-negative number per level".into(),
+                });
+            }
+            Box::new(crate::voxel::pyramid::PyramidCut::new(pyramid, None))
         }
         "amg" => {
             let (_, ms) = load::<crate::amg::Multiscale>(bytes, "amg")?;

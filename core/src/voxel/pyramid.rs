@@ -7,15 +7,22 @@
 //! detail, and the genus falls. The filtered densities are kept, so the
 //! studio's filter-radius slider can ask for any point between two levels: §5
 //! interpolates the two adjacent buffers into an in-between one and extracts it.
+//!
+//! [`Pyramid::certify`] gives every level a certified two-sided Hausdorff
+//! bound against the input surface (the simplifier's certificate), so a cut
+//! honours the tolerance and the view like every other method: the coarsest
+//! level within it. A level whose surface the filter took away entirely is
+//! empty, with no bound, and the pyramid says where the object vanishes.
 
 use glam::Vec3;
 use rayon::prelude::*;
 
 use super::{DENSITY_ISO, Filter, VoxelLevel, level, marching_cubes};
 use crate::cut::{DrawSet, Hierarchy};
-use crate::geom::Volume;
+use crate::geom::{TriMesh, Volume};
 use crate::implicit::Implicit;
 use crate::progress::{Cancelled, Progress};
+use crate::simplify::{BoundOptions, Original, certify_against};
 use crate::view::{Tolerance, View};
 
 /// What the pyramid samples.
@@ -25,6 +32,16 @@ pub enum Source<'a> {
     Solid(&'a dyn Implicit),
     /// A scalar volume and its iso value: S = (value ≥ iso) on its own grid.
     Volume(&'a Volume, f32),
+}
+
+impl<'a> Source<'a> {
+    /// The input surface, where the source has one (a mesh's solid).
+    pub fn surface(&self) -> Option<&'a TriMesh> {
+        match *self {
+            Source::Solid(s) => s.surface(),
+            Source::Volume(..) => None,
+        }
+    }
 }
 
 /// One level: the filtered density f = h ∗ S on its grid.
@@ -41,6 +58,14 @@ pub struct PyramidLevel {
 pub struct Pyramid {
     /// Finest first.
     pub levels: Vec<PyramidLevel>,
+    /// Per level, once certified: the certified two-sided Hausdorff bound of
+    /// its surface against the reference ([`f32::INFINITY`]: an empty level).
+    pub error_bounds: Vec<f32>,
+    /// The reference is the input surface (else, for a solid or a volume
+    /// given without one, the finest level's surface).
+    pub against_input: bool,
+    /// Bounding-box diagonal of the reference.
+    pub diagonal: f32,
 }
 
 /// The coarsest grid the pyramid goes down to (Tables 1–3 end near 4–8).
@@ -82,7 +107,64 @@ impl Pyramid {
             });
             factor *= 2;
         }
-        Ok(Pyramid { levels })
+        Ok(Pyramid {
+            levels,
+            error_bounds: Vec::new(),
+            against_input: false,
+            diagonal: 0.0,
+        })
+    }
+
+    /// Certifies every level against `reference` (the input surface), or
+    /// without one against the finest level's surface.
+    pub fn certify(
+        &mut self,
+        reference: Option<&TriMesh>,
+        progress: &Progress,
+    ) -> Result<(), Cancelled> {
+        let against_input = reference.is_some();
+        let finest;
+        let reference = match reference {
+            Some(m) => m,
+            None => {
+                finest = self.level(0, progress)?.mesh;
+                &finest
+            }
+        };
+        let original = Original::new(reference);
+        let diagonal = reference.bounds().diagonal();
+        let opts = BoundOptions::for_diagonal(diagonal);
+        let mut bounds = Vec::with_capacity(self.levels.len());
+        for i in 0..self.levels.len() {
+            progress.stage("certifying the levels' bounds");
+            let mesh = self.level(i, progress)?.mesh;
+            bounds.push(level_bound(&original, &mesh, &opts, progress)?);
+        }
+        self.error_bounds = bounds;
+        self.against_input = against_input;
+        self.diagonal = diagonal;
+        Ok(())
+    }
+
+    /// The first level the filter emptied (the object vanishes there).
+    pub fn vanishes_at(&self) -> Option<usize> {
+        self.error_bounds.iter().position(|b| b.is_infinite())
+    }
+
+    /// The coarsest level whose bound `tolerance` accepts for `view` (the
+    /// finest when none is certified or none is accepted).
+    pub fn level_within(&self, view: &View, tolerance: Tolerance) -> usize {
+        let Some(finest) = self.levels.first() else {
+            return 0;
+        };
+        let b = finest.density.bounds();
+        let (center, radius) = (b.center(), 0.5 * b.diagonal());
+        self.error_bounds
+            .iter()
+            .rposition(|e| {
+                e.is_finite() && tolerance.accepts(view, self.diagonal, *e, center, radius)
+            })
+            .unwrap_or(0)
     }
 
     /// The iso-surface of level `i` (clamped to the pyramid).
@@ -139,29 +221,42 @@ impl Pyramid {
     }
 }
 
-/// A pyramid shown at a continuous position (§5): the studio's filter slider
-/// moves `position` at run time and the cut is the in-between level there.
+/// A pyramid cut like every hierarchy: the coarsest certified level within
+/// the tolerance, unless a continuous position (§5, the studio's pyramid
+/// slider) overrides it and shows the in-between level there.
 #[derive(Debug, Clone)]
 pub struct PyramidCut {
     pub pyramid: Pyramid,
-    pub position: f32,
+    /// The explicit override: a continuous position (0 = finest).
+    pub position: Option<f32>,
     /// The level last extracted and its position (re-extracted on a move).
-    cached: Option<(f32, crate::geom::TriMesh)>,
+    cached: Option<(f32, TriMesh)>,
 }
 
 impl PyramidCut {
-    pub fn new(pyramid: Pyramid, position: f32) -> Self {
+    pub fn new(pyramid: Pyramid, position: Option<f32>) -> Self {
         PyramidCut {
             pyramid,
             position,
             cached: None,
         }
     }
+
+    /// The position a cut shows.
+    fn position_for(&self, view: &View, tolerance: Tolerance) -> f32 {
+        match self.position {
+            Some(t) if t.is_finite() => t.clamp(0.0, self.pyramid.levels.len().max(1) as f32 - 1.0),
+            _ => self.pyramid.level_within(view, tolerance) as f32,
+        }
+    }
 }
 
 impl Hierarchy for PyramidCut {
-    /// The finest grid's (the object's bounds, padded for the filter).
+    /// The reference surface's, once certified; else the finest grid's.
     fn diagonal(&self) -> f32 {
+        if self.pyramid.diagonal > 0.0 {
+            return self.pyramid.diagonal;
+        }
         self.pyramid
             .levels
             .first()
@@ -172,26 +267,33 @@ impl Hierarchy for PyramidCut {
         "voxel pyramid"
     }
 
-    fn select(&mut self, _view: &View, _tolerance: Tolerance) -> DrawSet {
-        let t = self.position;
+    /// A whole level carries its certified bound; an in-between one has
+    /// none here (infinite), as certifying it would cost a slider move.
+    fn select(&mut self, view: &View, tolerance: Tolerance) -> DrawSet {
+        let t = self.position_for(view, tolerance);
         if self.cached.as_ref().is_none_or(|(at, _)| *at != t) {
             // Extraction is never cancelled here; an empty mesh stands in if it were.
             let level = self.pyramid.in_between(t, &Progress::new());
             self.cached = Some((t, level.map(|l| l.mesh).unwrap_or_default()));
         }
+        let whole = t.fract() == 0.0;
         DrawSet {
             mesh: self
                 .cached
                 .as_ref()
                 .map(|(_, m)| m.clone())
                 .unwrap_or_default(),
+            error_bound: match self.pyramid.error_bounds.get(t as usize) {
+                Some(b) if whole => *b,
+                _ => f32::INFINITY,
+            },
             ..Default::default()
         }
     }
 
-    /// The cut depends on the position only.
-    fn view_key(&self, _view: &View, _tolerance: Tolerance) -> Option<u64> {
-        Some(0)
+    /// The cut depends on the position it shows only.
+    fn view_key(&self, view: &View, tolerance: Tolerance) -> Option<u64> {
+        Some(self.position_for(view, tolerance).to_bits().into())
     }
 
     fn save(&self, params: &serde_json::Value) -> Option<Vec<u8>> {
@@ -202,12 +304,26 @@ impl Hierarchy for PyramidCut {
         ))
     }
 
-    /// `position`: the continuous pyramid level (0 = finest).
+    /// `position`: the continuous pyramid level to show (0 = finest); a
+    /// negative one follows the tolerance.
     fn set_runtime(&mut self, params: &serde_json::Value) {
         if let Some(t) = params.get("position").and_then(|v| v.as_f64()) {
-            self.position = t as f32;
+            self.position = (t >= 0.0).then_some(t as f32);
         }
     }
+}
+
+/// A level's certified bound against `original`; infinite for an empty level.
+pub fn level_bound(
+    original: &Original,
+    mesh: &TriMesh,
+    opts: &BoundOptions,
+    progress: &Progress,
+) -> Result<f32, Cancelled> {
+    if mesh.triangles.is_empty() {
+        return Ok(f32::INFINITY);
+    }
+    Ok(certify_against(original, mesh, opts, progress)?.error_bound())
 }
 
 /// Trilinear interpolation of `v` at world point `p`; 0 outside the grid.
@@ -272,7 +388,7 @@ mod tests {
         assert_eq!(back.in_between(0.5, &p).unwrap(), mid);
 
         // As a hierarchy, the position moves at run time.
-        let mut cut = PyramidCut::new(back, 0.0);
+        let mut cut = PyramidCut::new(back, Some(0.0));
         let view = View::orbit(Vec3::ZERO, 5.0, 0.0, 0.0);
         let tol = Tolerance::Relative(0.01);
         assert_eq!(cut.select(&view, tol).mesh, l0.mesh);
