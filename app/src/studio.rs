@@ -885,6 +885,11 @@ impl StudioApp {
                 outlines: self.outlines,
             });
             let mut view = self.viewport.core_view();
+            let input_triangles = self
+                .current
+                .as_ref()
+                .and_then(|c| build::mesh_of(&c.loaded.model).ok())
+                .map_or(0, |m| m.triangles.len());
             let mt = &self.methods.merge_tree;
             if let Some(light) = mt.light() {
                 view.light_dir = light;
@@ -894,6 +899,7 @@ impl StudioApp {
                 "silhouette": mt.silhouette,
                 "lighting": mt.lighting,
                 "position": self.methods.voxel.runtime_position().unwrap_or(-1.0),
+                "collapse": self.methods.edge_collapse.runtime(input_triangles),
                 "amg_level": self.methods.amg.runtime_level(),
             }));
             live.update(&view, self.methods.threshold.tolerance());
@@ -911,13 +917,10 @@ impl StudioApp {
             return;
         }
         let scene = match (&self.result, self.view) {
-            (Some(built), View::Simplified | View::SideBySide) => {
-                match (&built.heat, &built.live) {
-                    (Some(heat), _) if self.heat => &heat.scene,
-                    (_, Some(live)) => live.scene(),
-                    _ => &built.scene,
-                }
-            }
+            (Some(built), View::Simplified | View::SideBySide) => match &built.live {
+                Some(live) => live.scene(),
+                None => &built.scene,
+            },
             _ => &current.scene,
         };
         self.viewport.swap_scene(scene);
@@ -993,7 +996,11 @@ impl StudioApp {
                 serde_json::json!({"resolution": m.voxel.resolution, "radius": m.voxel.radius})
             }
             Method::Amg => serde_json::json!({"k": m.amg.k}),
-            Method::EdgeCollapse => serde_json::json!({}),
+            Method::EdgeCollapse => serde_json::json!({
+                "lock_borders": m.edge_collapse.lock_borders,
+                "min_quality": m.edge_collapse.min_quality,
+                "min_normal_cos": m.edge_collapse.min_normal_cos,
+            }),
         };
         live.save(&params)
     }
@@ -1260,7 +1267,7 @@ impl StudioApp {
                 self.export_dialog(ui.ctx());
             }
             let can_save = self.export.is_none()
-                && self.result.as_ref().is_some_and(|b| b.live.is_some() && b.method() != Method::EdgeCollapse);
+                && self.result.as_ref().is_some_and(|b| b.live.is_some());
             let save = ui
                 .add_enabled(can_save, egui::Button::new("Save hierarchy…"))
                 .on_hover_text("Save the built hierarchy (versioned, checksummed .lodh) to reopen it later without rebuilding.")
@@ -1297,7 +1304,7 @@ impl StudioApp {
         let has_heat = self
             .result
             .as_ref()
-            .is_some_and(|r| r.heat.is_some() || r.live.as_ref().is_some_and(|l| l.has_errors()));
+            .is_some_and(|r| r.live.as_ref().is_some_and(|l| l.has_errors()));
         // Without a result the original is what is shown, whatever was chosen.
         let mut shown = if has_result {
             self.view
@@ -1465,14 +1472,7 @@ impl StudioApp {
                         }
                     });
                 }
-                if let Some(heat) = &built.heat
-                    && self.heat
-                    && self.view.shows_lod()
-                {
-                    ui.add_space(4.0);
-                    ui.label("certified bound per triangle");
-                    heatmap::legend(ui, &build::length(heat.max));
-                } else if let Some(live) = built.live.as_ref().filter(|l| l.has_errors())
+                if let Some(live) = built.live.as_ref().filter(|l| l.has_errors())
                     && self.heat
                     && self.view.shows_lod()
                 {

@@ -446,34 +446,55 @@ fn edge_collapse_builds_shows_certificate_and_exports() {
     assert!(harness.state().is_building(), "a rebuild is scheduled");
     wait_for_build(&mut harness);
 
+    harness.run();
     let built = harness.state().result().expect("the build finished");
     let triangles = built.mesh().triangles.len();
-    let bound = built
-        .simplified()
-        .expect("an edge-collapse result")
-        .error_bound();
-    assert!(triangles > 0 && triangles <= 929, "{triangles} triangles");
+    let live = built.live.as_ref().expect("the collapses are cut live");
+    let bound = live.stats.error_bound;
+    assert!(triangles > 900 && triangles <= 929, "{triangles} triangles");
     assert!(bound.is_finite() && bound > 0.0, "bound {bound}");
     for label in [
         "original triangles",
-        "simplified triangles",
-        "certified bound",
-        "bound / diagonal",
-        "forward (O to S)",
-        "reverse (S to O)",
+        "recorded collapses",
+        "floor triangles",
+        "bound at the floor",
         "build time",
+        "cut triangles",
+        "cut bound",
     ] {
         assert!(has_label(&harness, label), "inspector row {label:?}");
     }
     assert!(has_label(&harness, &triangles.to_string()));
-    assert!(has_label(&harness, &lodstudio::build::length(bound)));
+    let shown = lodstudio::build::length(bound);
+    assert!(
+        harness.query_all_by_label_contains(&shown).next().is_some(),
+        "{shown}"
+    );
     assert!(
         harness
             .state()
             .log_lines()
-            .any(|l| l.contains("certified bound")),
+            .any(|l| l.contains("bound at the floor")),
         "the log reports the build"
     );
+
+    // The ratio slider moves the cut within a frame: no rebuild.
+    let cuts = live.stats.cuts;
+    harness
+        .get_by_role_and_label(egui::Role::Slider, "ratio")
+        .set_value_accesskit(0.1);
+    harness.run();
+    assert!(!harness.state().is_building(), "a target is no rebuild");
+    let live = harness.state().result().unwrap().live.as_ref().unwrap();
+    let coarser = live.stats.triangles;
+    assert!(coarser > 350 && coarser <= 371, "{coarser}");
+    assert!(live.stats.error_bound >= bound && live.stats.cuts > cuts);
+    assert_eq!(drawn_triangles(&harness), Some(coarser));
+    harness
+        .get_by_role_and_label(egui::Role::Slider, "ratio")
+        .set_value_accesskit(0.25);
+    harness.run();
+    assert_eq!(drawn_triangles(&harness), Some(triangles), "and back");
 
     // The viewport shows the result; the toggle switches back and forth.
     assert_eq!(drawn_triangles(&harness), Some(triangles));
@@ -487,7 +508,7 @@ fn edge_collapse_builds_shows_certificate_and_exports() {
     // Colour by the certified bound: a legend explains the colours.
     harness.get_by_label("Colour by certified bound").click();
     harness.run();
-    assert!(has_label(&harness, "certified bound per triangle"));
+    assert!(has_label(&harness, "error bound per primitive"));
     let (covered, shades, _) = viewport_pixels(&mut harness, "studio_heat");
     assert!(covered > 0.02, "covers {:.1}%", covered * 100.0);
     assert!(shades > 20, "only {shades} shades");
@@ -514,9 +535,13 @@ fn edge_collapse_builds_shows_certificate_and_exports() {
 
 #[test]
 fn cancelling_a_build_keeps_the_previous_result() {
-    let mut harness = studio(Some("builtin:torus".into()));
+    let mut harness = studio(Some("builtin:sphereflake".into()));
     wait_for_load(&mut harness);
-    let input = harness.state().summary().expect("torus loaded").triangles;
+    let input = harness
+        .state()
+        .summary()
+        .expect("sphereflake loaded")
+        .triangles;
 
     let mut methods = *harness.state().methods();
     methods.auto_rebuild = false;
@@ -537,29 +562,29 @@ fn cancelling_a_build_keeps_the_previous_result() {
         .clone();
     assert!(before.triangles.len() <= input / 2);
 
-    // An error target this tight builds several times over (seconds): cancel it.
-    methods.edge_collapse.mode = TargetMode::Error;
-    methods.edge_collapse.error_percent = 0.01;
+    // A new sliver guard records the collapses again (seconds): cancel it.
+    methods.edge_collapse.min_quality = 0.3;
     harness.state_mut().set_methods(methods);
-    harness.get_by_label("Build").click();
+    harness.state_mut().build();
     harness.step();
     harness.step();
-    assert!(harness.state().is_building(), "the build is still running");
+    assert!(
+        harness.state().is_building(),
+        "the build is still running: {:?}",
+        harness.state().log_lines().collect::<Vec<_>>()
+    );
     assert!(
         harness
-            .query_all_by_label_contains("Edge collapse of builtin:torus: ")
+            .query_all_by_label_contains("Edge collapse of builtin:sphereflake: ")
             .next()
             .is_some(),
         "the progress row names the build and its stage"
     );
     cancel_keeps(&mut harness, &before);
     assert!(has_label(&harness, &before.triangles.len().to_string()));
-    assert!(
-        harness
-            .state()
-            .log_lines()
-            .any(|l| l == "Cancelled Edge collapse of builtin:torus; the previous result is kept"),
-    );
+    assert!(harness.state().log_lines().any(
+        |l| l == "Cancelled Edge collapse of builtin:sphereflake; the previous result is kept"
+    ),);
     assert!(has_label(
         &harness,
         "Parameters changed since the last build."
@@ -1053,6 +1078,31 @@ fn voxel_layers_and_the_pyramid_are_shown_live() {
     assert!(has_label(&harness, "genus per pyramid level"));
     let finest = cut_stats(&harness).triangles;
     assert!(finest > 0);
+    // The level follows the threshold: a looser one shows a coarser level,
+    // each with its certified bound.
+    methods.threshold.in_pixels = false;
+    methods.threshold.percent = 0.01;
+    harness.state_mut().set_methods(methods);
+    harness.run();
+    assert_eq!(
+        cut_stats(&harness).triangles,
+        finest,
+        "none within: the finest"
+    );
+    harness
+        .get_by_role_and_label(egui::Role::Slider, "error threshold")
+        .set_value_accesskit(20.0);
+    harness.run();
+    assert!(
+        !harness.state().is_building(),
+        "a threshold needs no rebuild"
+    );
+    let coarse = cut_stats(&harness);
+    assert!(coarse.triangles < finest, "{coarse:?}");
+    assert!(coarse.error_bound <= 0.2 * 4.62, "{coarse:?}");
+    // The position overrides it, browsing between levels.
+    harness.get_by_label("level follows the threshold").click();
+    harness.run();
     harness
         .get_by_role_and_label(egui::Role::Slider, "pyramid position")
         .set_value_accesskit(1.5);

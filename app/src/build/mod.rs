@@ -19,14 +19,15 @@ use lodstudio_core::geom::Volume;
 use lodstudio_core::implicit::Implicit;
 use lodstudio_core::io::Model;
 use lodstudio_core::progress::{Cancelled, Progress};
-use lodstudio_core::simplify::{Simplified, SimplifyError, SimplifyOptions, simplify};
+use lodstudio_core::simplify::CollapseOptions;
+use lodstudio_core::simplify::progressive::{self, Progressive, ProgressiveCut};
 use lodstudio_core::view::{Tolerance, View};
 use lodstudio_core::voxel::layers::{self, Layered};
 use lodstudio_core::voxel::pyramid::{Pyramid, PyramidCut};
 use lodstudio_core::voxel::{self, DENSITY_ISO, Source, VoxelLevel, density, marching_cubes};
 
-use crate::heatmap;
 use crate::live_cut::LiveCut;
+use crate::panels::simplify::EdgeCollapseSettings;
 use crate::panels::voxel::{VolumeGrid, VoxelSettings};
 use crate::panels::{BuildParams, Method};
 use crate::viewport::Scene;
@@ -52,15 +53,8 @@ pub struct Row {
 
 /// What a build made, by method.
 pub enum Lod {
-    /// Edge collapse: the simplified mesh and its certificate.
-    Collapsed {
-        simplified: Simplified,
-        input_triangles: usize,
-        /// Bounding-box diagonal of the input (what relative errors refer to).
-        diagonal: f32,
-    },
     /// Voxel simplification: the iso-surface and its topology.
-    Voxel(VoxelLevel),
+    Voxel(Box<VoxelLevel>),
     /// A hierarchy cut live ([`Built::live`]): what is shown is its cut.
     Cut,
 }
@@ -75,13 +69,6 @@ pub struct Plot {
     pub series: Vec<(String, Vec<[f64; 2]>)>,
 }
 
-/// The simplified mesh coloured by each triangle's certified bound.
-pub struct Heat {
-    pub scene: Arc<Scene>,
-    /// The value the heat map's brightest colour stands for.
-    pub max: f32,
-}
-
 /// A finished build.
 pub struct Built {
     pub lod: Lod,
@@ -91,8 +78,6 @@ pub struct Built {
     pub seconds: f32,
     /// The simplified mesh as the viewport draws it.
     pub scene: Arc<Scene>,
-    /// Only for methods with per-triangle bounds (edge collapse).
-    pub heat: Option<Heat>,
     pub rows: Vec<Row>,
     pub plots: Vec<Plot>,
     /// Hierarchies cut live for the camera and the threshold (and layered
@@ -122,7 +107,6 @@ impl Built {
             params,
             seconds,
             scene: Arc::clone(live.scene()),
-            heat: None,
             rows,
             plots,
             live: Some(live),
@@ -136,18 +120,9 @@ impl Built {
     /// The mesh the build made (a live cut's current triangles).
     pub fn mesh(&self) -> &TriMesh {
         match (&self.lod, &self.live) {
-            (Lod::Collapsed { simplified, .. }, _) => &simplified.mesh,
             (Lod::Voxel(level), _) => &level.mesh,
             (Lod::Cut, Some(live)) => &live.draw_set().mesh,
             (Lod::Cut, None) => &EMPTY,
-        }
-    }
-
-    /// The edge-collapse result, if this was one.
-    pub fn simplified(&self) -> Option<&Simplified> {
-        match &self.lod {
-            Lod::Collapsed { simplified, .. } => Some(simplified),
-            Lod::Voxel(_) | Lod::Cut => None,
         }
     }
 
@@ -155,27 +130,13 @@ impl Built {
     pub fn voxel(&self) -> Option<&VoxelLevel> {
         match &self.lod {
             Lod::Voxel(level) => Some(level),
-            Lod::Collapsed { .. } | Lod::Cut => None,
+            Lod::Cut => None,
         }
     }
 
     /// One line for the log, after the job's label.
     pub fn report(&self) -> String {
         match &self.lod {
-            Lod::Collapsed {
-                simplified,
-                input_triangles,
-                diagonal,
-            } => {
-                let bound = simplified.error_bound();
-                format!(
-                    "{input_triangles} to {} triangles, certified bound {} ({:.3} % of the diagonal), {:.2} s",
-                    simplified.mesh.triangles.len(),
-                    length(bound),
-                    100.0 * bound / diagonal.max(f32::MIN_POSITIVE),
-                    self.seconds
-                )
-            }
             Lod::Voxel(level) => format!(
                 "{} triangles, {} components, genus {} (resolution {}, filter radius {:.1} voxels), {:.2} s",
                 level.mesh.triangles.len(),
@@ -264,14 +225,16 @@ pub fn mesh_of(model: &Model) -> Result<&TriMesh, String> {
     ))
 }
 
-/// Simplifies `model` and prepares everything the studio shows of the result.
+/// Records `model`'s edge collapses down to the floor, each step with its
+/// certified bound, as a hierarchy the studio cuts live (the target and the
+/// threshold choose the step).
 ///
 /// # Errors
 /// `Err(Cancelled)` when `progress` was cancelled; `Ok(Err(message))` when the
-/// model or the options do not allow a build.
+/// model does not allow a build.
 pub fn run(
     model: &Model,
-    options: SimplifyOptions,
+    collapse: CollapseOptions,
     progress: &Progress,
 ) -> Result<Result<Built, String>, Cancelled> {
     let mesh = match mesh_of(model) {
@@ -279,50 +242,21 @@ pub fn run(
         Err(message) => return Ok(Err(message)),
     };
     let start = Instant::now();
-    let simplified = match simplify(mesh, &options, progress) {
-        Ok(s) => s,
-        Err(SimplifyError::Cancelled) => return Err(Cancelled),
-        Err(e @ SimplifyError::BadTarget(_)) => return Ok(Err(e.to_string())),
-    };
+    let floor = EdgeCollapseSettings::floor(mesh.triangles.len());
+    let recorded = Arc::new(progressive::record(mesh, collapse, floor, progress)?);
     let seconds = start.elapsed().as_secs_f32();
     progress.check()?;
     progress.stage("preparing the view");
-    let scene = Arc::new(Scene::from_mesh(&simplified.mesh));
-    progress.check()?;
-    let bounds = &simplified.certificate.triangle_bounds;
-    let heat_max = bounds
-        .iter()
-        .copied()
-        .filter(|b| b.is_finite())
-        .fold(0.0, f32::max);
-    let colors: Vec<_> = bounds
-        .iter()
-        .map(|&b| heatmap::linear(if heat_max > 0.0 { b / heat_max } else { 0.0 }))
-        .collect();
-    let heat = Heat {
-        scene: Arc::new(Scene::from_mesh_with_triangle_colors(
-            &simplified.mesh,
-            &colors,
-        )),
-        max: heat_max,
-    };
-    let diagonal = mesh.bounds().diagonal();
-    let input_triangles = mesh.triangles.len();
-    let rows = rows(&simplified, input_triangles, diagonal, seconds);
-    Ok(Ok(Built {
-        lod: Lod::Collapsed {
-            simplified,
-            input_triangles,
-            diagonal,
-        },
-        params: BuildParams::EdgeCollapse(options),
+    let rows = rows(&recorded, seconds);
+    let plots = vec![bound_curve(&recorded)];
+    Ok(Ok(Built::live(
+        Box::new(ProgressiveCut::new(recorded)),
+        mesh.bounds(),
+        BuildParams::EdgeCollapse(collapse),
         seconds,
-        scene,
-        heat: Some(heat),
         rows,
-        plots: Vec::new(),
-        live: None,
-    }))
+        plots,
+    )))
 }
 
 /// Samples a solid (a built-in implicit or a mesh's winding number), filters
@@ -461,11 +395,10 @@ fn voxel_built(
         },
     );
     Ok(Ok(Built {
-        lod: Lod::Voxel(level),
+        lod: Lod::Voxel(Box::new(level)),
         params: BuildParams::Voxel(settings),
         seconds,
         scene,
-        heat: None,
         rows,
         plots: Vec::new(),
         live,
@@ -547,11 +480,10 @@ fn voxel_pyramid(
         Tolerance::Pixels(1.0),
     );
     Ok(Ok(Built {
-        lod: Lod::Voxel(finest),
+        lod: Lod::Voxel(Box::new(finest)),
         params: BuildParams::Voxel(settings),
         seconds,
         scene: Arc::clone(live.scene()),
-        heat: None,
         rows,
         plots,
         live: Some(live),
@@ -630,60 +562,65 @@ fn voxel_rows(level: &VoxelLevel, settings: VoxelSettings, seconds: f32) -> Vec<
     ]
 }
 
-fn rows(simplified: &Simplified, input: usize, diagonal: f32, seconds: f32) -> Vec<Row> {
-    let certificate = &simplified.certificate;
-    let bound = simplified.error_bound();
-    let relative = if bound.is_finite() && diagonal > 0.0 {
-        format!("{:.3} %", 100.0 * bound / diagonal)
-    } else {
-        "—".to_string()
-    };
+fn rows(p: &Progressive, seconds: f32) -> Vec<Row> {
+    let floor = p.collapses();
+    let bound = p.bound_at(floor);
     vec![
         Row {
             label: "original triangles",
-            value: input.to_string(),
+            value: p.triangles_at(0).to_string(),
             hint: "Triangles of the model as opened (after repair).",
         },
         Row {
-            label: "simplified triangles",
-            value: simplified.mesh.triangles.len().to_string(),
-            hint: "Triangles left after the edge collapses.",
+            label: "recorded collapses",
+            value: floor.to_string(),
+            hint: "Edge collapses recorded, each with the certified bound of the triangles \
+                   it made; the target and the threshold choose how many are shown.",
         },
         Row {
-            label: "certified bound",
-            value: length(bound),
+            label: "floor triangles",
+            value: p.triangles_at(floor).to_string(),
+            hint: "Triangles after every recorded collapse: the coarsest step.",
+        },
+        Row {
+            label: "bound at the floor",
+            value: format!(
+                "{} ({:.3} %)",
+                length(bound),
+                100.0 * bound / p.diagonal().max(f32::MIN_POSITIVE)
+            ),
             hint: "Guaranteed upper bound on the two-sided Hausdorff distance between the \
-                   original and the simplified surface: no point of either lies farther \
-                   than this from the other (hybrid paper §5.2).",
-        },
-        Row {
-            label: "bound / diagonal",
-            value: relative,
-            hint: "The certified bound as a percentage of the bounding-box diagonal.",
-        },
-        Row {
-            label: "forward (O to S)",
-            value: length(certificate.forward),
-            hint: "Bound on the distance from any point of the original O to the \
-                   simplified surface S.",
-        },
-        Row {
-            label: "reverse (S to O)",
-            value: length(certificate.reverse),
-            hint: "Bound on the distance from any point of the simplified surface S to \
-                   the original O.",
-        },
-        Row {
-            label: "collapses",
-            value: simplified.collapses.to_string(),
-            hint: "Edge collapses performed (for an error target: in the final run).",
+                   original and the coarsest step: no point of either lies farther than \
+                   this from the other (hybrid paper §5.2).",
         },
         Row {
             label: "build time",
             value: format!("{seconds:.2} s"),
-            hint: "Time to collapse and certify, without preparing the view.",
+            hint: "Time to collapse and bound every step, without preparing the view.",
         },
     ]
+}
+
+/// The certified bound of each step against its triangle count.
+fn bound_curve(p: &Progressive) -> Plot {
+    let n = p.collapses();
+    let stride = (n / 256).max(1);
+    let diagonal = p.diagonal().max(f32::MIN_POSITIVE);
+    let points = (0..=n)
+        .step_by(stride)
+        .chain(std::iter::once(n))
+        .map(|k| {
+            let bound = 100.0 * p.bound_at(k) / diagonal;
+            [p.triangles_at(k) as f64, f64::from(bound)]
+        })
+        .collect();
+    Plot {
+        title: "certified bound per step",
+        x_label: "triangles",
+        y_label: "bound (% of the diagonal)",
+        log_y: true,
+        series: vec![("bound".to_string(), points)],
+    }
 }
 
 /// A distance with four significant digits (model units vary wildly).
@@ -704,7 +641,7 @@ mod tests {
     use lodstudio_core::builtins::torus;
     use lodstudio_core::geom::PointSet;
     use lodstudio_core::implicit::MeshSolid;
-    use lodstudio_core::simplify::{CollapseOptions, Target};
+    use lodstudio_core::simplify::CollapseOptions;
 
     #[test]
     fn lengths_keep_four_significant_digits() {
@@ -717,24 +654,28 @@ mod tests {
 
     #[test]
     fn builds_a_torus_and_explains_points() {
-        let options = SimplifyOptions {
-            per_triangle_bounds: false,
-            target: Target::Ratio(0.25),
-            collapse: CollapseOptions::default(),
-        };
+        let options = CollapseOptions::default();
         let model = Model::Mesh(torus(1.0, 0.35, 32, 16));
-        let built = run(&model, options, &Progress::new())
+        let mut built = run(&model, options, &Progress::new())
             .expect("not cancelled")
             .expect("a mesh builds");
-        let simplified = built.simplified().expect("an edge-collapse result");
-        assert!(simplified.mesh.triangles.len() <= 256);
-        assert_eq!(
-            built.scene.triangle_count(),
-            simplified.mesh.triangles.len()
-        );
-        let heat_max = built.heat.as_ref().expect("a heat map").max;
-        assert!(heat_max > 0.0 && heat_max <= simplified.error_bound());
         assert_eq!(built.method(), Method::EdgeCollapse);
+        // The target moves the cut without a rebuild: a quarter of the triangles.
+        let live = built.live.as_mut().expect("cut live");
+        live.set_runtime(serde_json::json!({"collapse": {"triangles": 256}}));
+        let view = View::orbit(glam::Vec3::ZERO, 3.0, 0.2, 0.3);
+        assert!(live.update(&view, Tolerance::Pixels(1.0)));
+        let (n, bound) = (live.stats.triangles, live.stats.error_bound);
+        assert!((250..=256).contains(&n), "{n}");
+        assert!(bound > 0.0 && bound.is_finite());
+        live.set_runtime(serde_json::json!({"collapse": {"triangles": 900}}));
+        live.update(&view, Tolerance::Pixels(1.0));
+        assert!(live.stats.triangles > n && live.stats.error_bound <= bound);
+        assert!(live.has_errors(), "per-triangle bounds for the heat map");
+        // Down to the floor, or as far as the torus's topology lets it go.
+        assert!(built.rows.iter().any(
+            |r| r.label == "floor triangles" && r.value.parse::<usize>().is_ok_and(|f| f < 64)
+        ));
 
         let points = Model::Points(PointSet::default());
         let message = run(&points, options, &Progress::new())
@@ -762,7 +703,6 @@ mod tests {
         let level = built.voxel().expect("a voxel result");
         assert!(!level.mesh.triangles.is_empty());
         assert_eq!(built.mesh().triangles.len(), level.mesh.triangles.len());
-        assert!(built.heat.is_none());
         assert_eq!(built.method(), Method::Voxel);
 
         let mesh = Model::Mesh(torus(1.0, 0.35, 8, 4));

@@ -31,6 +31,7 @@ pub fn reopen(path: &Path) -> Result<Reopened, LoadError> {
     let bad = |why: String| LoadError::malformed(path, ParseError::new(Location::File, why));
     let (header, hierarchy) = hierarchy_file::reopen(&bytes).map_err(|e| bad(e.to_string()))?;
     let method = match header.method.as_str() {
+        "simplify" => Method::EdgeCollapse,
         "hybrid" => Method::Hybrid,
         "mergetree" => Method::MergeTree,
         "voxel" => Method::Voxel,
@@ -77,7 +78,18 @@ impl Reopened {
                 methods.amg.k = number("k").map_or(methods.amg.k, |k| k as usize);
                 methods.amg = methods.amg.sanitized();
             }
-            Method::EdgeCollapse => {}
+            Method::EdgeCollapse => {
+                let ec = &mut methods.edge_collapse;
+                ec.lock_borders = self
+                    .params
+                    .get("lock_borders")
+                    .and_then(|v| v.as_bool())
+                    .unwrap_or(ec.lock_borders);
+                ec.min_quality = number("min_quality").unwrap_or(ec.min_quality as f64) as f32;
+                ec.min_normal_cos =
+                    number("min_normal_cos").unwrap_or(ec.min_normal_cos as f64) as f32;
+                methods.edge_collapse = methods.edge_collapse.sanitized();
+            }
         }
         methods
     }
@@ -91,7 +103,6 @@ impl Reopened {
             params: methods.params(None),
             seconds: 0.0,
             scene: Arc::clone(live.scene()),
-            heat: None,
             rows: vec![Row {
                 label: "saved with",
                 value: self.params.to_string(),

@@ -9,7 +9,7 @@ pub mod mergetree;
 pub mod simplify;
 pub mod voxel;
 
-use lodstudio_core::simplify::SimplifyOptions;
+use lodstudio_core::simplify::CollapseOptions;
 use serde::{Deserialize, Serialize};
 
 use lodstudio_core::mergetree::MergeTreeOptions;
@@ -116,7 +116,8 @@ pub struct MethodSettings {
 /// with other parameters than the shown ones is stale.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum BuildParams {
-    EdgeCollapse(SimplifyOptions),
+    /// The collapses' legality rules (the target chooses a prefix at run time).
+    EdgeCollapse(CollapseOptions),
     Voxel(VoxelSettings),
     /// The tree's build options (its criteria apply at run time).
     MergeTree(MergeTreeOptions),
@@ -169,7 +170,7 @@ impl MethodSettings {
     /// open model when it is a volume (voxel builds depend on other values then).
     pub fn params(&self, volume: Option<&VolumeGrid>) -> BuildParams {
         match self.method {
-            Method::EdgeCollapse => BuildParams::EdgeCollapse(self.edge_collapse.options()),
+            Method::EdgeCollapse => BuildParams::EdgeCollapse(self.edge_collapse.collapse()),
             Method::Voxel => BuildParams::Voxel(match volume {
                 Some(grid) => self.voxel.for_volume(grid),
                 None => self.voxel.for_implicit(),

@@ -1,17 +1,21 @@
 //! Parameters of edge-collapse simplification (hybrid paper §5.2) and their
-//! controls, explained in the papers' terms.
+//! controls, explained in the papers' terms. The build records the collapses
+//! once, down to a floor (`simplify::progressive`); the target only chooses
+//! a prefix, live.
 
-use lodstudio_core::simplify::{CollapseOptions, SimplifyOptions, Target};
+use lodstudio_core::simplify::CollapseOptions;
 use serde::{Deserialize, Serialize};
 
-/// When collapsing stops; each mode keeps its own value so switching back
-/// restores it.
+/// Which prefix of the recorded collapses is shown; each mode keeps its own
+/// value so switching back restores it.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
 pub enum TargetMode {
     #[default]
     Ratio,
     Triangles,
     Error,
+    /// The view's error threshold, as for every other hierarchy.
+    Threshold,
 }
 
 const RATIO_RANGE: std::ops::RangeInclusive<f32> = 0.001..=1.0;
@@ -20,15 +24,17 @@ const ERROR_PERCENT_RANGE: std::ops::RangeInclusive<f32> = 0.001..=10.0;
 /// DragValue needs a finite upper end; no model comes close.
 const MAX_TRIANGLES: usize = 1_000_000_000;
 
-const TARGET_HINT: &str = "When to stop collapsing edges. Edges collapse in order of \
+const TARGET_HINT: &str = "Where to stop collapsing edges. Edges collapse in order of \
     quadric error; each collapse merges an edge's two vertices into one and removes the \
-    triangles on that edge.";
+    triangles on that edge. The build records every collapse down to 0.1 % of the \
+    triangles, each step with its certified bound, so moving the target needs no rebuild.";
 const RATIO_HINT: &str = "Keep this fraction of the input's triangles.";
 const TRIANGLES_HINT: &str = "Collapse until at most this many triangles remain (fewer \
     are possible only if no legal collapse is left).";
 const ERROR_HINT: &str = "As few triangles as possible while the certified two-sided \
-    Hausdorff bound stays within this percentage of the bounding-box diagonal (the \
-    triangle count is found by bisection, so this builds several times).";
+    Hausdorff bound stays within this percentage of the bounding-box diagonal.";
+const THRESHOLD_HINT: &str = "Follow the view's error threshold (object space, or pixels \
+    at the camera) like every other hierarchy: the coarsest step within it.";
 const LOCK_HINT: &str = "Border vertices never move, so open boundaries, seams between \
     parts and non-manifold edges keep their exact shape. Off: they may still only slide \
     along the border, never off it.";
@@ -39,11 +45,6 @@ const QUALITY_HINT: &str = "Sliver guard: reject a collapse that creates a trian
 const FOLD_HINT: &str = "Fold guard: reject a collapse that turns any triangle's normal \
     by more than the angle whose cosine this is, so the surface does not fold over \
     itself. 0 rejects only turns beyond 90°; higher is stricter.";
-
-const TIGHT_HINT: &str = "Certify every triangle's bound to within 5% of its measured \
-    distance, so the heat map shows where the error really is. Off: triangles are only \
-    refined while they could decide the mesh's bound (much faster; their values are \
-    conservative).";
 
 /// Everything edge collapse needs besides the mesh.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -60,8 +61,6 @@ pub struct EdgeCollapseSettings {
     pub min_quality: f32,
     /// Smallest cosine between a triangle's normals before and after a collapse.
     pub min_normal_cos: f32,
-    /// Certify every triangle tightly (for the heat map), not only the maximum.
-    pub tight_bounds: bool,
 }
 
 impl Default for EdgeCollapseSettings {
@@ -75,7 +74,6 @@ impl Default for EdgeCollapseSettings {
             lock_borders: collapse.lock_borders,
             min_quality: collapse.min_quality,
             min_normal_cos: collapse.min_normal_cos,
-            tight_bounds: false,
         }
     }
 }
@@ -101,25 +99,37 @@ impl EdgeCollapseSettings {
             lock_borders: self.lock_borders,
             min_quality: clamp_or(self.min_quality, 0.0..=1.0, d.min_quality),
             min_normal_cos: clamp_or(self.min_normal_cos, 0.0..=1.0, d.min_normal_cos),
-            tight_bounds: self.tight_bounds,
         }
     }
 
-    /// What `simplify` gets.
-    pub fn options(&self) -> SimplifyOptions {
+    /// What the build depends on: the collapses' legality rules.
+    pub fn collapse(&self) -> CollapseOptions {
         let s = self.sanitized();
-        SimplifyOptions {
-            per_triangle_bounds: s.tight_bounds,
-            target: match s.mode {
-                TargetMode::Ratio => Target::Ratio(s.ratio),
-                TargetMode::Triangles => Target::Triangles(s.triangles),
-                TargetMode::Error => Target::RelativeError(s.error_percent / 100.0),
-            },
-            collapse: CollapseOptions {
-                lock_borders: s.lock_borders,
-                min_quality: s.min_quality,
-                min_normal_cos: s.min_normal_cos,
-            },
+        CollapseOptions {
+            lock_borders: s.lock_borders,
+            min_quality: s.min_quality,
+            min_normal_cos: s.min_normal_cos,
+        }
+    }
+
+    /// The triangles a build records collapses down to, for `input` triangles:
+    /// the ratio slider's low end.
+    pub fn floor(input: usize) -> usize {
+        (f64::from(*RATIO_RANGE.start()) * input as f64) as usize
+    }
+
+    /// The run-time choice of a recorded collapse's prefix (the hierarchy's
+    /// `collapse` parameter): `null` follows the view's threshold.
+    pub fn runtime(&self, input_triangles: usize) -> serde_json::Value {
+        let s = self.sanitized();
+        match s.mode {
+            TargetMode::Ratio => {
+                let n = (f64::from(s.ratio) * input_triangles as f64).round();
+                serde_json::json!({ "triangles": n })
+            }
+            TargetMode::Triangles => serde_json::json!({ "triangles": s.triangles }),
+            TargetMode::Error => serde_json::json!({ "error": s.error_percent / 100.0 }),
+            TargetMode::Threshold => serde_json::Value::Null,
         }
     }
 
@@ -133,6 +143,7 @@ impl EdgeCollapseSettings {
                 (TargetMode::Ratio, "Ratio", RATIO_HINT),
                 (TargetMode::Triangles, "Triangles", TRIANGLES_HINT),
                 (TargetMode::Error, "Error", ERROR_HINT),
+                (TargetMode::Threshold, "Threshold", THRESHOLD_HINT),
             ] {
                 ui.selectable_value(&mut self.mode, mode, name)
                     .on_hover_text(hint);
@@ -175,6 +186,9 @@ impl EdgeCollapseSettings {
                 .on_hover_text(ERROR_HINT);
                 ui.weak("of the bounding-box diagonal");
             }
+            TargetMode::Threshold => {
+                ui.weak("the error threshold below chooses");
+            }
         }
         ui.checkbox(&mut self.lock_borders, "Lock borders")
             .on_hover_text(LOCK_HINT);
@@ -184,8 +198,6 @@ impl EdgeCollapseSettings {
             .on_hover_text(FOLD_HINT);
         let degrees = self.min_normal_cos.clamp(-1.0, 1.0).acos().to_degrees();
         ui.weak(format!("normals may turn up to {degrees:.0}°"));
-        ui.checkbox(&mut self.tight_bounds, "Tight per-triangle bounds")
-            .on_hover_text(TIGHT_HINT);
         *self != before
     }
 }
@@ -195,22 +207,30 @@ mod tests {
     use super::*;
 
     #[test]
-    fn options_follow_the_mode() {
+    fn the_mode_chooses_the_prefix_and_only_legality_rebuilds() {
         let mut s = EdgeCollapseSettings {
             ratio: 0.25,
             triangles: 500,
             error_percent: 1.0,
             ..Default::default()
         };
-        assert_eq!(s.options().target, Target::Ratio(0.25));
+        assert_eq!(s.runtime(1000), serde_json::json!({"triangles": 250.0}));
         s.mode = TargetMode::Triangles;
-        assert_eq!(s.options().target, Target::Triangles(500));
+        assert_eq!(s.runtime(1000), serde_json::json!({"triangles": 500}));
         s.mode = TargetMode::Error;
-        assert_eq!(s.options().target, Target::RelativeError(0.01));
+        assert_eq!(
+            s.runtime(1000),
+            serde_json::json!({"error": 1.0f32 / 100.0})
+        );
+        s.mode = TargetMode::Threshold;
+        assert_eq!(s.runtime(1000), serde_json::Value::Null);
+        let moved = EdgeCollapseSettings { ratio: 0.5, ..s };
+        assert_eq!(moved.collapse(), s.collapse(), "a target is no rebuild");
         s.min_normal_cos = f32::NAN;
         assert_eq!(
-            s.options().collapse.min_normal_cos,
+            s.collapse().min_normal_cos,
             CollapseOptions::default().min_normal_cos
         );
+        assert_eq!(EdgeCollapseSettings::floor(100_000), 100);
     }
 }

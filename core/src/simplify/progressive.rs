@@ -283,9 +283,21 @@ fn range<'a>(list: &'a [u32], ends: &[u32], i: usize) -> &'a [u32] {
     &list[start..ends[i] as usize]
 }
 
+/// What chooses the prefix instead of the view's tolerance (the studio's
+/// ratio / triangles / error slider).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum PrefixTarget {
+    /// The first prefix with at most this many triangles.
+    Triangles(usize),
+    /// The coarsest prefix within this fraction of the diagonal.
+    RelativeError(f32),
+}
+
 /// A progressive mesh cut live: the selected prefix and its alive triangles.
 pub struct ProgressiveCut {
     progressive: Arc<Progressive>,
+    /// `None`: the view's tolerance chooses.
+    pub target: Option<PrefixTarget>,
     at: usize,
     alive: Vec<bool>,
 }
@@ -295,6 +307,7 @@ impl ProgressiveCut {
         let alive = progressive.alive_at(0);
         ProgressiveCut {
             progressive,
+            target: None,
             at: 0,
             alive,
         }
@@ -302,6 +315,16 @@ impl ProgressiveCut {
 
     pub fn progressive(&self) -> &Arc<Progressive> {
         &self.progressive
+    }
+
+    /// The prefix a cut for `view` within `tolerance` shows.
+    fn prefix_for(&self, view: &View, tolerance: Tolerance) -> usize {
+        let p = &self.progressive;
+        match self.target {
+            Some(PrefixTarget::Triangles(n)) => p.prefix_for_triangles(n),
+            Some(PrefixTarget::RelativeError(f)) => p.prefix_within(view, Tolerance::Relative(f)),
+            None => p.prefix_within(view, tolerance),
+        }
     }
 
     /// The cut after `k` collapses, moved to from the previous one.
@@ -332,13 +355,27 @@ impl Hierarchy for ProgressiveCut {
     }
 
     fn select(&mut self, view: &View, tolerance: Tolerance) -> DrawSet {
-        let k = self.progressive.prefix_within(view, tolerance);
+        let k = self.prefix_for(view, tolerance);
         self.select_prefix(k)
     }
 
     /// The selected prefix.
     fn view_key(&self, view: &View, tolerance: Tolerance) -> Option<u64> {
-        Some(self.progressive.prefix_within(view, tolerance) as u64)
+        Some(self.prefix_for(view, tolerance) as u64)
+    }
+
+    /// `collapse`: `{"triangles": N}` or `{"error": fraction of the
+    /// diagonal}` choose the prefix; `null` hands it back to the tolerance.
+    fn set_runtime(&mut self, params: &serde_json::Value) {
+        let Some(c) = params.get("collapse") else {
+            return;
+        };
+        let number = |key| c.get(key).and_then(serde_json::Value::as_f64);
+        self.target = match (number("triangles"), number("error")) {
+            (Some(n), _) if n >= 0.0 => Some(PrefixTarget::Triangles(n as usize)),
+            (_, Some(f)) if f >= 0.0 => Some(PrefixTarget::RelativeError(f as f32)),
+            _ => None,
+        };
     }
 
     fn select_triangles(&mut self, n: usize) -> Option<DrawSet> {
