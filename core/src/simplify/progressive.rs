@@ -329,17 +329,28 @@ impl ProgressiveCut {
 
     /// The cut after `k` collapses, moved to from the previous one.
     pub fn select_prefix(&mut self, k: usize) -> DrawSet {
-        let p = &self.progressive;
-        let k = k.min(p.collapses());
-        p.replay(&mut self.alive, self.at, k);
+        self.move_to(k);
+        self.draw_set()
+    }
+
+    /// Replays or undoes the collapses between the current prefix and `k`.
+    pub fn move_to(&mut self, k: usize) {
+        let k = k.min(self.progressive.collapses());
+        self.progressive.replay(&mut self.alive, self.at, k);
         self.at = k;
+    }
+
+    /// The current prefix's triangles (as `simplify` makes them), each with
+    /// the bound of the collapse that made it.
+    pub fn draw_set(&self) -> DrawSet {
+        let p = &self.progressive;
         let ids: Vec<u32> = (0..self.alive.len() as u32)
             .filter(|t| self.alive[*t as usize])
             .collect();
         DrawSet {
             triangle_errors: ids.iter().map(|t| p.triangle_bound(*t)).collect(),
             mesh: p.record.history.arrays().gather(ids),
-            error_bound: p.bound_at(k),
+            error_bound: p.bound_at(self.at),
             ..Default::default()
         }
     }
