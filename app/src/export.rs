@@ -3,10 +3,11 @@
 
 use std::path::{Path, PathBuf};
 
-use lodstudio_core::TriMesh;
-use lodstudio_core::io::{encode_mesh, write_atomic};
+use lodstudio_core::cut::DrawSet;
+use lodstudio_core::io::{cut_writer, write_atomic};
 
-/// Extensions `encode_mesh` writes, the dialog's default first.
+/// Extensions the cut writer writes, the dialog's default (it holds every
+/// primitive type) first.
 const MESH_EXTENSIONS: &[&str] = &["glb", "obj", "ply"];
 
 /// How an export ended.
@@ -15,6 +16,8 @@ pub enum Saved {
     Written {
         path: PathBuf,
         bytes: usize,
+        /// Files written beside it (a cut's points, more layers).
+        beside: Vec<PathBuf>,
     },
     /// The dialog was closed without a choice (or there is no dialog service).
     NoFile,
@@ -23,14 +26,18 @@ pub enum Saved {
 
 /// Asks where to save (suggesting `file_name`); the dialog itself asks before
 /// replacing a file. Then writes as [`write`] does.
-pub fn choose_and_write(mesh: &TriMesh, file_name: &str) -> Saved {
+pub fn choose_and_write(set: &DrawSet, file_name: &str) -> Saved {
     let chosen = rfd::FileDialog::new()
-        .set_title("Export simplified mesh")
+        .set_title("Export the LOD")
         .set_file_name(file_name)
-        .add_filter("Meshes (glb, obj, ply)", MESH_EXTENSIONS)
+        .add_filter("glTF binary: everything (glb)", &MESH_EXTENSIONS[..1])
+        .add_filter(
+            "Meshes: triangles, points beside (obj, ply)",
+            &MESH_EXTENSIONS[1..],
+        )
         .save_file();
     match chosen {
-        Some(path) => write(mesh, &path),
+        Some(path) => write(set, &path),
         None => Saved::NoFile,
     }
 }
@@ -49,11 +56,20 @@ pub fn choose_and_write_hierarchy(bytes: &[u8], file_name: &str) -> Saved {
     }
 }
 
-/// Writes `mesh` to `path` in the format its extension names, atomically (a
-/// failed write leaves any existing file as it was).
-pub fn write(mesh: &TriMesh, path: &Path) -> Saved {
-    match encode_mesh(path, mesh) {
-        Ok(bytes) => write_bytes(&bytes, path),
+/// Writes the cut `set` at `path` through the one cut writer (GLB holds it
+/// all; OBJ and PLY get the points beside them, and refuse splats),
+/// atomically: a failed write leaves any existing file as it was.
+pub fn write(set: &DrawSet, path: &Path) -> Saved {
+    match cut_writer::write(path, set) {
+        Ok(files) => {
+            let bytes = files.iter().map(|f| f.1).sum();
+            let mut paths = files.into_iter().map(|f| f.0);
+            Saved::Written {
+                path: paths.next().unwrap_or_else(|| path.to_path_buf()),
+                bytes,
+                beside: paths.collect(),
+            }
+        }
         Err(e) => Saved::Failed(e),
     }
 }
@@ -64,6 +80,7 @@ pub fn write_bytes(bytes: &[u8], path: &Path) -> Saved {
         Ok(()) => Saved::Written {
             path: path.to_path_buf(),
             bytes: bytes.len(),
+            beside: Vec::new(),
         },
         Err(e) => Saved::Failed(format!("{}: cannot write: {e}", path.display())),
     }
@@ -93,9 +110,12 @@ mod tests {
             "couplingdown-929.glb"
         );
         assert_eq!(suggested_name(Path::new("builtin:torus"), 5), "torus-5.glb");
-        let mesh = lodstudio_core::builtins::torus(1.0, 0.3, 8, 4);
+        let set = DrawSet {
+            mesh: lodstudio_core::builtins::torus(1.0, 0.3, 8, 4),
+            ..Default::default()
+        };
         let dir = std::env::temp_dir();
-        match write(&mesh, &dir.join("lodstudio-export-test.xyz")) {
+        match write(&set, &dir.join("lodstudio-export-test.xyz")) {
             Saved::Failed(message) => assert!(message.contains("xyz"), "{message}"),
             other => panic!("expected a failure, got {other:?}"),
         }

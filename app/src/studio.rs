@@ -377,7 +377,7 @@ impl StudioApp {
     /// thread, without a dialog; the outcome goes to the log.
     pub fn export_to(&mut self, path: impl Into<PathBuf>, ctx: &egui::Context) {
         let path = path.into();
-        self.start_export(ctx, move |mesh| export::write(mesh, &path));
+        self.start_export(ctx, move |set| export::write(set, &path));
     }
 
     /// Whether an export (its dialog or its writing) is under way.
@@ -959,7 +959,7 @@ impl StudioApp {
     fn start_export(
         &mut self,
         ctx: &egui::Context,
-        write: impl FnOnce(&lodstudio_core::TriMesh) -> Saved + Send + 'static,
+        write: impl FnOnce(&lodstudio_core::cut::DrawSet) -> Saved + Send + 'static,
     ) {
         if self.export.is_some() {
             return;
@@ -968,14 +968,15 @@ impl StudioApp {
             self.error("Nothing to export yet: build a LOD first".into());
             return;
         };
-        // The mesh on screen: a live cut's triangles, or the built mesh.
-        let mesh = match &built.live {
-            Some(live) if !live.draw_set().mesh.triangles.is_empty() => {
-                live.draw_set().mesh.clone()
-            }
-            _ => built.mesh().clone(),
+        // What is on screen: a live cut, every primitive of it, or the built mesh.
+        let set = match &built.live {
+            Some(live) => live.draw_set().clone(),
+            None => lodstudio_core::cut::DrawSet {
+                mesh: built.mesh().clone(),
+                ..Default::default()
+            },
         };
-        match Job::spawn("export", "Exporting".into(), ctx, move |_| Ok(write(&mesh))) {
+        match Job::spawn("export", "Exporting".into(), ctx, move |_| Ok(write(&set))) {
             Ok(job) => self.export = Some(job),
             Err(e) => self.error(format!("cannot start the export: {e}")),
         }
@@ -1055,7 +1056,7 @@ impl StudioApp {
             return;
         };
         let name = export::suggested_name(&current.path, built.mesh().triangles.len());
-        self.start_export(ctx, move |mesh| export::choose_and_write(mesh, &name));
+        self.start_export(ctx, move |set| export::choose_and_write(set, &name));
     }
 
     fn poll_export(&mut self) {
@@ -1069,8 +1070,18 @@ impl StudioApp {
         };
         self.export = None;
         match saved {
-            Saved::Written { path, bytes } => {
-                self.info(format!("Exported {} ({bytes} bytes)", path.display()));
+            Saved::Written {
+                path,
+                bytes,
+                beside,
+            } => {
+                let beside: Vec<String> = beside.iter().map(|p| p.display().to_string()).collect();
+                let also = if beside.is_empty() {
+                    String::new()
+                } else {
+                    format!(", with {}", beside.join(", "))
+                };
+                self.info(format!("Exported {}{also} ({bytes} bytes)", path.display()));
             }
             Saved::NoFile => self.info(
                 "Nothing exported: no file chosen (the dialog needs xdg-desktop-portal)".into(),

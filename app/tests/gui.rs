@@ -1169,6 +1169,24 @@ fn hybrid_cut_mixes_triangles_and_points_live() {
     harness.state_mut().viewport_mut().yaw += 1.0;
     harness.run();
     assert_eq!(cut_stats(&harness).cuts, coarse.cuts);
+    // Export writes the cut's triangles and, beside them, its points.
+    let out = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("gui-hybrid-cut.obj");
+    let points = out.with_extension("points.ply");
+    let _ = std::fs::remove_file(&points);
+    assert_eq!(export_and_reload(&mut harness, &out), coarse.triangles);
+    let read = lodstudio_core::io::load(&points, &Default::default(), &Default::default())
+        .expect("the points load");
+    let lodstudio_core::Model::Points(p) = read.model else {
+        panic!("a point set");
+    };
+    assert_eq!(p.positions.len(), coarse.points);
+    assert!(p.radii.is_some_and(|r| r.iter().all(|r| *r > 0.0)));
+    assert!(
+        harness
+            .state()
+            .log_lines()
+            .any(|l| l.contains("points.ply"))
+    );
 }
 
 /// A saved hierarchy reopens in the studio as a live cut, with its method and
@@ -1258,6 +1276,26 @@ fn amg_splats_are_drawn_and_the_level_moves_live() {
     assert_eq!(
         coarse.splats, 8,
         "one domain per face at the coarsest level"
+    );
+    // Export writes the splats: a GLB with their textures, blended ...
+    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR"));
+    let ctx = harness.ctx.clone();
+    harness.state_mut().export_to(dir.join("gui-amg.glb"), &ctx);
+    wait_while(&mut harness, "exporting", StudioApp::is_exporting);
+    let glb = std::fs::read(dir.join("gui-amg.glb")).expect("exported");
+    let text = String::from_utf8_lossy(&glb);
+    assert_eq!(text.matches("\"image/png\"").count(), 8);
+    assert_eq!(text.matches("\"BLEND\"").count(), 8);
+    // ... and a format that cannot hold them says so instead of dropping them.
+    let _ = std::fs::remove_file(dir.join("gui-amg.obj"));
+    harness.state_mut().export_to(dir.join("gui-amg.obj"), &ctx);
+    wait_while(&mut harness, "exporting", StudioApp::is_exporting);
+    assert!(!dir.join("gui-amg.obj").exists());
+    assert!(
+        harness
+            .state()
+            .log_lines()
+            .any(|l| l.starts_with("Export failed") && l.contains("splats need a .glb"))
     );
 }
 

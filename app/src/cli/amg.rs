@@ -94,9 +94,7 @@ pub fn run(args: AmgArgs) -> Result<(), CliError> {
             .map_err(|e| CliError::BadInput(format!("{}: cannot write: {e}", out.display())))?;
     }
     if let Some(out) = &args.output {
-        let glb = io::gltf_writer::write_draw_set_glb(&prims.draw_set(None));
-        io::write_atomic(out, &glb)
-            .map_err(|e| CliError::BadInput(format!("{}: cannot write: {e}", out.display())))?;
+        write_cut(out, &prims.draw_set(None))?;
     }
     let levels: Vec<usize> = (0..ms.levels()).map(|l| ms.domains(l).len()).collect();
     let j = serde_json::json!({

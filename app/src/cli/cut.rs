@@ -1,7 +1,5 @@
 //! `cut`: reopen a saved hierarchy and write its cut, without rebuilding.
 
-use std::path::Path;
-
 use super::*;
 use lodstudio_core::cut::select_triangles;
 use lodstudio_core::io::hierarchy_file;
@@ -96,14 +94,4 @@ pub fn run(args: CutArgs) -> Result<(), CliError> {
         );
     }
     Ok(())
-}
-
-/// A cut as GLB (everything) or as a mesh file (its triangles).
-fn write_cut(out: &Path, set: &lodstudio_core::cut::DrawSet) -> Result<(), CliError> {
-    if io::extension(out) == "glb" {
-        let bytes = io::gltf_writer::write_draw_set_glb(set);
-        return io::write_atomic(out, &bytes)
-            .map_err(|e| CliError::BadInput(format!("{}: cannot write: {e}", out.display())));
-    }
-    write_mesh(out, &set.mesh)
 }

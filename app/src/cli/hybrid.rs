@@ -1,7 +1,6 @@
 //! `hybrid`: the multi-resolution graph of triangles and points (hybrid paper).
 
 use super::*;
-use lodstudio_core::PointSet;
 use lodstudio_core::cut::Hierarchy;
 use lodstudio_core::hybrid::{self, HybridCut, HybridOptions, Mrg, NodeKind, curve};
 use lodstudio_core::view::{Tolerance, View};
@@ -40,11 +39,6 @@ pub struct HybridArgs {
     input: InputArgs,
 }
 
-/// The `.points.ply` beside a cut's triangle file.
-fn points_path(out: &std::path::Path) -> PathBuf {
-    out.with_extension("points.ply")
-}
-
 /// Builds the MRG, reporting bad options and empty meshes as bad input.
 pub fn build(mesh: &lodstudio_core::TriMesh, opts: &HybridOptions) -> Result<Mrg, CliError> {
     opts.validate().map_err(CliError::BadInput)?;
@@ -69,7 +63,7 @@ pub fn run(args: HybridArgs) -> Result<(), CliError> {
     for out in [
         args.curve.clone(),
         args.output.clone(),
-        args.output.as_deref().map(points_path),
+        args.output.as_deref().map(io::cut_writer::points_path),
     ]
     .into_iter()
     .flatten()
@@ -110,26 +104,7 @@ pub fn run(args: HybridArgs) -> Result<(), CliError> {
             let mut cut = HybridCut::new(Arc::clone(&mrg));
             let view = View::orbit(mesh.bounds().center(), diag, 0.0, 0.0);
             let set = cut.select(&view, Tolerance::Relative(fraction));
-            let points = PointSet {
-                positions: set.points.iter().map(|p| p.center).collect(),
-                normals: Some(set.points.iter().map(|p| p.normal).collect()),
-                colors: Some(set.points.iter().map(|p| p.color).collect()),
-                radii: Some(set.points.iter().map(|p| p.radius).collect()),
-            };
-            if io::extension(out) == "glb" {
-                let bytes = io::gltf_writer::write_draw_set_glb(&set);
-                io::write_atomic(out, &bytes).map_err(|e| {
-                    CliError::BadInput(format!("{}: cannot write: {e}", out.display()))
-                })?;
-            } else {
-                write_mesh(out, &set.mesh)?;
-            }
-            let pts = points_path(out);
-            io::write_atomic(
-                &pts,
-                &io::ply::write_points(&points, io::ply::Encoding::BinaryLittleEndian),
-            )
-            .map_err(|e| CliError::BadInput(format!("{}: cannot write: {e}", pts.display())))?;
+            write_cut(out, &set)?;
             Some((set, fraction))
         }
         _ => None,

@@ -167,7 +167,7 @@ pub fn run(args: MergeTreeArgs) -> Result<(), CliError> {
         )));
     }
     if let Some(out) = &args.output {
-        write_mesh(out, &warm.draw_set().mesh)?;
+        write_cut(out, &warm.draw_set())?;
     }
     let levels = tree.levels();
     let json = serde_json::json!({

@@ -339,6 +339,17 @@ pub fn check_output(out: &std::path::Path, force: bool) -> Result<(), CliError> 
     Ok(())
 }
 
+/// Writes a cut through the one writer (`io::cut_writer`: GLB holds it all,
+/// mesh formats get the `.points.ply` and `.layerK` files beside them).
+pub fn write_cut(
+    out: &std::path::Path,
+    set: &lodstudio_core::cut::DrawSet,
+) -> Result<(), CliError> {
+    io::cut_writer::write(out, set)
+        .map(|_| ())
+        .map_err(CliError::BadInput)
+}
+
 pub fn write_mesh(out: &std::path::Path, mesh: &lodstudio_core::TriMesh) -> Result<(), CliError> {
     let bytes = io::encode_mesh(out, mesh).map_err(CliError::BadInput)?;
     io::write_atomic(out, &bytes)

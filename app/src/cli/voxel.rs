@@ -255,7 +255,13 @@ pub fn run(args: VoxelArgs) -> Result<(), CliError> {
         .expect("a plan has a layer");
     let l = voxel::level(main.mesh.clone(), resolution, args.radius);
     if let Some(out) = &args.output {
-        write_layers(out, &layers)?;
+        write_cut(
+            out,
+            &lodstudio_core::cut::DrawSet {
+                layers: layers.clone(),
+                ..Default::default()
+            },
+        )?;
     }
     let mut j = level_json(&l);
     j["layers"] = layers.len().into();
@@ -291,35 +297,6 @@ fn report_level(
             l.genus,
             j["layers"]
         );
-    }
-    Ok(())
-}
-
-/// Writes layers: all in one GLB, or one mesh file each (OUT, then
-/// OUT.layerK.EXT).
-fn write_layers(
-    out: &std::path::Path,
-    layers: &[lodstudio_core::cut::Layer],
-) -> Result<(), CliError> {
-    if out
-        .extension()
-        .is_some_and(|e| e.eq_ignore_ascii_case("glb"))
-    {
-        let bytes = io::gltf_writer::write_draw_set_glb(&lodstudio_core::cut::DrawSet {
-            layers: layers.to_vec(),
-            ..Default::default()
-        });
-        return io::write_atomic(out, &bytes)
-            .map_err(|e| CliError::BadInput(format!("{}: cannot write: {e}", out.display())));
-    }
-    for (k, layer) in layers.iter().enumerate() {
-        let path = if k == 0 {
-            out.to_path_buf()
-        } else {
-            let ext = out.extension().and_then(|e| e.to_str()).unwrap_or("ply");
-            out.with_extension(format!("layer{k}.{ext}"))
-        };
-        write_mesh(&path, &layer.mesh)?;
     }
     Ok(())
 }
