@@ -3,8 +3,8 @@
 
 use std::path::{Path, PathBuf};
 
-use lodstudio_core::cut::DrawSet;
 use lodstudio_core::io::{cut_writer, write_atomic};
+use lodstudio_core::lod::DrawSet;
 
 /// Extensions the cut writer writes, the dialog's default (it holds every
 /// primitive type) first.

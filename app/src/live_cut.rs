@@ -5,7 +5,7 @@
 use std::sync::Arc;
 use std::time::Instant;
 
-use lodstudio_core::cut::{DrawSet, Hierarchy};
+use lodstudio_core::lod::{DrawSet, Hierarchy};
 use lodstudio_core::view::{Tolerance, View};
 use serde::{Deserialize, Serialize};
 
@@ -309,7 +309,7 @@ mod tests {
     #[test]
     fn layered_cuts_are_reselected_only_when_the_slicing_direction_changes() {
         let mesh = lodstudio_core::builtins::torus(1.0, 0.3, 16, 8);
-        let layer = |alpha| lodstudio_core::cut::Layer {
+        let layer = |alpha| lodstudio_core::lod::Layer {
             mesh: mesh.clone(),
             alpha,
             isodensity: alpha,

@@ -12,9 +12,9 @@ use std::sync::mpsc::{self, Receiver, TryRecvError};
 use std::time::Duration;
 
 use lodstudio_core::builtins;
-use lodstudio_core::cut::Picked;
 use lodstudio_core::implicit::MeshSolid;
 use lodstudio_core::io::{LoadError, LoadOptions, Loaded, load};
+use lodstudio_core::lod::Picked;
 use lodstudio_core::progress::{Cancelled, Progress};
 use lodstudio_core::stats::ModelSummary;
 
@@ -959,7 +959,7 @@ impl StudioApp {
     fn start_export(
         &mut self,
         ctx: &egui::Context,
-        write: impl FnOnce(&lodstudio_core::cut::DrawSet) -> Saved + Send + 'static,
+        write: impl FnOnce(&lodstudio_core::lod::DrawSet) -> Saved + Send + 'static,
     ) {
         if self.export.is_some() {
             return;
@@ -971,7 +971,7 @@ impl StudioApp {
         // What is on screen: a live cut, every primitive of it, or the built mesh.
         let set = match &built.live {
             Some(live) => live.draw_set().clone(),
-            None => lodstudio_core::cut::DrawSet {
+            None => lodstudio_core::lod::DrawSet {
                 mesh: built.mesh().clone(),
                 ..Default::default()
             },

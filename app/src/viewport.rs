@@ -15,9 +15,9 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use bytemuck::{Pod, Zeroable};
 use egui_wgpu::{CallbackResources, CallbackTrait, ScreenDescriptor, wgpu};
 use glam::{Mat4, Vec3};
-use lodstudio_core::cut::{DrawSet, Layer};
 use lodstudio_core::geom::{Aabb, PointSet, TriMesh, Volume};
 use lodstudio_core::io::Model;
+use lodstudio_core::lod::{DrawSet, Layer};
 
 /// Vertical field of view of the camera.
 const FOV_Y: f32 = std::f32::consts::FRAC_PI_4;
@@ -333,13 +333,7 @@ impl Scene {
                     .splats
                     .iter()
                     .flat_map(|s| {
-                        let [a, b] = s.axes;
-                        let c = [
-                            s.center - a - b,
-                            s.center + a - b,
-                            s.center + a + b,
-                            s.center - a + b,
-                        ];
+                        let c = s.corners();
                         (0..4).flat_map(move |i| [c[i], c[(i + 1) % 4]])
                     })
                     .map(|p| MeshVertex {
@@ -458,12 +452,12 @@ fn splat_quads(set: &DrawSet) -> (Vec<SplatVertex>, Vec<u32>, Atlas) {
             (py + t.height) as f32 / height as f32,
         );
         let base = vertices.len() as u32;
-        let [a, b] = splat.axes;
+        let c = splat.corners();
         for (corner, uv) in [
-            (splat.center - a - b, [u0, v0]),
-            (splat.center + a - b, [u1, v0]),
-            (splat.center + a + b, [u1, v1]),
-            (splat.center - a + b, [u0, v1]),
+            (c[0], [u0, v0]),
+            (c[1], [u1, v0]),
+            (c[2], [u1, v1]),
+            (c[3], [u0, v1]),
         ] {
             vertices.push(SplatVertex {
                 position: corner.to_array(),

@@ -7,13 +7,13 @@
 
 pub mod amg;
 pub mod builtins;
-pub mod cut;
 pub mod distance;
 pub mod geom;
 pub mod hybrid;
 mod id_set;
 pub mod implicit;
 pub mod io;
+pub mod lod;
 pub mod mergetree;
 pub mod progress;
 pub mod rng;

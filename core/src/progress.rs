@@ -10,7 +10,7 @@ use std::sync::Mutex;
 use std::sync::atomic::{AtomicBool, AtomicU32, Ordering};
 use std::time::{Duration, Instant};
 
-use crate::cut::DrawSet;
+use crate::lod::DrawSet;
 
 /// Returned by work that stopped because [`Progress::cancel`] was called.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, thiserror::Error)]

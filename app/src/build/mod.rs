@@ -89,7 +89,7 @@ impl Built {
     /// A finished hierarchy build, cut live from a first view of `bounds`
     /// (the studio re-cuts it for its own camera at the next frame).
     pub fn live(
-        hierarchy: Box<dyn lodstudio_core::cut::Hierarchy>,
+        hierarchy: Box<dyn lodstudio_core::lod::Hierarchy>,
         bounds: lodstudio_core::Aabb,
         params: BuildParams,
         seconds: f32,

@@ -4,8 +4,8 @@
 use std::path::Path;
 use std::sync::Arc;
 
-use lodstudio_core::cut::Hierarchy;
 use lodstudio_core::io::{LoadError, Location, ParseError, hierarchy_file};
+use lodstudio_core::lod::Hierarchy;
 use lodstudio_core::view::{Tolerance, View};
 
 use super::{Built, Lod, Row};

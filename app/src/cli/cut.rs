@@ -1,8 +1,8 @@
 //! `cut`: reopen a saved hierarchy and write its cut, without rebuilding.
 
 use super::*;
-use lodstudio_core::cut::select_triangles;
 use lodstudio_core::io::hierarchy_file;
+use lodstudio_core::lod::select_triangles;
 use lodstudio_core::view::{Tolerance, View};
 
 #[derive(Args, Debug)]

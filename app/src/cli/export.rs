@@ -3,9 +3,9 @@
 use std::path::Path;
 
 use super::*;
-use lodstudio_core::cut::DrawSet;
 use lodstudio_core::io::gltf::lod_screen_coverages;
 use lodstudio_core::io::gltf_writer::{PointsAs, write_lod_chain};
+use lodstudio_core::lod::DrawSet;
 use lodstudio_core::simplify;
 
 /// The LOD methods `export` can use.
@@ -488,7 +488,7 @@ fn cut_lods(
     mesh: &lodstudio_core::TriMesh,
     pixels_to_error: impl Fn(f32) -> f32,
 ) -> Result<Vec<Lod>, CliError> {
-    use lodstudio_core::cut::Hierarchy;
+    use lodstudio_core::lod::Hierarchy;
     use lodstudio_core::view::{Tolerance, View};
     let progress = Progress::new();
     let failed = |_| CliError::Failure("cancelled".into());

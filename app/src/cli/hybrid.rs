@@ -1,8 +1,8 @@
 //! `hybrid`: the multi-resolution graph of triangles and points (hybrid paper).
 
 use super::*;
-use lodstudio_core::cut::Hierarchy;
 use lodstudio_core::hybrid::{self, HybridCut, HybridOptions, Mrg, NodeKind, curve};
+use lodstudio_core::lod::Hierarchy;
 use lodstudio_core::view::{Tolerance, View};
 use std::sync::Arc;
 

@@ -115,7 +115,7 @@ impl SaveArgs {
     /// Writes `hierarchy` with its `params` when --save was given.
     pub fn write(
         &self,
-        hierarchy: &dyn lodstudio_core::cut::Hierarchy,
+        hierarchy: &dyn lodstudio_core::lod::Hierarchy,
         params: serde_json::Value,
     ) -> Result<(), CliError> {
         let Some(path) = &self.save else {
@@ -343,7 +343,7 @@ pub fn check_output(out: &std::path::Path, force: bool) -> Result<(), CliError> 
 /// mesh formats get the `.points.ply` and `.layerK` files beside them).
 pub fn write_cut(
     out: &std::path::Path,
-    set: &lodstudio_core::cut::DrawSet,
+    set: &lodstudio_core::lod::DrawSet,
 ) -> Result<(), CliError> {
     io::cut_writer::write(out, set)
         .map(|_| ())

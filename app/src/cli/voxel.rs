@@ -257,7 +257,7 @@ pub fn run(args: VoxelArgs) -> Result<(), CliError> {
     if let Some(out) = &args.output {
         write_cut(
             out,
-            &lodstudio_core::cut::DrawSet {
+            &lodstudio_core::lod::DrawSet {
                 layers: layers.clone(),
                 ..Default::default()
             },

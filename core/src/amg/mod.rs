@@ -18,7 +18,7 @@ use std::collections::HashMap;
 use glam::Vec3;
 use sprs::CsMat;
 
-use crate::cut::{DrawSet, Hierarchy};
+use crate::lod::{DrawSet, Hierarchy};
 use crate::view::{Tolerance, View};
 
 use crate::geom::PointSet;
@@ -230,12 +230,12 @@ pub fn decompose(
 
 /// One AMG level as points: `kept` (the points its unknowns stand for) as
 /// discs about as wide as their spacing on a surface of the set's extent.
-fn level_preview(points: &PointSet, kept: &[u32], diagonal: f32) -> crate::cut::DrawSet {
+fn level_preview(points: &PointSet, kept: &[u32], diagonal: f32) -> crate::lod::DrawSet {
     let radius = 0.5 * diagonal / (kept.len().max(1) as f32).sqrt();
-    crate::cut::DrawSet {
+    crate::lod::DrawSet {
         points: kept
             .iter()
-            .map(|&i| crate::cut::CutPoint {
+            .map(|&i| crate::lod::CutPoint {
                 center: points.positions[i as usize],
                 radius,
                 color: points

@@ -10,7 +10,7 @@ use spade::{DelaunayTriangulation, HasPosition, Point2, PositionInTriangulation,
 use super::Multiscale;
 use super::basis::domain_neighbours;
 use super::classifier::symmetric_eigen;
-use crate::cut::{DrawSet, Splat, Texture};
+use crate::lod::{DrawSet, Splat, Texture};
 use crate::progress::{Cancelled, Progress};
 
 /// Largest texture side; coarser texels are used for larger domains.

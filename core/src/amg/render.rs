@@ -7,7 +7,7 @@
 use glam::Vec3;
 
 use super::primitive::decode_srgb;
-use crate::cut::DrawSet;
+use crate::lod::DrawSet;
 use crate::view::View;
 
 /// Additively blended linear RGB (premultiplied by Ψ) and the summed Ψ per pixel,
@@ -153,13 +153,7 @@ fn raster(
     if tex.width == 0 || tex.height == 0 || l0 <= 0.0 || l1 <= 0.0 {
         return;
     }
-    let corners = [
-        s.center - a0 - a1,
-        s.center + a0 - a1,
-        s.center + a0 + a1,
-        s.center - a0 + a1,
-    ];
-    let (x0, y0, x1, y1) = cam.pixel_bounds(&corners);
+    let (x0, y0, x1, y1) = cam.pixel_bounds(&s.corners());
     let to_plane = s.normal.dot(s.center - cam.eye);
     for y in y0..y1 {
         for x in x0..x1 {

@@ -179,12 +179,12 @@ pub fn build_observed(
             let count = collapse_nodes.len();
             if count.is_multiple_of(256) && progress.wants_preview() {
                 // Watching the build: the triangles left and the points made so far.
-                progress.publish(crate::cut::DrawSet {
+                progress.publish(crate::lod::DrawSet {
                     mesh: col.mesh().0,
                     points: mrg
                         .points
                         .iter()
-                        .map(|p| crate::cut::CutPoint {
+                        .map(|p| crate::lod::CutPoint {
                             center: p.center,
                             radius: p.radius,
                             color: p.color,

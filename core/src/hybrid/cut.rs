@@ -19,9 +19,9 @@ use std::sync::Arc;
 use glam::Vec3;
 
 use super::mrg::{DRAIN, Mrg, NodeKind};
-use crate::cut::{CutPoint, DrawSet, Hierarchy};
 use crate::geom::{TriMesh, Wedges};
 use crate::id_set::{Columns, IdSet};
+use crate::lod::{CutPoint, DrawSet, Hierarchy};
 use crate::view::{NarrowTest, SphereTest, Tolerance, View};
 
 /// What the refinement test reads of a node.

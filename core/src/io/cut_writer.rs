@@ -12,8 +12,8 @@
 use std::path::{Path, PathBuf};
 
 use super::{encode_mesh, extension, ply, write_atomic};
-use crate::cut::DrawSet;
 use crate::geom::PointSet;
+use crate::lod::DrawSet;
 
 /// The `.points.ply` beside a cut's file.
 pub fn points_path(path: &Path) -> PathBuf {
@@ -92,7 +92,7 @@ pub fn write(path: &Path, set: &DrawSet) -> Result<Vec<(PathBuf, usize)>, String
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::cut::{CutPoint, Layer, Splat};
+    use crate::lod::{CutPoint, Layer, Splat};
     use glam::Vec3;
 
     fn set() -> DrawSet {

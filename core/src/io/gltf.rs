@@ -456,7 +456,7 @@ fn read_image_uri(uri: &str, base: Option<&Path>) -> Result<Vec<u8>, String> {
 /// vertex normals when the mesh has none), vertex colours and UVs when it has
 /// them, and 32-bit indices in one buffer, one node, one scene.
 pub fn write_glb(mesh: &TriMesh) -> Vec<u8> {
-    super::gltf_writer::write_draw_set_glb(&crate::cut::DrawSet {
+    super::gltf_writer::write_draw_set_glb(&crate::lod::DrawSet {
         mesh: mesh.clone(),
         ..Default::default()
     })
@@ -580,7 +580,7 @@ mod tests {
     #[test]
     fn materials_round_trip_one_primitive_per_material_with_their_images() {
         use crate::geom::{AlphaMode, Image, Material, Materials};
-        let png = super::super::gltf_writer::encode_png(&crate::cut::Texture {
+        let png = super::super::gltf_writer::encode_png(&crate::lod::Texture {
             width: 2,
             height: 1,
             rgba: vec![[255, 0, 0, 255], [0, 0, 255, 128]],
@@ -691,10 +691,10 @@ mod tests {
             colors: Some(vec![Vec3::new(1.0, 0.0, 0.0); 2]),
             radii: Some(vec![0.1, 0.2]),
         };
-        let set = |mesh: &TriMesh| crate::cut::DrawSet {
+        let set = |mesh: &TriMesh| crate::lod::DrawSet {
             mesh: mesh.clone(),
             points: (0..2)
-                .map(|i| crate::cut::CutPoint {
+                .map(|i| crate::lod::CutPoint {
                     center: points.positions[i],
                     radius: points.radii.as_ref().unwrap()[i],
                     color: Vec3::new(1.0, 0.0, 0.0),
@@ -717,10 +717,10 @@ mod tests {
         assert_eq!(only["meshes"][0]["primitives"][0]["mode"], 0);
     }
 
-    fn sets(meshes: &[TriMesh]) -> Vec<crate::cut::DrawSet> {
+    fn sets(meshes: &[TriMesh]) -> Vec<crate::lod::DrawSet> {
         meshes
             .iter()
-            .map(|m| crate::cut::DrawSet {
+            .map(|m| crate::lod::DrawSet {
                 mesh: m.clone(),
                 ..Default::default()
             })

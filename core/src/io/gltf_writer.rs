@@ -21,8 +21,8 @@ use std::collections::BTreeSet;
 use glam::Vec3;
 use serde_json::{Value, json};
 
-use crate::cut::{DrawSet, Texture};
 use crate::geom::{Aabb, AlphaMode, Material, TriMesh};
+use crate::lod::{DrawSet, Texture};
 
 const ARRAY_BUFFER: u32 = 34962;
 const ELEMENT_ARRAY_BUFFER: u32 = 34963;
@@ -361,13 +361,7 @@ impl GltfWriter {
                     m
                 }
             };
-            let [a, b] = s.axes;
-            let corners = [
-                s.center - a - b,
-                s.center + a - b,
-                s.center + a + b,
-                s.center - a + b,
-            ];
+            let corners = s.corners();
             let pos = self.floats(&flat3(&corners), "VEC3", Some(Aabb::from_points(&corners)));
             let n = s.normal.try_normalize().unwrap_or(Vec3::Z);
             let nrm = self.floats(&flat3(&[n; 4]), "VEC3", None);
@@ -573,7 +567,7 @@ pub(crate) fn encode_png(tex: &Texture) -> Vec<u8> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::cut::{Layer, Splat};
+    use crate::lod::{Layer, Splat};
 
     #[test]
     fn splats_and_layers_read_back_with_their_textures_and_alpha() {

@@ -185,10 +185,10 @@ pub fn load<T: DeserializeOwned>(
 /// an AMG multiscale.
 pub fn reopen(
     bytes: &[u8],
-) -> Result<(Header, Box<dyn crate::cut::Hierarchy>), HierarchyFileError> {
+) -> Result<(Header, Box<dyn crate::lod::Hierarchy>), HierarchyFileError> {
     use std::sync::Arc;
     let header = peek(bytes)?;
-    let hierarchy: Box<dyn crate::cut::Hierarchy> = match header.method.as_str() {
+    let hierarchy: Box<dyn crate::lod::Hierarchy> = match header.method.as_str() {
         "simplify" => {
             use crate::simplify::progressive::{Progressive, ProgressiveCut, Record};
             let (_, record) = load::<Record>(bytes, "simplify")?;
@@ -361,7 +361,7 @@ mod tests {
     /// for views near and far, in pixels and in object space.
     #[test]
     fn reopened_hierarchies_give_identical_cuts() {
-        use crate::cut::Hierarchy;
+        use crate::lod::Hierarchy;
         use crate::view::{Tolerance, View};
         use std::sync::Arc;
         let mesh = crate::builtins::torus(1.0, 0.35, 48, 24);

@@ -309,8 +309,8 @@ impl MergeTree {
 mod tests {
     use super::*;
     use crate::builtins::{icosphere, torus};
-    use crate::cut::Hierarchy;
     use crate::geom::Topology;
+    use crate::lod::Hierarchy;
     use crate::view::{Tolerance, View};
     use std::sync::Arc;
 

@@ -12,9 +12,9 @@ use fixedbitset::FixedBitSet;
 
 use super::criteria::Frame;
 use super::{Criteria, MergeTree, NONE, Node};
-use crate::cut::{DrawSet, Hierarchy};
 use crate::geom::{TriMesh, Wedges};
 use crate::id_set::IdSet;
+use crate::lod::{DrawSet, Hierarchy};
 use crate::view::{Tolerance, View};
 
 /// What one update did.

@@ -170,7 +170,7 @@ pub(crate) fn build_levels(
             let mut alive: Vec<u32> = b.vtris.iter().flatten().copied().collect();
             alive.sort_unstable();
             alive.dedup();
-            progress.publish(crate::cut::DrawSet {
+            progress.publish(crate::lod::DrawSet {
                 mesh: TriMesh::new(
                     mesh.positions.clone(),
                     alive.iter().map(|&t| b.tris[t as usize]).collect(),

@@ -125,7 +125,7 @@ pub fn simplify(
                 progress.set_fraction(done);
                 cancelled = progress.is_cancelled();
                 if progress.wants_preview() {
-                    progress.publish(crate::cut::DrawSet {
+                    progress.publish(crate::lod::DrawSet {
                         mesh: s.mesh().0,
                         ..Default::default()
                     });

@@ -19,8 +19,8 @@ use serde::{Deserialize, Serialize};
 
 use super::collapse::{CollapseOptions, EdgeCollapser};
 use super::step_bounds::run_bounded;
-use crate::cut::{DrawSet, Hierarchy};
 use crate::geom::TriMesh;
+use crate::lod::{DrawSet, Hierarchy};
 use crate::progress::{Cancelled, Progress};
 use crate::view::{Tolerance, View};
 

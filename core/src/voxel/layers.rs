@@ -16,8 +16,8 @@
 use glam::Vec3;
 
 use super::{Filter, filter, marching_cubes};
-use crate::cut::{DrawSet, Hierarchy, Layer};
 use crate::geom::Volume;
+use crate::lod::{DrawSet, Hierarchy, Layer};
 use crate::progress::{Cancelled, Progress};
 use crate::view::{Tolerance, View};
 

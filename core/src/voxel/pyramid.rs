@@ -18,9 +18,9 @@ use glam::Vec3;
 use rayon::prelude::*;
 
 use super::{DENSITY_ISO, Filter, VoxelLevel, level, marching_cubes};
-use crate::cut::{DrawSet, Hierarchy};
 use crate::geom::{TriMesh, Volume};
 use crate::implicit::Implicit;
+use crate::lod::{DrawSet, Hierarchy};
 use crate::progress::{Cancelled, Progress};
 use crate::simplify::{BoundOptions, Original, certify_against};
 use crate::view::{Tolerance, View};
@@ -95,7 +95,7 @@ impl Pyramid {
             let density = super::density(source, resolution, factor, radius, filter, progress)?;
             if progress.wants_preview() {
                 // Watching the build: each new level as it is filtered.
-                progress.publish(crate::cut::DrawSet {
+                progress.publish(crate::lod::DrawSet {
                     mesh: marching_cubes(&density, DENSITY_ISO, progress)?,
                     ..Default::default()
                 });

@@ -1,0 +1,62 @@
+//! What every hierarchy answers: given a view and a tolerance, which
+//! primitives to draw (DESIGN.md).
+
+use super::DrawSet;
+use crate::view::{Tolerance, View};
+
+/// A built LOD hierarchy.
+pub trait Hierarchy: Send + Sync {
+    /// Short name of the method, for logs and the inspector.
+    fn method(&self) -> &'static str;
+    /// Bounding-box diagonal of the model it was built from (what relative
+    /// tolerances and bounds refer to).
+    fn diagonal(&self) -> f32;
+    /// The primitives to draw for `view` within `tolerance`. Hierarchies that
+    /// adapt incrementally keep the previous cut and start from it.
+    fn select(&mut self, view: &View, tolerance: Tolerance) -> DrawSet;
+    /// Equal keys for two views promise equal cuts at `tolerance`, so a caller
+    /// re-selecting every frame can skip the work; `None` (the default) when
+    /// any change of the view may change the cut.
+    fn view_key(&self, _view: &View, _tolerance: Tolerance) -> Option<u64> {
+        None
+    }
+    /// The finest cut with at most `n` triangles, for methods whose cuts
+    /// form one sequence (edge collapse); `None` for the others.
+    fn select_triangles(&mut self, _n: usize) -> Option<DrawSet> {
+        None
+    }
+    /// Run-time parameters that change the cut without a rebuild (the merge
+    /// tree's criteria, say), as JSON; unknown keys are ignored.
+    fn set_runtime(&mut self, _params: &serde_json::Value) {}
+    /// The built hierarchy in a saved-hierarchy file with `params` (see
+    /// [`crate::io::hierarchy_file`]); `None` for hierarchies that do not save.
+    fn save(&self, _params: &serde_json::Value) -> Option<Vec<u8>> {
+        None
+    }
+}
+
+/// The finest cut of `hierarchy` with at most `n` triangles: its own where
+/// its cuts form one sequence, else the cut at the least relative tolerance
+/// that keeps to `n` (bisected to 1e-6 of the diagonal; the coarsest cut if
+/// none does).
+pub fn select_triangles(hierarchy: &mut dyn Hierarchy, view: &View, n: usize) -> DrawSet {
+    if let Some(set) = hierarchy.select_triangles(n) {
+        return set;
+    }
+    let mut cut = |f: f32| hierarchy.select(view, Tolerance::Relative(f));
+    let (mut lo, mut hi) = (0.0f32, 1.0f32);
+    let mut best = cut(hi);
+    if best.mesh.triangles.len() > n {
+        return best;
+    }
+    while hi - lo > 1e-6 {
+        let mid = 0.5 * (lo + hi);
+        let set = cut(mid);
+        if set.mesh.triangles.len() <= n {
+            (hi, best) = (mid, set);
+        } else {
+            lo = mid;
+        }
+    }
+    best
+}
