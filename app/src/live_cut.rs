@@ -5,7 +5,7 @@
 use std::sync::Arc;
 use std::time::Instant;
 
-use lodstudio_core::lod::{DrawSet, Hierarchy};
+use lodstudio_core::lod::{DrawSet, Hierarchy, Method};
 use lodstudio_core::view::{Tolerance, View};
 use serde::{Deserialize, Serialize};
 
@@ -96,12 +96,12 @@ pub struct CutStyle {
 }
 
 /// What "colour by region" means for each method's cuts, if anything.
-pub fn region_name(method: &str) -> Option<&'static str> {
+pub fn region_name(method: Method) -> Option<&'static str> {
     match method {
-        "mergetree" => Some("merge-tree level"),
-        "amg" => Some("AMG domain"),
-        "voxel layers" => Some("voxel layer"),
-        _ => None,
+        Method::MergeTree => Some("merge-tree level"),
+        Method::Amg => Some("AMG domain"),
+        Method::Voxel => Some("voxel layer"),
+        Method::EdgeCollapse | Method::Hybrid => None,
     }
 }
 
@@ -154,7 +154,7 @@ impl LiveCut {
         live
     }
 
-    pub fn method(&self) -> &'static str {
+    pub fn method(&self) -> Method {
         self.hierarchy.method()
     }
 

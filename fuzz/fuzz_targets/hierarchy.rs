@@ -31,8 +31,8 @@ libfuzzer_sys::fuzz_target!(|data: &[u8]| {
     let method = METHODS[pick as usize % METHODS.len()];
     let file = frame(method, b"{}", body);
     // The raw bytes too: the header's own checks.
-    let _ = hierarchy_file::reopen(data);
-    let Ok((_, mut h)) = hierarchy_file::reopen(&file) else {
+    let _ = lodstudio_core::lod::saved::reopen(data);
+    let Ok((_, mut h)) = lodstudio_core::lod::saved::reopen(&file) else {
         return;
     };
     let view = View::orbit(glam::Vec3::ZERO, 2.0, 0.3, 0.2);

@@ -4,7 +4,7 @@
 use std::path::Path;
 use std::sync::Arc;
 
-use lodstudio_core::io::{LoadError, Location, ParseError, hierarchy_file};
+use lodstudio_core::io::{LoadError, Location, ParseError};
 use lodstudio_core::lod::Hierarchy;
 use lodstudio_core::view::{Tolerance, View};
 
@@ -29,19 +29,9 @@ pub fn reopen(path: &Path) -> Result<Reopened, LoadError> {
         source,
     })?;
     let bad = |why: String| LoadError::malformed(path, ParseError::new(Location::File, why));
-    let (header, hierarchy) = hierarchy_file::reopen(&bytes).map_err(|e| bad(e.to_string()))?;
-    let method = match header.method.as_str() {
-        "simplify" => Method::EdgeCollapse,
-        "hybrid" => Method::Hybrid,
-        "mergetree" => Method::MergeTree,
-        "voxel" => Method::Voxel,
-        "amg" => Method::Amg,
-        other => {
-            return Err(bad(format!(
-                "a {other} hierarchy, which the studio cannot show"
-            )));
-        }
-    };
+    let (header, hierarchy) =
+        lodstudio_core::lod::saved::reopen(&bytes).map_err(|e| bad(e.to_string()))?;
+    let method = hierarchy.method();
     Ok(Reopened {
         method,
         hierarchy,

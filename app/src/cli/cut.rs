@@ -1,7 +1,6 @@
 //! `cut`: reopen a saved hierarchy and write its cut, without rebuilding.
 
 use super::*;
-use lodstudio_core::io::hierarchy_file;
 use lodstudio_core::lod::select_triangles;
 use lodstudio_core::view::{Tolerance, View};
 
@@ -47,7 +46,7 @@ pub fn run(args: CutArgs) -> Result<(), CliError> {
     let bytes = std::fs::read(&args.file)
         .map_err(|e| CliError::BadInput(format!("{}: cannot read: {e}", args.file.display())))?;
     let start = std::time::Instant::now();
-    let (header, mut hierarchy) = hierarchy_file::reopen(&bytes)
+    let (header, mut hierarchy) = lodstudio_core::lod::saved::reopen(&bytes)
         .map_err(|e| CliError::BadInput(format!("{}: {e}", args.file.display())))?;
     if let Some(t) = args.at {
         hierarchy.set_runtime(&serde_json::json!({ "position": t }));

@@ -5,26 +5,12 @@ use std::path::Path;
 use super::*;
 use lodstudio_core::io::gltf::lod_screen_coverages;
 use lodstudio_core::io::gltf_writer::{PointsAs, write_lod_chain};
-use lodstudio_core::lod::DrawSet;
+use lodstudio_core::lod::{DrawSet, Method};
 use lodstudio_core::simplify;
 
-/// The LOD methods `export` can use.
-#[derive(clap::ValueEnum, Debug, Clone, Copy, PartialEq)]
-enum ExportMethod {
-    /// Edge collapse with a certified two-sided Hausdorff bound; every LOD is
-    /// simplified from the original mesh.
-    Simplify,
-    /// Cuts of one hybrid multi-resolution graph (triangles + points with
-    /// `_RADIUS`); each LOD's bound is its cut's guaranteed bound.
-    Hybrid,
-    /// Uniform cuts of one merge tree at object-space switch distances.
-    Mergetree,
-    /// Levels of the voxel pyramid (resolution halves, filter doubles), each
-    /// certified against the input mesh by the two-sided bound.
-    Voxel,
-    /// AMG levels of the mesh's vertices as textured splats (PNG in the file);
-    /// each LOD's bound is its largest domain plane error (points to plane).
-    Amg,
+/// `--method`: a [`Method`] by its tag.
+fn parse_method(tag: &str) -> Result<Method, String> {
+    Method::from_tag(tag).ok_or_else(|| format!("expected one of {}", Method::tags()))
 }
 
 #[derive(Args, Debug)]
@@ -32,9 +18,13 @@ pub struct ExportArgs {
     /// A mesh file, builtin:NAME, a folder (every model file in it) or a glob
     /// pattern such as 'models/*.obj' (one output per model, in the folder -o).
     file: PathBuf,
-    /// How the LODs are built.
-    #[arg(long, value_enum)]
-    method: ExportMethod,
+    /// How the LODs are built: simplify (edge collapse, every LOD from the
+    /// original, certified), hybrid (cuts of one MRG: triangles + points with
+    /// `_RADIUS`), mergetree (uniform cuts of one merge tree), voxel (pyramid
+    /// levels, certified against the input), amg (levels of the vertices as
+    /// textured splats; bound: the largest domain plane error).
+    #[arg(long, value_parser = parse_method, value_name = "simplify|hybrid|mergetree|voxel|amg")]
+    method: Method,
     /// Comma-separated LOD tolerances: "1%" (error relative to the bounding-box
     /// diagonal), "8px" (pixels on a --viewport-height screen when the object
     /// covers --coverage of its height), or a bare number in (0,1] (a triangle
@@ -298,7 +288,7 @@ fn export_one(
             let b = m.bounds();
             (m, b)
         }
-        Model::Points(p) if args.method == ExportMethod::Amg => {
+        Model::Points(p) if args.method == Method::Amg => {
             let b = p.bounds();
             point_set = Some(p);
             (lodstudio_core::TriMesh::default(), b)
@@ -318,12 +308,10 @@ fn export_one(
     // p pixels at coverage C: e = p · 2r / (H · C).
     let pixels_to_error = |p: f32| p * 2.0 * radius / (args.viewport_height * args.coverage);
     let mut lods = match args.method {
-        ExportMethod::Simplify => simplify_lods(args, items, &mesh, pixels_to_error)?,
-        ExportMethod::Hybrid | ExportMethod::Mergetree => {
-            cut_lods(args, items, &mesh, pixels_to_error)?
-        }
-        ExportMethod::Voxel => voxel_lods(args, items, &mesh, pixels_to_error)?,
-        ExportMethod::Amg => {
+        Method::EdgeCollapse => simplify_lods(args, items, &mesh, pixels_to_error)?,
+        Method::Hybrid | Method::MergeTree => cut_lods(args, items, &mesh, pixels_to_error)?,
+        Method::Voxel => voxel_lods(args, items, &mesh, pixels_to_error)?,
+        Method::Amg => {
             let points = match point_set {
                 Some(p) => p,
                 None => lodstudio_core::amg::point_set(&Model::Mesh(mesh.clone()))
@@ -371,7 +359,7 @@ fn export_one(
             })
         })
         .collect();
-    let method = format!("{:?}", args.method).to_lowercase();
+    let method = args.method.tag();
     Ok(serde_json::json!({
         "file": file.display().to_string(),
         "method": method,
@@ -493,7 +481,7 @@ fn cut_lods(
     let progress = Progress::new();
     let failed = |_| CliError::Failure("cancelled".into());
     let mut hierarchy: Box<dyn Hierarchy> = match args.method {
-        ExportMethod::Hybrid => {
+        Method::Hybrid => {
             let opts = lodstudio_core::hybrid::HybridOptions {
                 kappa: args.kappa,
                 tau: args.tau,

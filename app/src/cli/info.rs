@@ -38,7 +38,7 @@ pub fn run(args: InfoArgs) -> Result<(), CliError> {
     {
         // A saved hierarchy: what it holds, checked whole (decoded and its
         // invariants verified, as a cut would reopen it).
-        let (h, _) = io::hierarchy_file::reopen(&bytes)
+        let (h, _) = lodstudio_core::lod::saved::reopen(&bytes)
             .map_err(|e| CliError::BadInput(format!("{}: {e}", file.display())))?;
         let j = serde_json::json!({
             "file": file.display().to_string(),

@@ -21,80 +21,8 @@ use self::simplify::EdgeCollapseSettings;
 use self::voxel::{VolumeGrid, VoxelSettings};
 use crate::live_cut::Threshold;
 
-/// The LOD methods the studio can build.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
-pub enum Method {
-    /// Edge collapse with a certified Hausdorff bound (hybrid paper §5.2).
-    #[default]
-    EdgeCollapse,
-    /// Low-pass filtering of a sampled volume and marching cubes (voxel paper §2).
-    Voxel,
-    /// View-dependent refinement of a merge tree (merge-tree paper).
-    MergeTree,
-    /// A multi-resolution graph of triangles and points (hybrid paper).
-    Hybrid,
-    /// Domain primitives of a point set by algebraic multigrid (AMG paper).
-    Amg,
-}
-
-impl Method {
-    /// Every method, in the order the list shows them.
-    pub const ALL: &[Method] = &[
-        Method::EdgeCollapse,
-        Method::Hybrid,
-        Method::MergeTree,
-        Method::Voxel,
-        Method::Amg,
-    ];
-
-    pub fn name(self) -> &'static str {
-        match self {
-            Method::EdgeCollapse => "Edge collapse",
-            Method::Voxel => "Voxel (low-pass + marching cubes)",
-            Method::MergeTree => "Merge tree (view-dependent)",
-            Method::Hybrid => "Hybrid (triangles + points)",
-            Method::Amg => "AMG (splats)",
-        }
-    }
-
-    pub fn description(self) -> &'static str {
-        match self {
-            Method::EdgeCollapse => {
-                "Collapses edges in order of quadric error and certifies the result: a \
-                 guaranteed bound on the two-sided Hausdorff distance between the original \
-                 and the simplified surface (hybrid simplification paper, §5.2)."
-            }
-            Method::Voxel => {
-                "Samples the solid (or thresholds a volume) into a volume buffer, low-pass \
-                 filters it into a density \
-                 (Gaussian or hyper-cone) and extracts the iso-density surface by marching \
-                 cubes: wider filters remove small features, holes and tunnels, so the genus \
-                 falls (voxel-based object simplification paper, §2)."
-            }
-            Method::Amg => {
-                "Decomposes a point set (or a mesh's vertices) into quasi-flat domains \
-                 by algebraic multigrid on a stiffness matrix of local finite elements, and \
-                 draws each domain as a textured quad whose alpha is its partition-of-unity \
-                 weight, so overlapping splats blend seamlessly (AMG extreme \
-                 simplification paper)."
-            }
-            Method::Hybrid => {
-                "Simplifies by edge collapse and by replacing triangles with points and \
-                 merging points, whichever removes more primitives for its error, into a \
-                 multi-resolution graph; every cut of it has a guaranteed error bound, and \
-                 the cut follows the camera and the threshold live (hybrid \
-                 simplification paper)."
-            }
-            Method::MergeTree => {
-                "Builds a merge tree of vertex merges level by level with their \
-                 dependencies, then refines or coarsens it every frame from the previous \
-                 frame's vertices so each region's error stays within the threshold in \
-                 pixels, coarser on back faces, finer on silhouettes and where the \
-                 lighting changes (view-dependent merge trees paper)."
-            }
-        }
-    }
-}
+/// The LOD methods the studio can build: core's list, written once.
+pub use lodstudio_core::lod::Method;
 
 /// The chosen method, the parameters of every method, and how builds start.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -184,7 +112,7 @@ impl MethodSettings {
     /// The list of methods; true when the choice changed.
     pub fn method_list(&mut self, ui: &mut egui::Ui) -> bool {
         let before = self.method;
-        for &method in Method::ALL {
+        for method in Method::ALL {
             ui.selectable_value(&mut self.method, method, method.name())
                 .on_hover_text(method.description());
         }

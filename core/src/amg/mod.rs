@@ -340,15 +340,15 @@ impl Hierarchy for AmgHierarchy {
         self.multiscale.points.bounds().diagonal()
     }
 
-    fn method(&self) -> &'static str {
-        "amg"
+    fn method(&self) -> crate::lod::Method {
+        crate::lod::Method::Amg
     }
 
     fn save(&self, params: &serde_json::Value) -> Option<Vec<u8>> {
         let mut params = params.clone();
         params["texel"] = serde_json::json!(self.texel);
         Some(crate::io::hierarchy_file::save(
-            "amg",
+            crate::lod::Method::Amg.tag(),
             &params,
             &self.multiscale,
         ))

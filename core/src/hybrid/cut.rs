@@ -522,8 +522,8 @@ impl Hierarchy for HybridCut {
         self.mrg.diagonal
     }
 
-    fn method(&self) -> &'static str {
-        "hybrid"
+    fn method(&self) -> crate::lod::Method {
+        crate::lod::Method::Hybrid
     }
 
     fn select(&mut self, view: &View, tolerance: Tolerance) -> DrawSet {
@@ -533,7 +533,7 @@ impl Hierarchy for HybridCut {
 
     fn save(&self, params: &serde_json::Value) -> Option<Vec<u8>> {
         Some(crate::io::hierarchy_file::save(
-            "hybrid",
+            crate::lod::Method::Hybrid.tag(),
             params,
             self.mrg().as_ref(),
         ))

@@ -1,7 +1,7 @@
-//! Saved hierarchies: a progressive edge collapse, a built MRG, merge tree,
-//! voxel pyramid or AMG multiscale with its parameters, in a versioned,
-//! checksummed file, so the studio reopens it without rebuilding and cuts it
-//! exactly as before.
+//! The saved-hierarchy container: any method's built structure with its
+//! method tag and parameters, in a versioned, checksummed file, so the studio
+//! reopens it without rebuilding and cuts it exactly as before. The container
+//! knows no method: `lod::saved` decodes each through its [`crate::lod::Method`].
 //!
 //! Layout (little endian): magic `LODSTHRY`, format version (u32), method name
 //! (u16 length + UTF-8), parameters (u32 length + JSON), body (u64 length +
@@ -177,100 +177,6 @@ pub fn load<T: DeserializeOwned>(
                 why: e.to_string(),
             })?;
     Ok((header, value))
-}
-
-/// Reopens any saved hierarchy, ready to cut: a progressive edge collapse,
-/// a hybrid MRG, a merge tree
-/// (with the default criteria; the studio sets its own), a voxel pyramid or
-/// an AMG multiscale.
-pub fn reopen(
-    bytes: &[u8],
-) -> Result<(Header, Box<dyn crate::lod::Hierarchy>), HierarchyFileError> {
-    use std::sync::Arc;
-    let header = peek(bytes)?;
-    let hierarchy: Box<dyn crate::lod::Hierarchy> = match header.method.as_str() {
-        "simplify" => {
-            use crate::simplify::progressive::{Progressive, ProgressiveCut, Record};
-            let (_, record) = load::<Record>(bytes, "simplify")?;
-            let progressive =
-                Progressive::new(record).map_err(|why| HierarchyFileError::Corrupt {
-                    what: "collapse sequence",
-                    why,
-                })?;
-            Box::new(ProgressiveCut::new(Arc::new(progressive)))
-        }
-        "hybrid" => {
-            let (_, mrg) = load::<crate::hybrid::Mrg>(bytes, "hybrid")?;
-            // The graph's invariants (ids in range, arcs consistent) before any cut.
-            mrg.check()
-                .map_err(|why| HierarchyFileError::Corrupt { what: "graph", why })?;
-            Box::new(crate::hybrid::HybridCut::new(Arc::new(mrg)))
-        }
-        "mergetree" => {
-            let (_, tree) = load::<crate::mergetree::MergeTree>(bytes, "mergetree")?;
-            tree.check()
-                .map_err(|why| HierarchyFileError::Corrupt { what: "tree", why })?;
-            Box::new(crate::mergetree::MergeTreeView::new(
-                Arc::new(tree),
-                Default::default(),
-            ))
-        }
-        "voxel" => {
-            let (_, pyramid) = load::<crate::voxel::Pyramid>(bytes, "voxel")?;
-            let grids_fit = pyramid.levels.iter().all(|l| {
-                let d = l.density.dims;
-                d.iter().all(|&n| n >= 2)
-                    && d.iter().try_fold(1usize, |a, &n| a.checked_mul(n))
-                        == Some(l.density.data.len())
-            });
-            if pyramid.levels.is_empty() || !grids_fit {
-                return Err(HierarchyFileError::Corrupt {
-                    what: "pyramid",
-                    why: "levels missing or grids not matching their samples".into(),
-                });
-            }
-            let bounds_fit = [0, pyramid.levels.len()].contains(&pyramid.error_bounds.len())
-                && pyramid.error_bounds.iter().all(|b| *b >= 0.0)
-                && pyramid.diagonal.is_finite()
-                && pyramid.diagonal >= 0.0;
-            if !bounds_fit {
-                return Err(HierarchyFileError::Corrupt {
-                    what: "pyramid",
-                    why: "level bounds not one non-negative number per level".into(),
-                });
-            }
-            Box::new(crate::voxel::pyramid::PyramidCut::new(pyramid, None))
-        }
-        "amg" => {
-            let (_, ms) = load::<crate::amg::Multiscale>(bytes, "amg")?;
-            if !ms.is_consistent() {
-                return Err(HierarchyFileError::Corrupt {
-                    what: "multiscale",
-                    why: "points, radii and operators disagree in size".into(),
-                });
-            }
-            let texel = header
-                .params
-                .get("texel")
-                .and_then(|t| t.as_f64())
-                .unwrap_or(0.0) as f32;
-            let texel = if texel.is_finite() && texel > 0.0 {
-                texel
-            } else {
-                let mut r = ms.radii.clone();
-                r.sort_by(f32::total_cmp);
-                r[r.len() / 2]
-            };
-            Box::new(crate::amg::AmgHierarchy::new(ms, texel))
-        }
-        other => {
-            return Err(HierarchyFileError::WrongMethod {
-                found: other.to_string(),
-                expected: "simplify, hybrid, mergetree, voxel or amg".into(),
-            });
-        }
-    };
-    Ok((header, hierarchy))
 }
 
 /// Whether `bytes` start like a saved hierarchy.

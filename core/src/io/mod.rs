@@ -149,7 +149,7 @@ pub fn load_bytes(
         // A saved hierarchy opens as its finest cut (the studio also reopens
         // the hierarchy itself, to cut it live).
         Format::Hierarchy => {
-            let (_, mut h) = hierarchy_file::reopen(data)
+            let (_, mut h) = crate::lod::saved::reopen(data)
                 .map_err(|e| malformed(ParseError::new(Location::File, e.to_string())))?;
             let view = crate::view::View::orbit(glam::Vec3::ZERO, 1.0, 0.0, 0.0);
             Model::Mesh(h.select(&view, crate::view::Tolerance::Relative(0.0)).mesh)

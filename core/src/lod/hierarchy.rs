@@ -6,8 +6,8 @@ use crate::view::{Tolerance, View};
 
 /// A built LOD hierarchy.
 pub trait Hierarchy: Send + Sync {
-    /// Short name of the method, for logs and the inspector.
-    fn method(&self) -> &'static str;
+    /// The method that built it.
+    fn method(&self) -> super::Method;
     /// Bounding-box diagonal of the model it was built from (what relative
     /// tolerances and bounds refer to).
     fn diagonal(&self) -> f32;

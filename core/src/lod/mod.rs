@@ -6,12 +6,17 @@
 //!   implements, and cutting any of them to a triangle count;
 //! - `draw_set`: what a cut draws ([`DrawSet`]: triangles, points, splats,
 //!   layers, with their bounds);
-//! - `pick`: the studio's click to inspect, on any cut.
+//! - `pick`: the studio's click to inspect, on any cut;
+//! - `method`: the five methods, listed once ([`Method`]);
+//! - `saved`: a saved hierarchy reopened through its method.
 
 mod draw_set;
 mod hierarchy;
+mod method;
 mod pick;
+pub mod saved;
 
 pub use draw_set::{CutPoint, DrawSet, Layer, Splat, Texture};
 pub use hierarchy::{Hierarchy, select_triangles};
+pub use method::Method;
 pub use pick::Picked;

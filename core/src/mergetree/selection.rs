@@ -433,8 +433,8 @@ impl Hierarchy for MergeTreeView {
         self.tree.diagonal
     }
 
-    fn method(&self) -> &'static str {
-        "mergetree"
+    fn method(&self) -> crate::lod::Method {
+        crate::lod::Method::MergeTree
     }
 
     fn select(&mut self, view: &View, tolerance: Tolerance) -> DrawSet {
@@ -444,7 +444,7 @@ impl Hierarchy for MergeTreeView {
 
     fn save(&self, params: &serde_json::Value) -> Option<Vec<u8>> {
         Some(crate::io::hierarchy_file::save(
-            "mergetree",
+            crate::lod::Method::MergeTree.tag(),
             params,
             self.tree().as_ref(),
         ))

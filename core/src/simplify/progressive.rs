@@ -357,8 +357,8 @@ impl ProgressiveCut {
 }
 
 impl Hierarchy for ProgressiveCut {
-    fn method(&self) -> &'static str {
-        "edge collapse"
+    fn method(&self) -> crate::lod::Method {
+        crate::lod::Method::EdgeCollapse
     }
 
     fn diagonal(&self) -> f32 {
@@ -396,7 +396,7 @@ impl Hierarchy for ProgressiveCut {
 
     fn save(&self, params: &serde_json::Value) -> Option<Vec<u8>> {
         Some(crate::io::hierarchy_file::save(
-            "simplify",
+            crate::lod::Method::EdgeCollapse.tag(),
             params,
             self.progressive.record(),
         ))

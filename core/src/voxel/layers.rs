@@ -173,8 +173,8 @@ pub struct Layered {
 }
 
 impl Hierarchy for Layered {
-    fn method(&self) -> &'static str {
-        "voxel layers"
+    fn method(&self) -> crate::lod::Method {
+        crate::lod::Method::Voxel
     }
 
     /// The layers' own extent (they are what the level keeps of the object).

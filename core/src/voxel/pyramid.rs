@@ -263,8 +263,8 @@ impl Hierarchy for PyramidCut {
             .map_or(0.0, |l| l.density.bounds().diagonal())
     }
 
-    fn method(&self) -> &'static str {
-        "voxel pyramid"
+    fn method(&self) -> crate::lod::Method {
+        crate::lod::Method::Voxel
     }
 
     /// A whole level carries its certified bound; an in-between one has
@@ -298,7 +298,7 @@ impl Hierarchy for PyramidCut {
 
     fn save(&self, params: &serde_json::Value) -> Option<Vec<u8>> {
         Some(crate::io::hierarchy_file::save(
-            "voxel",
+            crate::lod::Method::Voxel.tag(),
             params,
             &self.pyramid,
         ))

@@ -1,0 +1,99 @@
+//! Saved hierarchies decoded: the container (`io::hierarchy_file`) holds a
+//! method's tag, and [`Method`] says which structure to decode and check.
+
+use std::sync::Arc;
+
+use super::{Hierarchy, Method};
+use crate::io::hierarchy_file::{Header, HierarchyFileError, load, peek};
+
+/// Reopens any saved hierarchy, ready to cut: a progressive edge collapse,
+/// a hybrid MRG, a merge tree
+/// (with the default criteria; the studio sets its own), a voxel pyramid or
+/// an AMG multiscale.
+pub fn reopen(bytes: &[u8]) -> Result<(Header, Box<dyn Hierarchy>), HierarchyFileError> {
+    let header = peek(bytes)?;
+    let Some(method) = Method::from_tag(&header.method) else {
+        return Err(HierarchyFileError::WrongMethod {
+            found: header.method,
+            expected: Method::tags(),
+        });
+    };
+    let tag = method.tag();
+    let hierarchy: Box<dyn Hierarchy> = match method {
+        Method::EdgeCollapse => {
+            use crate::simplify::progressive::{Progressive, ProgressiveCut, Record};
+            let (_, record) = load::<Record>(bytes, tag)?;
+            let progressive =
+                Progressive::new(record).map_err(|why| HierarchyFileError::Corrupt {
+                    what: "collapse sequence",
+                    why,
+                })?;
+            Box::new(ProgressiveCut::new(Arc::new(progressive)))
+        }
+        Method::Hybrid => {
+            let (_, mrg) = load::<crate::hybrid::Mrg>(bytes, tag)?;
+            // The graph's invariants (ids in range, arcs consistent) before any cut.
+            mrg.check()
+                .map_err(|why| HierarchyFileError::Corrupt { what: "graph", why })?;
+            Box::new(crate::hybrid::HybridCut::new(Arc::new(mrg)))
+        }
+        Method::MergeTree => {
+            let (_, tree) = load::<crate::mergetree::MergeTree>(bytes, tag)?;
+            tree.check()
+                .map_err(|why| HierarchyFileError::Corrupt { what: "tree", why })?;
+            Box::new(crate::mergetree::MergeTreeView::new(
+                Arc::new(tree),
+                Default::default(),
+            ))
+        }
+        Method::Voxel => {
+            let (_, pyramid) = load::<crate::voxel::Pyramid>(bytes, tag)?;
+            let grids_fit = pyramid.levels.iter().all(|l| {
+                let d = l.density.dims;
+                d.iter().all(|&n| n >= 2)
+                    && d.iter().try_fold(1usize, |a, &n| a.checked_mul(n))
+                        == Some(l.density.data.len())
+            });
+            if pyramid.levels.is_empty() || !grids_fit {
+                return Err(HierarchyFileError::Corrupt {
+                    what: "pyramid",
+                    why: "levels missing or grids not matching their samples".into(),
+                });
+            }
+            let bounds_fit = [0, pyramid.levels.len()].contains(&pyramid.error_bounds.len())
+                && pyramid.error_bounds.iter().all(|b| *b >= 0.0)
+                && pyramid.diagonal.is_finite()
+                && pyramid.diagonal >= 0.0;
+            if !bounds_fit {
+                return Err(HierarchyFileError::Corrupt {
+                    what: "pyramid",
+                    why: "level bounds not one non-negative number per level".into(),
+                });
+            }
+            Box::new(crate::voxel::pyramid::PyramidCut::new(pyramid, None))
+        }
+        Method::Amg => {
+            let (_, ms) = load::<crate::amg::Multiscale>(bytes, tag)?;
+            if !ms.is_consistent() {
+                return Err(HierarchyFileError::Corrupt {
+                    what: "multiscale",
+                    why: "points, radii and operators disagree in size".into(),
+                });
+            }
+            let texel = header
+                .params
+                .get("texel")
+                .and_then(|t| t.as_f64())
+                .unwrap_or(0.0) as f32;
+            let texel = if texel.is_finite() && texel > 0.0 {
+                texel
+            } else {
+                let mut r = ms.radii.clone();
+                r.sort_by(f32::total_cmp);
+                r[r.len() / 2]
+            };
+            Box::new(crate::amg::AmgHierarchy::new(ms, texel))
+        }
+    };
+    Ok((header, hierarchy))
+}
