@@ -3,8 +3,8 @@
 use std::path::Path;
 
 use super::*;
-use lodstudio_core::io::gltf::lod_screen_coverages;
 use lodstudio_core::io::gltf_writer::{PointsAs, write_lod_chain};
+use lodstudio_core::lod::chain::lod_screen_coverages;
 use lodstudio_core::lod::{DrawSet, Method};
 use lodstudio_core::simplify;
 

@@ -502,7 +502,7 @@ pub fn write_draw_set_glb(set: &DrawSet) -> Vec<u8> {
     let mut w = GltfWriter::new();
     let node = w.node("lod0", set);
     let (doc, bin) = w.document(&[node]);
-    super::gltf::glb_container(doc.to_string().into_bytes(), bin)
+    glb_container(doc.to_string().into_bytes(), bin)
 }
 
 /// An LOD chain as a GLB with the `MSFT_lod` node extension.
@@ -513,7 +513,7 @@ pub fn write_draw_set_glb(set: &DrawSet) -> Vec<u8> {
 /// decreasing quality and whose
 /// `extras.MSFT_screencoverage` is `coverages`: one value per LOD, LOD0's
 /// included, each the smallest screen coverage at which that LOD is shown
-/// (see [`super::gltf::lod_screen_coverages`]). Loaders without the extension
+/// (see [`crate::lod::chain::lod_screen_coverages`]). Loaders without the extension
 /// see LOD0 alone.
 ///
 /// # Panics
@@ -543,7 +543,7 @@ pub fn write_lod_chain(lods: &[DrawSet], coverages: &[f32], points_as: PointsAs)
         used.push(json!("MSFT_lod"));
         doc["extensionsUsed"] = json!(used);
     }
-    super::gltf::glb_container(doc.to_string().into_bytes(), bin)
+    glb_container(doc.to_string().into_bytes(), bin)
 }
 
 /// An RGBA8 texture as PNG.
@@ -561,6 +561,39 @@ pub(crate) fn encode_png(tex: &Texture) -> Vec<u8> {
         .write_image_data(&data)
         .expect("size matches the header");
     drop(writer);
+    out
+}
+
+/// Writes one mesh as a binary glTF (GLB): positions, normals (area-weighted
+/// vertex normals when the mesh has none), vertex colours and UVs when it has
+/// them, and 32-bit indices in one buffer, one node, one scene.
+pub fn write_glb(mesh: &TriMesh) -> Vec<u8> {
+    super::gltf_writer::write_draw_set_glb(&crate::lod::DrawSet {
+        mesh: mesh.clone(),
+        ..Default::default()
+    })
+}
+
+/// Packs a JSON chunk (space-padded) and a binary chunk (zero-padded; left out
+/// when empty) into GLB.
+fn glb_container(mut json: Vec<u8>, bin: Vec<u8>) -> Vec<u8> {
+    while !json.len().is_multiple_of(4) {
+        json.push(b' ');
+    }
+    let bin_chunk = if bin.is_empty() { 0 } else { 8 + bin.len() };
+    let total = 12 + 8 + json.len() + bin_chunk;
+    let mut out = Vec::with_capacity(total);
+    out.extend_from_slice(b"glTF");
+    out.extend_from_slice(&2u32.to_le_bytes());
+    out.extend_from_slice(&(total as u32).to_le_bytes());
+    out.extend_from_slice(&(json.len() as u32).to_le_bytes());
+    out.extend_from_slice(b"JSON");
+    out.extend_from_slice(&json);
+    if !bin.is_empty() {
+        out.extend_from_slice(&(bin.len() as u32).to_le_bytes());
+        out.extend_from_slice(b"BIN\0");
+        out.extend_from_slice(&bin);
+    }
     out
 }
 
@@ -644,5 +677,227 @@ mod tests {
             2,
             "one image per texture, shared by its splats"
         );
+    }
+}
+
+/// The writer's files read back by the reader.
+#[cfg(test)]
+mod round_trips {
+    use super::*;
+    use crate::geom::VertexAttributes;
+    use crate::io::gltf::read;
+    use crate::lod::chain::lod_screen_coverages;
+
+    #[test]
+    fn glb_round_trips_through_the_reader() {
+        let mut m = crate::builtins::torus(1.0, 0.3, 16, 8);
+        m.colors = Some(vec![Vec3::new(0.2, 0.5, 0.9); m.positions.len()]);
+        let glb = write_glb(&m);
+        let back = read(&glb, None).unwrap();
+        assert_eq!(back.triangles, m.triangles);
+        assert_eq!(back.positions, m.positions);
+        assert!(back.normals.is_some() && back.uvs.is_some());
+        assert_eq!(back.colors.as_ref().unwrap()[3], Vec3::new(0.2, 0.5, 0.9));
+    }
+
+    #[test]
+    fn materials_round_trip_one_primitive_per_material_with_their_images() {
+        use crate::geom::{AlphaMode, Image, Material, Materials};
+        let png = super::super::gltf_writer::encode_png(&crate::lod::Texture {
+            width: 2,
+            height: 1,
+            rgba: vec![[255, 0, 0, 255], [0, 0, 255, 128]],
+        });
+        let textured = Material {
+            name: Some("paint".into()),
+            base_color: [1.0, 1.0, 1.0, 1.0],
+            metallic: 0.25,
+            roughness: 0.5,
+            emissive: [0.0, 0.1, 0.0],
+            alpha_mode: AlphaMode::Mask(0.3),
+            double_sided: true,
+            base_color_texture: Some(Image {
+                mime_type: "image/png".into(),
+                bytes: png.into(),
+                mag_filter: Some(9729),
+                min_filter: None,
+                wrap_s: 10497,
+                wrap_t: 33648,
+            }),
+            vertex_attributes: Default::default(),
+        };
+        let glass = Material {
+            name: Some("glass".into()),
+            base_color: [0.5, 0.25, 0.0, 0.4],
+            alpha_mode: AlphaMode::Blend,
+            ..Material::default()
+        };
+        let mut a = crate::builtins::torus(1.0, 0.3, 16, 8);
+        a.materials = Some(Materials::single(textured));
+        let mut b = crate::builtins::torus(2.0, 0.2, 12, 6);
+        // Display colours are base colour × COLOR_0.
+        b.colors = Some(
+            (0..b.positions.len())
+                .map(|i| Vec3::new(0.5, 0.25, 0.0) * (i % 3) as f32 / 2.0)
+                .collect(),
+        );
+        b.materials = Some(Materials::single(glass));
+        let mut m = a.clone();
+        m.append(&b);
+        assert_eq!(m.part_count(), 2);
+        let glb = write_glb(&m);
+        let doc = glb_json(&glb);
+        assert_eq!(doc["meshes"][0]["primitives"].as_array().unwrap().len(), 2);
+        assert_eq!(doc["materials"].as_array().unwrap().len(), 2);
+        assert_eq!(
+            doc["samplers"][0],
+            serde_json::json!({"magFilter": 9729, "wrapS": 10497, "wrapT": 33648})
+        );
+        let back = read(&glb, None).unwrap();
+        // Read back, each material says which attributes its primitive has:
+        // the textured part's white COLOR_0 was left out.
+        let mut expected = m.materials.clone().unwrap();
+        expected.table[0].vertex_attributes = VertexAttributes {
+            colors: false,
+            uvs: true,
+        };
+        assert_eq!(back.materials, Some(expected));
+        assert_eq!(back.triangles.len(), m.triangles.len());
+        assert_eq!(back.part_count(), 2);
+        // The textured part's vertex colour is white: no COLOR_0 was written for it.
+        let first = &doc["meshes"][0]["primitives"][0]["attributes"];
+        assert!(first.get("COLOR_0").is_none() && first.get("TEXCOORD_0").is_some());
+        let (want, got) = (m.colors.clone().unwrap(), back.colors.clone().unwrap());
+        for t in 0..m.triangles.len() {
+            let p = m.part(t);
+            assert_eq!(back.part(t), p);
+            for (&v, &w) in m.triangles[t].iter().zip(&back.triangles[t]) {
+                let (c, d) = (want[v as usize], got[w as usize]);
+                assert!(c.abs_diff_eq(d, 1e-3), "part {p}: {c} vs {d}");
+            }
+        }
+    }
+
+    /// Image URIs name data or regular files beside the glTF, never devices,
+    /// folders or other schemes.
+
+    #[test]
+    fn glb_with_points_holds_a_points_primitive_with_radius() {
+        let mesh = crate::builtins::torus(1.0, 0.3, 8, 4);
+        let points = crate::geom::PointSet {
+            positions: vec![Vec3::ZERO, Vec3::X],
+            normals: None,
+            colors: Some(vec![Vec3::new(1.0, 0.0, 0.0); 2]),
+            radii: Some(vec![0.1, 0.2]),
+        };
+        let set = |mesh: &TriMesh| crate::lod::DrawSet {
+            mesh: mesh.clone(),
+            points: (0..2)
+                .map(|i| crate::lod::CutPoint {
+                    center: points.positions[i],
+                    radius: points.radii.as_ref().unwrap()[i],
+                    color: Vec3::new(1.0, 0.0, 0.0),
+                    normal: Vec3::Z,
+                    error: 0.0,
+                })
+                .collect(),
+            ..Default::default()
+        };
+        let glb = write_draw_set_glb(&set(&mesh));
+        let doc = glb_json(&glb);
+        assert_eq!(doc["scenes"][0]["nodes"], serde_json::json!([0]));
+        let prim = &doc["meshes"][0]["primitives"][1];
+        assert_eq!(prim["mode"], 0);
+        let radius = prim["attributes"]["_RADIUS"].as_u64().unwrap() as usize;
+        assert_eq!(doc["accessors"][radius]["count"], 2);
+        assert_eq!(read(&glb, None).unwrap().triangles, mesh.triangles);
+        // Points alone still make a valid file.
+        let only = glb_json(&write_draw_set_glb(&set(&TriMesh::default())));
+        assert_eq!(only["meshes"][0]["primitives"][0]["mode"], 0);
+    }
+
+    fn sets(meshes: &[TriMesh]) -> Vec<crate::lod::DrawSet> {
+        meshes
+            .iter()
+            .map(|m| crate::lod::DrawSet {
+                mesh: m.clone(),
+                ..Default::default()
+            })
+            .collect()
+    }
+
+    /// The JSON chunk of a GLB.
+    fn glb_json(glb: &[u8]) -> serde_json::Value {
+        let len = u32::from_le_bytes(glb[12..16].try_into().unwrap()) as usize;
+        assert_eq!(&glb[16..20], b"JSON");
+        serde_json::from_slice(&glb[20..20 + len]).unwrap()
+    }
+
+    #[test]
+    fn lod_chain_carries_msft_lod_and_readers_without_it_see_lod0() {
+        let lods = [
+            crate::builtins::torus(1.0, 0.3, 32, 16),
+            crate::builtins::torus(1.0, 0.3, 16, 8),
+            crate::builtins::torus(1.0, 0.3, 8, 4),
+        ];
+        let coverages = lod_screen_coverages(&[0.001, 0.01, 0.1], 1.3, 2.0, 1080.0);
+        let glb = write_lod_chain(&sets(&lods), &coverages, Default::default());
+        let doc = glb_json(&glb);
+        assert_eq!(doc["extensionsUsed"], serde_json::json!(["MSFT_lod"]));
+        assert_eq!(doc["scenes"][0]["nodes"], serde_json::json!([0]));
+        assert_eq!(
+            doc["nodes"][0]["extensions"]["MSFT_lod"]["ids"],
+            serde_json::json!([1, 2])
+        );
+        let stated: Vec<f32> = doc["nodes"][0]["extras"]["MSFT_screencoverage"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|v| v.as_f64().unwrap() as f32)
+            .collect();
+        assert_eq!(stated, coverages);
+        // Each LOD node's index accessor holds its triangles.
+        for (i, lod) in lods.iter().enumerate() {
+            let mesh = doc["nodes"][i]["mesh"].as_u64().unwrap() as usize;
+            let prim = &doc["meshes"][mesh]["primitives"][0];
+            let acc = prim["indices"].as_u64().unwrap() as usize;
+            assert_eq!(
+                doc["accessors"][acc]["count"].as_u64().unwrap() as usize,
+                lod.triangles.len() * 3
+            );
+            for attr in ["POSITION", "NORMAL", "TEXCOORD_0"] {
+                assert!(prim["attributes"][attr].is_u64(), "lod{i} {attr}");
+            }
+        }
+        let back = read(&glb, None).unwrap();
+        assert_eq!(back.triangles, lods[0].triangles);
+        assert_eq!(back.positions, lods[0].positions);
+        // One LOD: the plain file, no extension.
+        let single = write_lod_chain(&sets(&lods[..1]), &coverages[..1], Default::default());
+        assert_eq!(single, write_glb(&lods[0]));
+    }
+
+    #[test]
+    fn lod_chain_without_triangles_in_a_lod_stays_readable() {
+        let lods = [crate::builtins::torus(1.0, 0.3, 8, 4), TriMesh::default()];
+        let glb = write_lod_chain(&sets(&lods), &[0.5, 0.1], Default::default());
+        let doc = glb_json(&glb);
+        assert!(doc["nodes"][1].get("mesh").is_none());
+        assert_eq!(read(&glb, None).unwrap().triangles, lods[0].triangles);
+        // Nothing at all: a valid GLB without a binary chunk.
+        let empty = write_glb(&TriMesh::default());
+        assert_eq!(
+            empty.len(),
+            20 + glb_json(&empty).to_string().len().next_multiple_of(4)
+        );
+        assert!(read(&empty, None).unwrap().triangles.is_empty());
+        // A mesh without normals is written with computed ones.
+        let mut bare = crate::builtins::torus(1.0, 0.3, 8, 4);
+        bare.normals = None;
+        let back = read(&write_glb(&bare), None).unwrap();
+        let expected = bare.vertex_normals();
+        for (a, b) in back.normals.unwrap().iter().zip(&expected) {
+            assert!(a.distance(*b) < 1e-5);
+        }
     }
 }

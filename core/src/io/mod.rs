@@ -13,6 +13,7 @@ pub mod limits;
 pub mod obj;
 pub mod off;
 pub mod ply;
+mod text;
 pub mod volume;
 
 use std::path::{Path, PathBuf};
@@ -408,7 +409,7 @@ pub fn encode_mesh(path: &Path, mesh: &TriMesh) -> Result<Vec<u8>, String> {
     match extension(path).as_str() {
         "obj" => Ok(obj::write(mesh)),
         "ply" => Ok(ply::write_mesh(mesh, ply::Encoding::BinaryLittleEndian)),
-        "glb" => Ok(gltf::write_glb(mesh)),
+        "glb" => Ok(gltf_writer::write_glb(mesh)),
         other => Err(format!(
             "cannot write {:?}: unknown mesh extension {other:?} (use {MESH_WRITE_FORMATS})",
             path.display().to_string()

@@ -7,7 +7,7 @@
 
 use glam::{Vec2, Vec3};
 
-use super::ply::{Lines, PROGRESS_EVERY, Tokens, parse_f32, parse_int, shown, tick};
+use super::text::{Lines, PROGRESS_EVERY, Tokens, parse_f32, parse_int, shown, tick};
 use super::{Model, ParseError, ParseResult};
 use crate::geom::{PointSet, TriMesh};
 use crate::progress::Progress;

@@ -6,7 +6,7 @@
 
 use glam::Vec3;
 
-use super::ply::Lines;
+use super::text::Lines;
 use super::{Location, ParseError, ParseResult};
 use crate::geom::Volume;
 

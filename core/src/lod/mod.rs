@@ -8,8 +8,10 @@
 //!   layers, with their bounds);
 //! - `pick`: the studio's click to inspect, on any cut;
 //! - `method`: the five methods, listed once ([`Method`]);
-//! - `saved`: a saved hierarchy reopened through its method.
+//! - `saved`: a saved hierarchy reopened through its method;
+//! - `chain`: where each LOD of a chain takes over (screen coverage).
 
+pub mod chain;
 mod draw_set;
 mod hierarchy;
 mod method;

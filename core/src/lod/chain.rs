@@ -1,0 +1,86 @@
+//! The LOD chain: where each LOD takes over. An LOD's switch point comes
+//! from its certified bound: it is shown while the next coarser LOD's bound
+//! would project to more than the tolerance in pixels (`MSFT_screencoverage`
+//! in the exported GLB).
+
+/// The `MSFT_screencoverage` thresholds of an LOD chain.
+///
+/// `error_bounds[i]` is LOD i's guaranteed (object-space) error bound, in
+/// increasing order; `radius` is the object's bounding-sphere radius; the
+/// tolerance is `pixels` on a viewport `viewport_height` pixels high.
+///
+/// The screen coverage `c` is the object's projected height (its bounding
+/// sphere's diameter) as a fraction of the viewport height. With a vertical
+/// field of view θ at distance d, a length `l` covers `l·H / (2 d tan(θ/2))`
+/// pixels, so `c = 2r / (2 d tan(θ/2))` and an error bound `e` covers
+/// `e·H·c / (2r)` pixels: it stays within `p` pixels exactly while
+///
+/// ```text
+/// c <= c(e) = 2 r p / (e H)        (independent of θ and d)
+/// ```
+///
+/// A loader shows LOD i while the coverage is at least `coverages[i]` (and
+/// below `coverages[i-1]`), so LOD i+1 may take over once LOD i+1's bound
+/// projects within the tolerance: `coverages[i] = c(e[i+1])`. The last value is
+/// `p / H`, where the whole object spans `p` pixels (below it, leaving the
+/// object out stays within the tolerance). Values are clamped to (0, 1] and
+/// made strictly decreasing by lowering, never raising, a value, which only
+/// keeps a finer LOD longer; so every shown LOD's bound projects to at most
+/// `p` pixels (LOD0 excepted above `c(e[0])`, as nothing finer exists).
+pub fn lod_screen_coverages(
+    error_bounds: &[f32],
+    radius: f32,
+    pixels: f32,
+    viewport_height: f32,
+) -> Vec<f32> {
+    let (r, p, h) = (radius as f64, pixels as f64, viewport_height as f64);
+    let coverage = |e: f64| {
+        let c = 2.0 * r * p / (e * h);
+        if c.is_nan() { 1.0 } else { c }
+    };
+    let n = error_bounds.len();
+    let mut out: Vec<f32> = Vec::with_capacity(n);
+    for i in 0..n {
+        let raw = match error_bounds.get(i + 1) {
+            Some(&e) => coverage(e as f64),
+            None => p / h,
+        };
+        let mut c = raw.clamp(0.0, 1.0) as f32;
+        if let Some(&prev) = out.last() {
+            c = c.min(prev * (1.0 - 1e-4));
+        }
+        if c.is_nan() || c <= 0.0 {
+            // Degenerate input (zero radius or pixels): keep the order positive.
+            c = out.last().map_or(1.0, |prev| prev * 0.5);
+        }
+        out.push(c);
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn screen_coverage_is_where_the_next_bound_projects_to_the_tolerance() {
+        // r = 1, p = 2 px, H = 1000: c(e) = 2·1·2 / (e·1000) = 0.004 / e.
+        let c = lod_screen_coverages(&[0.001, 0.01, 0.1], 1.0, 2.0, 1000.0);
+        assert_eq!(c.len(), 3);
+        assert!((c[0] - 0.4).abs() < 1e-6, "{c:?}");
+        assert!((c[1] - 0.04).abs() < 1e-6, "{c:?}");
+        assert!((c[2] - 0.002).abs() < 1e-6, "{c:?}");
+        // At coverage c[0], LOD1's bound projects to exactly p pixels:
+        // pixels = e·H·c / (2r).
+        assert!((0.01 * 1000.0 * c[0] / 2.0 - 2.0).abs() < 1e-4);
+        // Zero bounds, equal bounds and huge bounds: clamped, strictly decreasing, positive.
+        let c = lod_screen_coverages(&[0.0, 0.0, 0.5, 0.5, 1e9], 1.0, 1.0, 1080.0);
+        assert!(c.iter().all(|v| *v > 0.0 && *v <= 1.0), "{c:?}");
+        assert!(c.windows(2).all(|w| w[1] < w[0]), "{c:?}");
+        let c = lod_screen_coverages(&[0.1, 0.2], 0.0, 1.0, 1080.0);
+        assert!(
+            c.iter().all(|v| *v > 0.0 && *v <= 1.0) && c[1] < c[0],
+            "{c:?}"
+        );
+    }
+}
