@@ -23,6 +23,7 @@ if [ -d "$SHARED" ]; then
   $BIN simplify "$SHARED/fandisk.obj" --triangles 60 -o "$gen/fandisk.obj" --force >/dev/null
   $BIN simplify "$SHARED/couplingdown.off" --triangles 80 -o "$gen/coupling.ply" --force >/dev/null
   $BIN simplify "$SHARED/CesiumMilkTruck.glb" --triangles 120 -o "$gen/truck.glb" --force >/dev/null
+  $BIN simplify "$gen/fandisk.obj" --triangles 20 -o "$gen/fandisk20.ply" --save "$gen/s.lodh" --force >/dev/null
   $BIN hybrid "$gen/fandisk.obj" --save "$gen/h.lodh" --force >/dev/null
   $BIN mergetree "$gen/fandisk.obj" --save "$gen/m.lodh" --force >/dev/null
   $BIN voxel "$gen/fandisk.obj" --resolution 8 --pyramid --save "$gen/v.lodh" --force >/dev/null
@@ -53,7 +54,8 @@ d = open(sys.argv[1], 'rb').read()
 at = 12; n = struct.unpack_from('<H', d, at)[0]; method = d[at+2:at+2+n].decode(); at += 2 + n
 p = struct.unpack_from('<I', d, at)[0]; at += 4 + p
 b = struct.unpack_from('<Q', d, at)[0]; at += 8
-pick = ["hybrid", "mergetree", "voxel", "amg"].index(method)
+# The order of lod::Method::ALL.
+pick = ["simplify", "hybrid", "mergetree", "voxel", "amg"].index(method)
 open(sys.argv[2], 'wb').write(bytes([pick]) + d[at:at+b])
 PY
 done

@@ -13,8 +13,9 @@ use std::time::Duration;
 
 use lodstudio_core::builtins;
 use lodstudio_core::implicit::MeshSolid;
-use lodstudio_core::io::{LoadError, LoadOptions, Loaded, load};
+use lodstudio_core::io::{LoadError, LoadOptions, Loaded};
 use lodstudio_core::lod::Picked;
+use lodstudio_core::open::open;
 use lodstudio_core::progress::{Cancelled, Progress};
 use lodstudio_core::stats::ModelSummary;
 
@@ -511,7 +512,7 @@ impl StudioApp {
         let name = display_name(&path);
         let worker_path = path.clone();
         let spawned = Job::spawn("model loader", name.clone(), ctx, move |progress| {
-            let loaded = load(&worker_path, &LoadOptions::default(), progress);
+            let loaded = open(&worker_path, &LoadOptions::default(), progress);
             // A cancelled load may fail for that reason alone: say nothing.
             progress.check()?;
             let loaded = match loaded {

@@ -15,6 +15,7 @@ pub mod implicit;
 pub mod io;
 pub mod lod;
 pub mod mergetree;
+pub mod open;
 pub mod progress;
 pub mod rng;
 mod simd;

@@ -4,10 +4,9 @@
 //! each method makes before a cut. The reopened hierarchy is then cut at a few
 //! tolerances.
 #![no_main]
-use lodstudio_core::io::hierarchy_file::{self, VERSION};
+use lodstudio_core::io::hierarchy_file::VERSION;
+use lodstudio_core::lod::Method;
 use lodstudio_core::view::{Tolerance, View};
-
-const METHODS: [&str; 4] = ["hybrid", "mergetree", "voxel", "amg"];
 
 fn frame(method: &str, params: &[u8], body: &[u8]) -> Vec<u8> {
     let mut out = b"LODSTHRY".to_vec();
@@ -28,15 +27,16 @@ libfuzzer_sys::fuzz_target!(|data: &[u8]| {
     let Some((&pick, body)) = data.split_first() else {
         return;
     };
-    let method = METHODS[pick as usize % METHODS.len()];
+    let method = Method::ALL[pick as usize % Method::ALL.len()].tag();
     let file = frame(method, b"{}", body);
     // The raw bytes too: the header's own checks.
-    let _ = lodstudio_core::lod::saved::reopen(data);
-    let Ok((_, mut h)) = lodstudio_core::lod::saved::reopen(&file) else {
+    let _ = lodstudio_core::open::reopen(data);
+    let Ok((_, mut h)) = lodstudio_core::open::reopen(&file) else {
         return;
     };
     let view = View::orbit(glam::Vec3::ZERO, 2.0, 0.3, 0.2);
     for tol in [0.0, 0.01, 0.5] {
         let _ = h.select(&view, Tolerance::Relative(tol));
     }
+    let _ = h.select_triangles(10);
 });

@@ -30,7 +30,7 @@ pub fn reopen(path: &Path) -> Result<Reopened, LoadError> {
     })?;
     let bad = |why: String| LoadError::malformed(path, ParseError::new(Location::File, why));
     let (header, hierarchy) =
-        lodstudio_core::lod::saved::reopen(&bytes).map_err(|e| bad(e.to_string()))?;
+        lodstudio_core::open::reopen(&bytes).map_err(|e| bad(e.to_string()))?;
     let method = hierarchy.method();
     Ok(Reopened {
         method,

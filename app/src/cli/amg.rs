@@ -52,7 +52,8 @@ pub fn run(args: AmgArgs) -> Result<(), CliError> {
     for out in [&args.output, &args.matrix_out].into_iter().flatten() {
         check_output(out, args.report.force)?;
     }
-    let loaded = io::load(&args.file, &args.input.load_options()?, &Progress::new())?;
+    let loaded =
+        lodstudio_core::open::open(&args.file, &args.input.load_options()?, &Progress::new())?;
     let points = amg::point_set(&loaded.model).ok_or_else(|| {
         CliError::BadInput(format!(
             "{}: the amg method takes point sets and meshes, not a {}",

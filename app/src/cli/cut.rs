@@ -46,7 +46,7 @@ pub fn run(args: CutArgs) -> Result<(), CliError> {
     let bytes = std::fs::read(&args.file)
         .map_err(|e| CliError::BadInput(format!("{}: cannot read: {e}", args.file.display())))?;
     let start = std::time::Instant::now();
-    let (header, mut hierarchy) = lodstudio_core::lod::saved::reopen(&bytes)
+    let (header, mut hierarchy) = lodstudio_core::open::reopen(&bytes)
         .map_err(|e| CliError::BadInput(format!("{}: {e}", args.file.display())))?;
     if let Some(t) = args.at {
         hierarchy.set_runtime(&serde_json::json!({ "position": t }));

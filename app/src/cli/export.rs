@@ -280,7 +280,7 @@ fn export_one(
     file: &Path,
     output: &Path,
 ) -> Result<serde_json::Value, CliError> {
-    let loaded = io::load(file, &args.input.load_options()?, &Progress::new())?;
+    let loaded = lodstudio_core::open::open(file, &args.input.load_options()?, &Progress::new())?;
     // AMG takes point sets too; every other method needs a triangle mesh.
     let mut point_set = None;
     let (mesh, bounds) = match loaded.model {

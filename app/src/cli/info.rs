@@ -38,7 +38,7 @@ pub fn run(args: InfoArgs) -> Result<(), CliError> {
     {
         // A saved hierarchy: what it holds, checked whole (decoded and its
         // invariants verified, as a cut would reopen it).
-        let (h, _) = lodstudio_core::lod::saved::reopen(&bytes)
+        let (h, _) = lodstudio_core::open::reopen(&bytes)
             .map_err(|e| CliError::BadInput(format!("{}: {e}", file.display())))?;
         let j = serde_json::json!({
             "file": file.display().to_string(),
@@ -62,7 +62,7 @@ pub fn run(args: InfoArgs) -> Result<(), CliError> {
         return Ok(());
     }
     let opts = args.input.load_options()?;
-    let loaded = io::load(&file, &opts, &Progress::new())?;
+    let loaded = lodstudio_core::open::open(&file, &opts, &Progress::new())?;
     let summary = ModelSummary::of(&loaded);
     if args.json {
         let mut v = summary.to_json();

@@ -83,7 +83,7 @@ pub fn run(args: MeasureArgs) -> Result<(), CliError> {
 fn normals_against_winding(file: &std::path::Path, input: &InputArgs) -> Result<f64, CliError> {
     let mut opts = input.load_options()?;
     opts.repair.weld = Weld::Off;
-    match io::load(file, &opts, &Progress::new())?.model {
+    match lodstudio_core::open::open(file, &opts, &Progress::new())?.model {
         Model::Mesh(m) => Ok(m.area_with_normals_against_winding()),
         _ => Ok(0.0),
     }

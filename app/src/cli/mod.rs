@@ -317,7 +317,7 @@ pub fn load_mesh(
     file: &std::path::Path,
     input: &InputArgs,
 ) -> Result<lodstudio_core::TriMesh, CliError> {
-    let loaded = io::load(file, &input.load_options()?, &Progress::new())?;
+    let loaded = lodstudio_core::open::open(file, &input.load_options()?, &Progress::new())?;
     match loaded.model {
         Model::Mesh(m) => Ok(m),
         other => Err(CliError::BadInput(format!(

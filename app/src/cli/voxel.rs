@@ -67,7 +67,8 @@ fn voxel_input(args: &VoxelArgs) -> Result<VoxelInput, CliError> {
     {
         return Ok(VoxelInput::Solid(solid));
     }
-    let loaded = io::load(&args.file, &args.input.load_options()?, &Progress::new())?;
+    let loaded =
+        lodstudio_core::open::open(&args.file, &args.input.load_options()?, &Progress::new())?;
     match loaded.model {
         Model::Volume(v) => {
             let (lo, hi) = v.value_range();

@@ -95,12 +95,9 @@ pub struct LoadOptions {
     pub raw: Option<RawSpec>,
 }
 
-/// Loads a file or a `builtin:NAME`, detects its format, and repairs meshes.
+/// Loads a model file, detects its format, and repairs meshes (`open::open`
+/// also opens `builtin:` names and saved hierarchies).
 pub fn load(path: &Path, opts: &LoadOptions, progress: &Progress) -> Result<Loaded, LoadError> {
-    if let Some(name) = path.to_str().and_then(|s| s.strip_prefix("builtin:")) {
-        let model = crate::builtins::build(name, progress)?;
-        return Ok(finish(model, Format::Builtin, opts));
-    }
     progress.stage("reading file");
     let bytes = std::fs::read(path).map_err(|source| LoadError::Io {
         file: path.to_path_buf(),
@@ -147,16 +144,26 @@ pub fn load_bytes(
             Model::Volume(volume::read_raw(data, spec).map_err(malformed)?)
         }
         Format::Builtin => unreachable!("detect never answers Builtin"),
-        // A saved hierarchy opens as its finest cut (the studio also reopens
-        // the hierarchy itself, to cut it live).
+        // Decoding one takes its method: `open::open` does.
         Format::Hierarchy => {
-            let (_, mut h) = crate::lod::saved::reopen(data)
-                .map_err(|e| malformed(ParseError::new(Location::File, e.to_string())))?;
-            let view = crate::view::View::orbit(glam::Vec3::ZERO, 1.0, 0.0, 0.0);
-            Model::Mesh(h.select(&view, crate::view::Tolerance::Relative(0.0)).mesh)
+            return Err(LoadError::UnknownFormat {
+                file: path.to_path_buf(),
+                why: "a saved hierarchy, which opens through lodstudio_core::open".into(),
+            });
         }
     };
     progress.check()?;
+    prepared(path, model, format, opts)
+}
+
+/// A model read from `path` in `format`, repaired as loading does, and
+/// refused when empty or of absurd extent.
+pub fn prepared(
+    path: &Path,
+    model: Model,
+    format: Format,
+    opts: &LoadOptions,
+) -> Result<Loaded, LoadError> {
     let loaded = finish(model, format, opts);
     check_not_empty(path, &loaded)?;
     check_extent(path, &loaded)?;

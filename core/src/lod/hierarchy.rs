@@ -29,7 +29,7 @@ pub trait Hierarchy: Send + Sync {
     /// tree's criteria, say), as JSON; unknown keys are ignored.
     fn set_runtime(&mut self, _params: &serde_json::Value) {}
     /// The built hierarchy in a saved-hierarchy file with `params` (see
-    /// [`crate::io::hierarchy_file`]); `None` for hierarchies that do not save.
+    /// `io::hierarchy_file`); `None` for hierarchies that do not save.
     fn save(&self, _params: &serde_json::Value) -> Option<Vec<u8>> {
         None
     }

@@ -8,7 +8,6 @@
 //!   layers, with their bounds);
 //! - `pick`: the studio's click to inspect, on any cut;
 //! - `method`: the five methods, listed once ([`Method`]);
-//! - `saved`: a saved hierarchy reopened through its method;
 //! - `chain`: where each LOD of a chain takes over (screen coverage).
 
 pub mod chain;
@@ -16,7 +15,6 @@ mod draw_set;
 mod hierarchy;
 mod method;
 mod pick;
-pub mod saved;
 
 pub use draw_set::{CutPoint, DrawSet, Layer, Splat, Texture};
 pub use hierarchy::{Hierarchy, select_triangles};

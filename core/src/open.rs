@@ -1,10 +1,48 @@
-//! Saved hierarchies decoded: the container (`io::hierarchy_file`) holds a
-//! method's tag, and [`Method`] says which structure to decode and check.
+//! Opening what a user names, in one place above the readers, the
+//! built-in models and the methods: a model file (`io`), a `builtin:` name
+//! (`builtins`), or a saved hierarchy (decoded through its [`Method`]; as a
+//! model it opens as its finest cut).
 
+use std::path::Path;
 use std::sync::Arc;
 
-use super::{Hierarchy, Method};
-use crate::io::hierarchy_file::{Header, HierarchyFileError, load, peek};
+use crate::io::hierarchy_file::{self, Header, HierarchyFileError, load, peek};
+use crate::io::{Format, LoadError, LoadOptions, Loaded, Location, ParseError};
+use crate::lod::{Hierarchy, Method};
+use crate::progress::Progress;
+use crate::view::{Tolerance, View};
+
+/// Opens a model file, a `builtin:NAME` or a saved hierarchy (its finest
+/// cut), detecting the format and repairing meshes as `io::load` does.
+pub fn open(path: &Path, opts: &LoadOptions, progress: &Progress) -> Result<Loaded, LoadError> {
+    if let Some(name) = path.to_str().and_then(|s| s.strip_prefix("builtin:")) {
+        let model = crate::builtins::build(name, progress)?;
+        return crate::io::prepared(path, model, Format::Builtin, opts);
+    }
+    progress.stage("reading file");
+    let bytes = std::fs::read(path).map_err(|source| LoadError::Io {
+        file: path.to_path_buf(),
+        source,
+    })?;
+    open_bytes(path, &bytes, opts, progress)
+}
+
+/// [`open`] for bytes already in memory (`path` names them in errors).
+pub fn open_bytes(
+    path: &Path,
+    bytes: &[u8],
+    opts: &LoadOptions,
+    progress: &Progress,
+) -> Result<Loaded, LoadError> {
+    if !hierarchy_file::is_hierarchy(bytes) {
+        return crate::io::load_bytes(path, bytes, opts, progress);
+    }
+    let malformed = |e: String| LoadError::malformed(path, ParseError::new(Location::File, e));
+    let (_, mut h) = reopen(bytes).map_err(|e| malformed(e.to_string()))?;
+    let view = View::orbit(glam::Vec3::ZERO, 1.0, 0.0, 0.0);
+    let model = crate::io::Model::Mesh(h.select(&view, Tolerance::Relative(0.0)).mesh);
+    crate::io::prepared(path, model, Format::Hierarchy, opts)
+}
 
 /// Reopens any saved hierarchy, ready to cut: a progressive edge collapse,
 /// a hybrid MRG, a merge tree
