@@ -2,9 +2,10 @@
 
 use glam::{Vec2, Vec3};
 
+use crate::geom::Model;
 use crate::geom::{PointSet, TriMesh};
 use crate::implicit::{self, Implicit, Sphereflake};
-use crate::io::{LoadError, Model};
+use crate::io::LoadError;
 use crate::progress::Progress;
 use crate::rng::Rng;
 

@@ -24,6 +24,7 @@ pub mod stats;
 pub mod view;
 pub mod voxel;
 
+pub use geom::Model;
 pub use geom::{Aabb, PointSet, TriMesh, Volume};
-pub use io::{LoadError, Loaded, Model};
+pub use io::{LoadError, Loaded};
 pub use progress::Progress;

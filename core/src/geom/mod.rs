@@ -99,6 +99,27 @@ impl Aabb {
     }
 }
 
+/// What a model is: a triangle mesh, a point set or a volume (what a file
+/// or a built-in holds).
+#[derive(Debug, Clone, PartialEq)]
+// One per load, moved rather than copied: boxing the mesh buys nothing.
+#[allow(clippy::large_enum_variant)]
+pub enum Model {
+    Mesh(TriMesh),
+    Points(PointSet),
+    Volume(Volume),
+}
+
+impl Model {
+    pub fn kind(&self) -> &'static str {
+        match self {
+            Model::Mesh(_) => "mesh",
+            Model::Points(_) => "points",
+            Model::Volume(_) => "volume",
+        }
+    }
+}
+
 /// A triangle mesh with optional per-vertex attributes and a per-triangle part id
 /// (OBJ objects, glTF mesh instances, builtin sub-shapes).
 #[derive(Debug, Clone, Default, PartialEq, serde::Serialize, serde::Deserialize)]

@@ -21,28 +21,9 @@ use std::path::{Path, PathBuf};
 pub use error::{LoadError, Location, ParseError, ParseResult};
 pub use volume::{RawSpec, ScalarType};
 
-use crate::geom::{PointSet, RepairOptions, RepairReport, TriMesh, Volume};
+pub use crate::geom::Model;
+use crate::geom::{RepairOptions, RepairReport, TriMesh};
 use crate::progress::Progress;
-
-/// What a file holds.
-#[derive(Debug, Clone, PartialEq)]
-// One per load, moved rather than copied: boxing the mesh buys nothing.
-#[allow(clippy::large_enum_variant)]
-pub enum Model {
-    Mesh(TriMesh),
-    Points(PointSet),
-    Volume(Volume),
-}
-
-impl Model {
-    pub fn kind(&self) -> &'static str {
-        match self {
-            Model::Mesh(_) => "mesh",
-            Model::Points(_) => "points",
-            Model::Volume(_) => "volume",
-        }
-    }
-}
 
 /// A loaded, repaired model with what was done to it.
 #[derive(Debug, Clone)]
