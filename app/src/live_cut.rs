@@ -118,6 +118,7 @@ pub struct CutStats {
     pub layer_triangles: usize,
     /// Object-space bound of the cut.
     pub error_bound: f32,
+    pub error_bound_kind: lodstudio_core::lod::BoundKind,
     /// Time of the last `select` and scene preparation.
     pub cut_ms: f32,
     /// Cuts taken since the build.
@@ -279,6 +280,7 @@ impl LiveCut {
             splats: d.splats.len(),
             layer_triangles: d.layers.iter().map(|l| l.mesh.triangles.len()).sum(),
             error_bound: d.error_bound,
+            error_bound_kind: d.error_bound_kind,
             cut_ms: start.elapsed().as_secs_f32() * 1000.0,
             cuts: self.stats.cuts + 1,
         };

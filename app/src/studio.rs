@@ -1472,7 +1472,7 @@ impl StudioApp {
                             ("cut points", st.points.to_string(), "Point primitives (discs) on the current cut."),
                             ("cut splats", st.splats.to_string(), "Textured domain primitives on the current cut."),
                             ("layer triangles", st.layer_triangles.to_string(), "Triangles of the translucent voxel layers."),
-                            ("cut bound", format!("{} ({:.3} %)", build::length(st.error_bound), 100.0 * st.error_bound / diagonal), "The cut's guaranteed object-space error bound (max over its elements)."),
+                            ("cut bound", format!("{} ({:.3} %, {})", build::length(st.error_bound), 100.0 * st.error_bound / diagonal, st.error_bound_kind.name()), "The cut's object-space error bound (max over its elements): certified (no point of the cut or the original lies farther from the other), or an estimate (AMG: the largest distance of a domain's points to its splat's plane)."),
                             ("bound at target", format!("{pixels:.2} px"), "The cut's bound projected at the camera's target distance."),
                             ("cut time", format!("{:.2} ms", st.cut_ms), "Time of the last re-selection of the cut and its scene."),
                             ("frame time", self.frame_summary(), "Median time between frames of the studio over the last second, and the median CPU time of a frame (layout, cut, tessellation and submitting the draw)."),

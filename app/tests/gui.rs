@@ -1384,3 +1384,41 @@ fn side_by_side_compares_the_original_with_the_lod_through_one_camera() {
     harness.run();
     assert!(harness.query_by_label("original viewport").is_none());
 }
+
+/// One interface in the studio (issue 25): for every method, dragging the
+/// error threshold changes what is drawn, without a rebuild.
+#[test]
+fn the_threshold_moves_every_method_live() {
+    let mut harness = studio(None);
+    wait_for_load(&mut harness);
+    for method in Method::ALL {
+        let mut methods = *harness.state().methods();
+        methods.method = method;
+        methods.auto_rebuild = false;
+        methods.edge_collapse.mode = TargetMode::Threshold;
+        methods.voxel.pyramid = true;
+        methods.voxel.resolution = 32;
+        methods.amg.auto_level = true;
+        methods.threshold.in_pixels = false;
+        methods.threshold.percent = 0.05;
+        harness.state_mut().set_methods(methods);
+        harness.state_mut().build();
+        wait_for_build(&mut harness);
+        harness.run();
+        let fine = cut_stats(&harness);
+        harness
+            .get_by_role_and_label(egui::Role::Slider, "error threshold")
+            .set_value_accesskit(20.0);
+        harness.run();
+        assert!(!harness.state().is_building(), "{method:?}: no rebuild");
+        let coarse = cut_stats(&harness);
+        let drawn = |s: &lodstudio::live_cut::CutStats| {
+            s.triangles + s.points + s.splats + s.layer_triangles
+        };
+        assert!(
+            drawn(&coarse) < drawn(&fine),
+            "{method:?}: {fine:?} -> {coarse:?}"
+        );
+        assert!(coarse.error_bound >= fine.error_bound, "{method:?}");
+    }
+}

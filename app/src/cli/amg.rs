@@ -108,6 +108,7 @@ pub fn run(args: AmgArgs) -> Result<(), CliError> {
         "texels": prims.texels(),
         "texel": texel,
         "max_plane_error": prims.errors.iter().copied().fold(0.0, f32::max),
+        "error_bound_kind": lodstudio_core::lod::BoundKind::Estimate.name(),
         "seconds_decomposition": seconds_decomposition,
         "seconds_primitives": seconds_primitives,
     });

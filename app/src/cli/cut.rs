@@ -75,6 +75,7 @@ pub fn run(args: CutArgs) -> Result<(), CliError> {
         "points": set.points.len(),
         "splats": set.splats.len(),
         "error_bound": set.error_bound,
+        "error_bound_kind": set.error_bound_kind.name(),
         "error_bound_relative": set.error_bound / diagonal.max(f32::MIN_POSITIVE),
         "bbox_diagonal": diagonal,
         "seconds": start.elapsed().as_secs_f64(),

@@ -353,6 +353,7 @@ fn export_one(
                 "vertices": l.set.mesh.positions.len(),
                 "error_bound": l.bound,
                 "error_bound_relative": l.bound / diag,
+                "error_bound_kind": l.set.error_bound_kind.name(),
                 "screen_coverage": c,
                 // Geometric bounds say nothing of textures: how far the UVs moved.
                 "uv_error": lodstudio_core::distance::uv_error(&mesh, &l.set.mesh),

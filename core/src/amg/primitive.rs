@@ -58,6 +58,8 @@ impl Primitives {
             splats,
             textures: self.textures.clone(),
             error_bound: self.errors.iter().copied().fold(0.0, f32::max),
+            // Points to plane, not the distance of the quads to the surface.
+            error_bound_kind: crate::lod::BoundKind::Estimate,
             ..DrawSet::default()
         }
     }

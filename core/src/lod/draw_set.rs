@@ -64,6 +64,28 @@ pub struct Layer {
     pub isodensity: f32,
 }
 
+/// What a cut's `error_bound` is.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum BoundKind {
+    /// A guarantee: no dense measurement of the two-sided Hausdorff distance
+    /// to the original exceeds it (points as balls, splats as their quads).
+    #[default]
+    Certified,
+    /// A measure of the method's own (AMG: the largest distance of a domain's
+    /// points to its splat's plane), not a bound on the distance to the original.
+    Estimate,
+}
+
+impl BoundKind {
+    /// The JSON and inspector word.
+    pub fn name(self) -> &'static str {
+        match self {
+            BoundKind::Certified => "certified",
+            BoundKind::Estimate => "estimate",
+        }
+    }
+}
+
 /// The primitives on a cut.
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct DrawSet {
@@ -83,6 +105,7 @@ pub struct DrawSet {
     pub layer_order: Vec<[u32; 2]>,
     /// The cut's error bound in object space (max over its primitives).
     pub error_bound: f32,
+    pub error_bound_kind: BoundKind,
 }
 
 impl DrawSet {

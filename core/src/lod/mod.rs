@@ -16,7 +16,7 @@ mod hierarchy;
 mod method;
 mod pick;
 
-pub use draw_set::{CutPoint, DrawSet, Layer, Splat, Texture};
+pub use draw_set::{BoundKind, CutPoint, DrawSet, Layer, Splat, Texture};
 pub use hierarchy::{Hierarchy, select_triangles};
 pub use method::Method;
 pub use pick::Picked;
