@@ -129,7 +129,8 @@ pub struct CutStats {
 pub struct LiveCut {
     hierarchy: Box<dyn Hierarchy>,
     last: Option<(Option<u64>, View, Tolerance)>,
-    runtime: serde_json::Value,
+    /// Whether knobs were handed over yet (the first ones always re-select).
+    knobs_given: bool,
     /// How the cut is coloured and outlined.
     style: CutStyle,
     scene: Arc<Scene>,
@@ -142,7 +143,7 @@ impl LiveCut {
         let mut live = LiveCut {
             hierarchy,
             last: None,
-            runtime: serde_json::Value::Null,
+            knobs_given: false,
             style: CutStyle::default(),
             scene: Arc::new(Scene::from_draw_set(
                 &DrawSet::default(),
@@ -250,12 +251,12 @@ impl LiveCut {
         }
     }
 
-    /// Hands the hierarchy new run-time parameters (when they differ), and
-    /// forces the next [`LiveCut::update`] to re-select.
-    pub fn set_runtime(&mut self, params: serde_json::Value) {
-        if params != self.runtime {
-            self.hierarchy.set_runtime(&params);
-            self.runtime = params;
+    /// Hands the hierarchy the run-time knobs; when its cut may change with
+    /// them, the next [`LiveCut::update`] re-selects.
+    pub fn set_knobs(&mut self, knobs: &lodstudio_core::lod::Knobs) {
+        let changed = self.hierarchy.set_knobs(knobs);
+        if changed || !self.knobs_given {
+            self.knobs_given = true;
             self.last = None;
         }
     }

@@ -895,14 +895,16 @@ impl StudioApp {
             if let Some(light) = mt.light() {
                 view.light_dir = light;
             }
-            live.set_runtime(serde_json::json!({
-                "backface": mt.backface,
-                "silhouette": mt.silhouette,
-                "lighting": mt.lighting,
-                "position": self.methods.voxel.runtime_position().unwrap_or(-1.0),
-                "collapse": self.methods.edge_collapse.runtime(input_triangles),
-                "amg_level": self.methods.amg.runtime_level(),
-            }));
+            live.set_knobs(&lodstudio_core::lod::Knobs {
+                criteria: lodstudio_core::lod::Criteria {
+                    backface: mt.backface,
+                    silhouette: mt.silhouette,
+                    lighting: mt.lighting,
+                },
+                pyramid_position: self.methods.voxel.runtime_position(),
+                amg_level: self.methods.amg.runtime_level(),
+                collapse: self.methods.edge_collapse.runtime(input_triangles),
+            });
             live.update(&view, self.methods.threshold.tolerance());
         }
     }
@@ -1472,7 +1474,8 @@ impl StudioApp {
                             ("cut points", st.points.to_string(), "Point primitives (discs) on the current cut."),
                             ("cut splats", st.splats.to_string(), "Textured domain primitives on the current cut."),
                             ("layer triangles", st.layer_triangles.to_string(), "Triangles of the translucent voxel layers."),
-                            ("cut bound", format!("{} ({:.3} %, {})", build::length(st.error_bound), 100.0 * st.error_bound / diagonal, st.error_bound_kind.name()), "The cut's object-space error bound (max over its elements): certified (no point of the cut or the original lies farther from the other), or an estimate (AMG: the largest distance of a domain's points to its splat's plane)."),
+                            ("cut bound", format!("{} ({:.3} %)", build::length(st.error_bound), 100.0 * st.error_bound / diagonal), "The cut's object-space error bound (max over its elements)."),
+                            ("bound is", st.error_bound_kind.name().to_string(), "Certified: no point of the cut or of the original lies farther than the bound from the other (a dense measurement never exceeds it). Estimate: a measure of the method's own (AMG: the largest distance of a domain's points to its splat's plane), not a bound on the distance to the original."),
                             ("bound at target", format!("{pixels:.2} px"), "The cut's bound projected at the camera's target distance."),
                             ("cut time", format!("{:.2} ms", st.cut_ms), "Time of the last re-selection of the cut and its scene."),
                             ("frame time", self.frame_summary(), "Median time between frames of the studio over the last second, and the median CPU time of a frame (layout, cut, tessellation and submitting the draw)."),

@@ -662,13 +662,17 @@ mod tests {
         assert_eq!(built.method(), Method::EdgeCollapse);
         // The target moves the cut without a rebuild: a quarter of the triangles.
         let live = built.live.as_mut().expect("cut live");
-        live.set_runtime(serde_json::json!({"collapse": {"triangles": 256}}));
+        let knobs = |n| lodstudio_core::lod::Knobs {
+            collapse: Some(lodstudio_core::lod::PrefixTarget::Triangles(n)),
+            ..Default::default()
+        };
+        live.set_knobs(&knobs(256));
         let view = View::orbit(glam::Vec3::ZERO, 3.0, 0.2, 0.3);
         assert!(live.update(&view, Tolerance::Pixels(1.0)));
         let (n, bound) = (live.stats.triangles, live.stats.error_bound);
         assert!((250..=256).contains(&n), "{n}");
         assert!(bound > 0.0 && bound.is_finite());
-        live.set_runtime(serde_json::json!({"collapse": {"triangles": 900}}));
+        live.set_knobs(&knobs(900));
         live.update(&view, Tolerance::Pixels(1.0));
         assert!(live.stats.triangles > n && live.stats.error_bound <= bound);
         assert!(live.has_errors(), "per-triangle bounds for the heat map");

@@ -48,9 +48,10 @@ pub fn run(args: CutArgs) -> Result<(), CliError> {
     let start = std::time::Instant::now();
     let (header, mut hierarchy) = lodstudio_core::open::reopen(&bytes)
         .map_err(|e| CliError::BadInput(format!("{}: {e}", args.file.display())))?;
-    if let Some(t) = args.at {
-        hierarchy.set_runtime(&serde_json::json!({ "position": t }));
-    }
+    hierarchy.set_knobs(&lodstudio_core::lod::Knobs {
+        pyramid_position: args.at,
+        ..Default::default()
+    });
     let view = View::orbit(glam::Vec3::ZERO, 1.0, 0.0, 0.0);
     let diagonal = hierarchy.diagonal();
     let set = match args.triangles {

@@ -67,13 +67,9 @@ impl AmgSettings {
         }
     }
 
-    /// The level to draw, as the live cut's run-time parameter.
-    pub fn runtime_level(&self) -> i64 {
-        if self.auto_level {
-            -1
-        } else {
-            self.level as i64
-        }
+    /// The level to draw (`None`: the threshold chooses), the live cut's knob.
+    pub fn runtime_level(&self) -> Option<usize> {
+        (!self.auto_level).then_some(self.level)
     }
 
     /// The controls; true when a build parameter changed.

@@ -3,6 +3,7 @@
 //! once, down to a floor (`simplify::progressive`); the target only chooses
 //! a prefix, live.
 
+use lodstudio_core::lod::PrefixTarget;
 use lodstudio_core::simplify::CollapseOptions;
 use serde::{Deserialize, Serialize};
 
@@ -118,18 +119,18 @@ impl EdgeCollapseSettings {
         (f64::from(*RATIO_RANGE.start()) * input as f64) as usize
     }
 
-    /// The run-time choice of a recorded collapse's prefix (the hierarchy's
-    /// `collapse` parameter): `null` follows the view's threshold.
-    pub fn runtime(&self, input_triangles: usize) -> serde_json::Value {
+    /// The run-time choice of a recorded collapse's prefix (the live cut's
+    /// knob): `None` follows the view's threshold.
+    pub fn runtime(&self, input_triangles: usize) -> Option<PrefixTarget> {
         let s = self.sanitized();
         match s.mode {
             TargetMode::Ratio => {
                 let n = (f64::from(s.ratio) * input_triangles as f64).round();
-                serde_json::json!({ "triangles": n })
+                Some(PrefixTarget::Triangles(n as usize))
             }
-            TargetMode::Triangles => serde_json::json!({ "triangles": s.triangles }),
-            TargetMode::Error => serde_json::json!({ "error": s.error_percent / 100.0 }),
-            TargetMode::Threshold => serde_json::Value::Null,
+            TargetMode::Triangles => Some(PrefixTarget::Triangles(s.triangles)),
+            TargetMode::Error => Some(PrefixTarget::RelativeError(s.error_percent / 100.0)),
+            TargetMode::Threshold => None,
         }
     }
 
@@ -214,16 +215,13 @@ mod tests {
             error_percent: 1.0,
             ..Default::default()
         };
-        assert_eq!(s.runtime(1000), serde_json::json!({"triangles": 250.0}));
+        assert_eq!(s.runtime(1000), Some(PrefixTarget::Triangles(250)));
         s.mode = TargetMode::Triangles;
-        assert_eq!(s.runtime(1000), serde_json::json!({"triangles": 500}));
+        assert_eq!(s.runtime(1000), Some(PrefixTarget::Triangles(500)));
         s.mode = TargetMode::Error;
-        assert_eq!(
-            s.runtime(1000),
-            serde_json::json!({"error": 1.0f32 / 100.0})
-        );
+        assert_eq!(s.runtime(1000), Some(PrefixTarget::RelativeError(0.01)));
         s.mode = TargetMode::Threshold;
-        assert_eq!(s.runtime(1000), serde_json::Value::Null);
+        assert_eq!(s.runtime(1000), None);
         let moved = EdgeCollapseSettings { ratio: 0.5, ..s };
         assert_eq!(moved.collapse(), s.collapse(), "a target is no rebuild");
         s.min_normal_cos = f32::NAN;

@@ -384,12 +384,11 @@ impl Hierarchy for AmgHierarchy {
         self.level.map(|l| l as u64)
     }
 
-    /// `amg_level`: the level to draw, or a negative number for the
-    /// tolerance's choice.
-    fn set_runtime(&mut self, params: &serde_json::Value) {
-        if let Some(l) = params.get("amg_level").and_then(|v| v.as_i64()) {
-            self.set_level(usize::try_from(l).ok());
-        }
+    /// The level to draw, or `None` for the tolerance's choice.
+    fn set_knobs(&mut self, knobs: &crate::lod::Knobs) -> bool {
+        let before = self.level;
+        self.set_level(knobs.amg_level);
+        self.level != before
     }
 }
 

@@ -25,9 +25,11 @@ pub trait Hierarchy: Send + Sync {
     fn select_triangles(&mut self, _n: usize) -> Option<DrawSet> {
         None
     }
-    /// Run-time parameters that change the cut without a rebuild (the merge
-    /// tree's criteria, say), as JSON; unknown keys are ignored.
-    fn set_runtime(&mut self, _params: &serde_json::Value) {}
+    /// Takes the run-time knobs it reads (the merge tree's criteria, say);
+    /// true when its cut may change with them.
+    fn set_knobs(&mut self, _knobs: &super::Knobs) -> bool {
+        false
+    }
     /// The built hierarchy in a saved-hierarchy file with `params` (see
     /// `io::hierarchy_file`); `None` for hierarchies that do not save.
     fn save(&self, _params: &serde_json::Value) -> Option<Vec<u8>> {

@@ -8,15 +8,18 @@
 //!   layers, with their bounds);
 //! - `pick`: the studio's click to inspect, on any cut;
 //! - `method`: the five methods, listed once ([`Method`]);
-//! - `chain`: where each LOD of a chain takes over (screen coverage).
+//! - `chain`: where each LOD of a chain takes over (screen coverage);
+//! - `knobs`: what changes a cut at run time ([`Knobs`]), typed.
 
 pub mod chain;
 mod draw_set;
 mod hierarchy;
+mod knobs;
 mod method;
 mod pick;
 
 pub use draw_set::{BoundKind, CutPoint, DrawSet, Layer, Splat, Texture};
 pub use hierarchy::{Hierarchy, select_triangles};
+pub use knobs::{Criteria, Knobs, PrefixTarget};
 pub use method::Method;
 pub use pick::Picked;

@@ -105,29 +105,7 @@ impl NormalCone {
     }
 }
 
-/// Which view-dependent criteria refine or coarsen beyond the screen-space
-/// projection (§3). Each multiplies the pixel threshold of a node.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Criteria {
-    /// Visibility culling: nodes wholly back-facing or outside the view
-    /// frustum are simplified harder.
-    pub backface: bool,
-    /// Silhouettes: nodes whose normals straddle the view direction are refined.
-    pub silhouette: bool,
-    /// Local illumination: nodes across which the diffuse shading of the
-    /// view's light changes most are refined.
-    pub lighting: bool,
-}
-
-impl Default for Criteria {
-    fn default() -> Self {
-        Self {
-            backface: true,
-            silhouette: true,
-            lighting: true,
-        }
-    }
-}
+pub use crate::lod::Criteria;
 
 /// Threshold factor for invisible nodes.
 pub const BACKFACE_FACTOR: f32 = 8.0;

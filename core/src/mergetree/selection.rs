@@ -450,14 +450,10 @@ impl Hierarchy for MergeTreeView {
         ))
     }
 
-    /// The criteria switches `backface`, `silhouette` and `lighting` (§3).
-    fn set_runtime(&mut self, params: &serde_json::Value) {
-        let flag =
-            |key: &str, current: bool| params.get(key).and_then(|v| v.as_bool()).unwrap_or(current);
-        self.criteria = Criteria {
-            backface: flag("backface", self.criteria.backface),
-            silhouette: flag("silhouette", self.criteria.silhouette),
-            lighting: flag("lighting", self.criteria.lighting),
-        };
+    /// The criteria switches (§3).
+    fn set_knobs(&mut self, knobs: &crate::lod::Knobs) -> bool {
+        let changed = self.criteria != knobs.criteria;
+        self.criteria = knobs.criteria;
+        changed
     }
 }

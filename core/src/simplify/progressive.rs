@@ -20,7 +20,7 @@ use serde::{Deserialize, Serialize};
 use super::collapse::{CollapseOptions, EdgeCollapser};
 use super::step_bounds::run_bounded;
 use crate::geom::TriMesh;
-use crate::lod::{DrawSet, Hierarchy};
+use crate::lod::{DrawSet, Hierarchy, PrefixTarget};
 use crate::progress::{Cancelled, Progress};
 use crate::view::{Tolerance, View};
 
@@ -283,16 +283,6 @@ fn range<'a>(list: &'a [u32], ends: &[u32], i: usize) -> &'a [u32] {
     &list[start..ends[i] as usize]
 }
 
-/// What chooses the prefix instead of the view's tolerance (the studio's
-/// ratio / triangles / error slider).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub enum PrefixTarget {
-    /// The first prefix with at most this many triangles.
-    Triangles(usize),
-    /// The coarsest prefix within this fraction of the diagonal.
-    RelativeError(f32),
-}
-
 /// A progressive mesh cut live: the selected prefix and its alive triangles.
 pub struct ProgressiveCut {
     progressive: Arc<Progressive>,
@@ -375,18 +365,11 @@ impl Hierarchy for ProgressiveCut {
         Some(self.prefix_for(view, tolerance) as u64)
     }
 
-    /// `collapse`: `{"triangles": N}` or `{"error": fraction of the
-    /// diagonal}` choose the prefix; `null` hands it back to the tolerance.
-    fn set_runtime(&mut self, params: &serde_json::Value) {
-        let Some(c) = params.get("collapse") else {
-            return;
-        };
-        let number = |key| c.get(key).and_then(serde_json::Value::as_f64);
-        self.target = match (number("triangles"), number("error")) {
-            (Some(n), _) if n >= 0.0 => Some(PrefixTarget::Triangles(n as usize)),
-            (_, Some(f)) if f >= 0.0 => Some(PrefixTarget::RelativeError(f as f32)),
-            _ => None,
-        };
+    /// The prefix target, or `None` to follow the tolerance.
+    fn set_knobs(&mut self, knobs: &crate::lod::Knobs) -> bool {
+        let changed = self.target != knobs.collapse;
+        self.target = knobs.collapse;
+        changed
     }
 
     fn select_triangles(&mut self, n: usize) -> Option<DrawSet> {

@@ -304,12 +304,12 @@ impl Hierarchy for PyramidCut {
         ))
     }
 
-    /// `position`: the continuous pyramid level to show (0 = finest); a
-    /// negative one follows the tolerance.
-    fn set_runtime(&mut self, params: &serde_json::Value) {
-        if let Some(t) = params.get("position").and_then(|v| v.as_f64()) {
-            self.position = (t >= 0.0).then_some(t as f32);
-        }
+    /// The continuous position to show (0 = finest), or `None` to follow
+    /// the tolerance.
+    fn set_knobs(&mut self, knobs: &crate::lod::Knobs) -> bool {
+        let changed = self.position != knobs.pyramid_position;
+        self.position = knobs.pyramid_position;
+        changed
     }
 }
 
@@ -392,7 +392,10 @@ mod tests {
         let view = View::orbit(Vec3::ZERO, 5.0, 0.0, 0.0);
         let tol = Tolerance::Relative(0.01);
         assert_eq!(cut.select(&view, tol).mesh, l0.mesh);
-        cut.set_runtime(&serde_json::json!({"position": 0.5}));
+        cut.set_knobs(&crate::lod::Knobs {
+            pyramid_position: Some(0.5),
+            ..Default::default()
+        });
         assert_eq!(cut.select(&view, tol).mesh, mid.mesh);
     }
 

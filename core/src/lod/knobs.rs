@@ -1,0 +1,51 @@
+//! Run-time knobs: what changes a cut without a rebuild, typed. The studio
+//! hands every live hierarchy the same [`Knobs`]; each method reads its own
+//! and says whether its cut may change.
+
+/// Which view-dependent criteria refine or coarsen beyond the screen-space
+/// projection (§3). Each multiplies the pixel threshold of a node.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Criteria {
+    /// Visibility culling: nodes wholly back-facing or outside the view
+    /// frustum are simplified harder.
+    pub backface: bool,
+    /// Silhouettes: nodes whose normals straddle the view direction are refined.
+    pub silhouette: bool,
+    /// Local illumination: nodes across which the diffuse shading of the
+    /// view's light changes most are refined.
+    pub lighting: bool,
+}
+
+impl Default for Criteria {
+    fn default() -> Self {
+        Self {
+            backface: true,
+            silhouette: true,
+            lighting: true,
+        }
+    }
+}
+
+/// What chooses an edge collapse's prefix instead of the view's tolerance
+/// (the studio's ratio / triangles / error target).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum PrefixTarget {
+    /// The first prefix with at most this many triangles.
+    Triangles(usize),
+    /// The coarsest prefix within this fraction of the diagonal.
+    RelativeError(f32),
+}
+
+/// Every method's run-time knobs.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Knobs {
+    /// Merge tree: the view-dependent criteria (§3).
+    pub criteria: Criteria,
+    /// Voxel pyramid: a continuous position (§5) instead of the coarsest
+    /// level within the tolerance.
+    pub pyramid_position: Option<f32>,
+    /// AMG: a level instead of the coarsest within the tolerance.
+    pub amg_level: Option<usize>,
+    /// Edge collapse: a prefix target instead of the tolerance.
+    pub collapse: Option<PrefixTarget>,
+}
