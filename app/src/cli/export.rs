@@ -309,15 +309,18 @@ fn export_one(
     let pixels_to_error = |p: f32| p * 2.0 * radius / (args.viewport_height * args.coverage);
     let mut lods = match args.method {
         Method::EdgeCollapse => simplify_lods(args, items, &mesh, pixels_to_error)?,
-        Method::Hybrid | Method::MergeTree => cut_lods(args, items, &mesh, pixels_to_error)?,
-        Method::Voxel => voxel_lods(args, items, &mesh, pixels_to_error)?,
         Method::Amg => {
             let points = match point_set {
                 Some(p) => p,
                 None => lodstudio_core::amg::point_set(&Model::Mesh(mesh.clone()))
                     .ok_or_else(|| CliError::BadInput("no points to decompose".into()))?,
             };
-            amg_lods(items, &points, pixels_to_error)?
+            let hierarchy = build_hierarchy(args, &mesh, Some(&points))?;
+            hierarchy_lods(hierarchy, items, points.positions.len(), pixels_to_error)?
+        }
+        Method::Hybrid | Method::MergeTree | Method::Voxel => {
+            let hierarchy = build_hierarchy(args, &mesh, None)?;
+            hierarchy_lods(hierarchy, items, mesh.triangles.len(), pixels_to_error)?
         }
     };
     // Decreasing quality: increasing bound, then decreasing primitive count.
@@ -437,51 +440,17 @@ fn simplify_lods(
         .collect()
 }
 
-/// The object-space tolerance (a fraction of the diagonal) of one item; a
-/// triangle ratio is met by bisecting the tolerance until the cut has at most
-/// that share of the input's primitives.
-fn cut_at(
-    item: LodTolerance,
-    diag: f32,
-    input: usize,
-    pixels_to_error: &impl Fn(f32) -> f32,
-    cut: &mut dyn FnMut(f32) -> DrawSet,
-) -> DrawSet {
-    match item {
-        LodTolerance::Relative(f) => cut(f),
-        LodTolerance::Pixels(p) => cut(pixels_to_error(p) / diag.max(f32::MIN_POSITIVE)),
-        LodTolerance::Ratio(r) => {
-            let goal = (r as f64 * input as f64).ceil() as usize;
-            let (mut lo, mut hi) = (0.0f32, 1.0f32);
-            let mut best = cut(hi);
-            for _ in 0..24 {
-                let mid = 0.5 * (lo + hi);
-                let set = cut(mid);
-                if set.primitive_count() <= goal {
-                    hi = mid;
-                    best = set;
-                } else {
-                    lo = mid;
-                }
-            }
-            best
-        }
-    }
-}
-
-/// Hybrid and merge tree: one hierarchy built once, cut per LOD in object
-/// space (view-independent, so every viewer gets the same chain).
-fn cut_lods(
+/// The hierarchy `args.method` builds on `mesh` (or on `points`, AMG), as
+/// every other part of lodstudio cuts it.
+fn build_hierarchy(
     args: &ExportArgs,
-    items: &[(String, LodTolerance)],
     mesh: &lodstudio_core::TriMesh,
-    pixels_to_error: impl Fn(f32) -> f32,
-) -> Result<Vec<Lod>, CliError> {
-    use lodstudio_core::lod::Hierarchy;
-    use lodstudio_core::view::{Tolerance, View};
+    points: Option<&lodstudio_core::PointSet>,
+) -> Result<Box<dyn lodstudio_core::lod::Hierarchy>, CliError> {
+    use std::sync::Arc;
     let progress = Progress::new();
     let failed = |_| CliError::Failure("cancelled".into());
-    let mut hierarchy: Box<dyn Hierarchy> = match args.method {
+    Ok(match args.method {
         Method::Hybrid => {
             let opts = lodstudio_core::hybrid::HybridOptions {
                 kappa: args.kappa,
@@ -490,153 +459,93 @@ fn cut_lods(
             };
             opts.validate().map_err(CliError::BadInput)?;
             let mrg = lodstudio_core::hybrid::build(mesh, &opts, &progress).map_err(failed)?;
-            Box::new(lodstudio_core::hybrid::HybridCut::new(std::sync::Arc::new(
-                mrg,
-            )))
+            Box::new(lodstudio_core::hybrid::HybridCut::new(Arc::new(mrg)))
         }
-        _ => {
+        Method::MergeTree => {
             let tree = lodstudio_core::mergetree::build(mesh, &Default::default(), &progress)
                 .map_err(failed)?;
             Box::new(lodstudio_core::mergetree::MergeTreeView::new(
-                std::sync::Arc::new(tree),
+                Arc::new(tree),
                 Default::default(),
             ))
         }
-    };
-    let diag = mesh.bounds().diagonal();
-    let view = View::orbit(mesh.bounds().center(), diag, 0.0, 0.0);
-    let mut cut = |f: f32| hierarchy.select(&view, Tolerance::Relative(f));
-    Ok(items
+        // The pyramid of the mesh's solid, each level certified against the input.
+        Method::Voxel => {
+            use lodstudio_core::voxel::{Filter, Pyramid, Source, pyramid::PyramidCut};
+            if !(8..=512).contains(&args.resolution) {
+                return Err(CliError::BadInput(format!(
+                    "--resolution must be in 8..=512, got {}",
+                    args.resolution
+                )));
+            }
+            let solid = lodstudio_core::implicit::MeshSolid::new(mesh);
+            let source = Source::Solid(&solid);
+            let mut pyramid =
+                Pyramid::build(source, args.resolution, 1.0, Filter::Gaussian, &progress)
+                    .map_err(failed)?;
+            pyramid
+                .certify(source.surface(), &progress)
+                .map_err(failed)?;
+            Box::new(PyramidCut::new(pyramid, None))
+        }
+        // The multiscale of the points (a mesh's vertices), splats at the median radius.
+        Method::Amg => {
+            use lodstudio_core::amg::{self, AmgError, AmgOptions};
+            let points =
+                points.ok_or_else(|| CliError::BadInput("no points to decompose".into()))?;
+            let ms =
+                amg::decompose(points, &AmgOptions::default(), &progress).map_err(|e| match e {
+                    AmgError::BadInput(m) => CliError::BadInput(m),
+                    AmgError::Cancelled => CliError::Failure("cancelled".into()),
+                })?;
+            let mut radii = ms.radii.clone();
+            radii.sort_by(f32::total_cmp);
+            let texel = radii.get(radii.len() / 2).copied().unwrap_or(0.0);
+            Box::new(amg::AmgHierarchy::new(ms, texel))
+        }
+        Method::EdgeCollapse => unreachable!("edge-collapse LODs are simplified from the original"),
+    })
+}
+
+/// Hybrid, merge tree, voxel pyramid, AMG: one hierarchy built once, and an
+/// LOD per item chosen from it (`lod::chain`) in object space
+/// (view-independent, so every viewer gets the same chain): the coarsest cut
+/// within an error, the finest within a share of the `input` primitives
+/// (triangles; AMG: points). An error no cut meets is refused.
+fn hierarchy_lods(
+    mut hierarchy: Box<dyn lodstudio_core::lod::Hierarchy>,
+    items: &[(String, LodTolerance)],
+    input: usize,
+    pixels_to_error: impl Fn(f32) -> f32,
+) -> Result<Vec<Lod>, CliError> {
+    use lodstudio_core::lod::chain::{ChainItem, choose};
+    let diag = hierarchy.diagonal().max(f32::MIN_POSITIVE);
+    let view = lodstudio_core::view::View::orbit(glam::Vec3::ZERO, diag, 0.0, 0.0);
+    items
         .iter()
         .map(|(label, item)| {
-            let set = cut_at(
-                *item,
-                diag,
-                mesh.triangles.len(),
-                &pixels_to_error,
-                &mut cut,
-            );
-            Lod {
+            let wanted = match *item {
+                LodTolerance::Relative(f) => ChainItem::Error(f),
+                LodTolerance::Pixels(p) => ChainItem::Error(pixels_to_error(p) / diag),
+                LodTolerance::Ratio(r) => {
+                    ChainItem::Primitives((r as f64 * input as f64).ceil() as usize)
+                }
+            };
+            let set = choose(hierarchy.as_mut(), &view, wanted);
+            if let ChainItem::Error(f) = wanted
+                && set.error_bound > f * diag * (1.0 + 1e-6)
+            {
+                return Err(CliError::BadInput(format!(
+                    "--lods {label}: no {} cut is that fine (the finest bound is {:.3}% of the diagonal{})",
+                    hierarchy.method().tag(),
+                    100.0 * set.error_bound / diag,
+                    if hierarchy.method() == Method::Voxel { "; raise --resolution" } else { "" },
+                )));
+            }
+            Ok(Lod {
                 label: label.clone(),
                 bound: set.error_bound,
                 set,
-            }
-        })
-        .collect())
-}
-
-/// Voxel: the pyramid of the mesh's solid; each level certified against the
-/// input (two-sided bound), and each item takes the coarsest level within it.
-fn voxel_lods(
-    args: &ExportArgs,
-    items: &[(String, LodTolerance)],
-    mesh: &lodstudio_core::TriMesh,
-    pixels_to_error: impl Fn(f32) -> f32,
-) -> Result<Vec<Lod>, CliError> {
-    use lodstudio_core::voxel::{Filter, Pyramid, Source};
-    if !(8..=512).contains(&args.resolution) {
-        return Err(CliError::BadInput(format!(
-            "--resolution must be in 8..=512, got {}",
-            args.resolution
-        )));
-    }
-    let progress = Progress::new();
-    let failed = |_| CliError::Failure("cancelled".into());
-    let solid = lodstudio_core::implicit::MeshSolid::new(mesh);
-    let pyramid = Pyramid::build(
-        Source::Solid(&solid),
-        args.resolution,
-        1.0,
-        Filter::Gaussian,
-        &progress,
-    )
-    .map_err(failed)?;
-    let diag = mesh.bounds().diagonal();
-    let opts = simplify::BoundOptions::for_diagonal(diag);
-    let mut levels = Vec::new();
-    for i in 0..pyramid.levels.len() {
-        let level = pyramid.level(i, &progress).map_err(failed)?;
-        let bound = simplify::certify(mesh, &level.mesh, &opts).error_bound();
-        levels.push((level.mesh, bound));
-    }
-    items
-        .iter()
-        .map(|(label, item)| {
-            let fits = |(m, b): &(lodstudio_core::TriMesh, f32)| match *item {
-                LodTolerance::Relative(f) => *b <= f * diag,
-                LodTolerance::Pixels(p) => *b <= pixels_to_error(p),
-                LodTolerance::Ratio(r) => m.triangles.len() as f64 <= r as f64 * mesh.triangles.len() as f64,
-            };
-            // An error tolerance takes the coarsest level within it, a triangle
-            // budget the finest (levels go from finest to coarsest).
-            let found = match item {
-                LodTolerance::Ratio(_) => levels.iter().find(|l| fits(l)),
-                _ => levels.iter().rev().find(|l| fits(l)),
-            };
-            let (m, b) = found.ok_or_else(|| {
-                CliError::BadInput(format!(
-                    "--lods {label}: no pyramid level is that fine (finest bound {:.3}% of the diagonal; raise --resolution)",
-                    100.0 * levels[0].1 / diag
-                ))
-            })?;
-            Ok(Lod {
-                label: label.clone(),
-                bound: *b,
-                set: DrawSet {
-                    mesh: m.clone(),
-                    ..Default::default()
-                },
-            })
-        })
-        .collect()
-}
-
-/// AMG: the multiscale of the mesh's vertices; an error item takes the
-/// coarsest level whose every domain's plane error meets it, a ratio the
-/// finest level with at most that share of the points as domains.
-fn amg_lods(
-    items: &[(String, LodTolerance)],
-    points: &lodstudio_core::PointSet,
-    pixels_to_error: impl Fn(f32) -> f32,
-) -> Result<Vec<Lod>, CliError> {
-    use lodstudio_core::amg::{self, AmgError, AmgOptions};
-    let progress = Progress::new();
-    let ms = amg::decompose(points, &AmgOptions::default(), &progress).map_err(|e| match e {
-        AmgError::BadInput(m) => CliError::BadInput(m),
-        AmgError::Cancelled => CliError::Failure("cancelled".into()),
-    })?;
-    let mut radii = ms.radii.clone();
-    radii.sort_by(f32::total_cmp);
-    let texel = radii.get(radii.len() / 2).copied().unwrap_or(0.0);
-    let diag = points.bounds().diagonal();
-    let mut levels = Vec::new();
-    for l in 1..ms.levels() {
-        let prims = amg::primitives(&ms, l, texel, &progress)
-            .map_err(|_| CliError::Failure("cancelled".into()))?;
-        let bound = prims.errors.iter().copied().fold(0.0f32, f32::max);
-        levels.push((prims.draw_set(None), bound));
-    }
-    items
-        .iter()
-        .map(|(label, item)| {
-            let fits = |(set, b): &(DrawSet, f32)| match *item {
-                LodTolerance::Relative(f) => *b <= f * diag,
-                LodTolerance::Pixels(p) => *b <= pixels_to_error(p),
-                LodTolerance::Ratio(r) => {
-                    set.splats.len() as f64 <= r as f64 * points.positions.len() as f64
-                }
-            };
-            let found = match item {
-                LodTolerance::Ratio(_) => levels.iter().find(|l| fits(l)),
-                _ => levels.iter().rev().find(|l| fits(l)),
-            };
-            let (set, bound) = found.ok_or_else(|| {
-                CliError::BadInput(format!("--lods {label}: no AMG level is that fine"))
-            })?;
-            Ok(Lod {
-                label: label.clone(),
-                bound: *bound,
-                set: set.clone(),
             })
         })
         .collect()

@@ -1,7 +1,60 @@
-//! The LOD chain: where each LOD takes over. An LOD's switch point comes
+//! The LOD chain: which cut each LOD is, and where each takes over. Any
+//! hierarchy gives an LOD for an error (its coarsest cut within it) or for a
+//! primitive budget (its finest cut within it); an LOD's switch point comes
 //! from its certified bound: it is shown while the next coarser LOD's bound
 //! would project to more than the tolerance in pixels (`MSFT_screencoverage`
 //! in the exported GLB).
+
+use super::{DrawSet, Hierarchy};
+use crate::view::{Tolerance, View};
+
+/// What one LOD of a chain asks for.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum ChainItem {
+    /// An error bound, as a fraction of the bounding-box diagonal.
+    Error(f32),
+    /// At most this many primitives.
+    Primitives(usize),
+}
+
+/// The LOD `item` asks of `hierarchy` (cut for `view`): the hierarchy's own
+/// choice within an error; within a budget, its own where its cuts form one
+/// sequence (edge collapse), else the cut at the least relative tolerance
+/// that keeps to it.
+pub fn choose(hierarchy: &mut dyn Hierarchy, view: &View, item: ChainItem) -> DrawSet {
+    match item {
+        ChainItem::Error(f) => hierarchy.select(view, Tolerance::Relative(f)),
+        ChainItem::Primitives(n) => match hierarchy.select_triangles(n) {
+            Some(set) => set,
+            None => finest_within(hierarchy, view, |s| s.primitive_count() <= n),
+        },
+    }
+}
+
+/// The cut at the least relative tolerance whose cut `fits` (bisected to
+/// 2⁻²⁴ of the diagonal), or the coarsest cut if none does.
+pub(super) fn finest_within(
+    hierarchy: &mut dyn Hierarchy,
+    view: &View,
+    fits: impl Fn(&DrawSet) -> bool,
+) -> DrawSet {
+    let mut cut = |f: f32| hierarchy.select(view, Tolerance::Relative(f));
+    let (mut lo, mut hi) = (0.0f32, 1.0f32);
+    let mut best = cut(hi);
+    if !fits(&best) {
+        return best;
+    }
+    for _ in 0..24 {
+        let mid = 0.5 * (lo + hi);
+        let set = cut(mid);
+        if fits(&set) {
+            (hi, best) = (mid, set);
+        } else {
+            lo = mid;
+        }
+    }
+    best
+}
 
 /// The `MSFT_screencoverage` thresholds of an LOD chain.
 ///
@@ -61,6 +114,27 @@ pub fn lod_screen_coverages(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A budget takes the finest cut within it; an error the coarsest.
+    #[test]
+    fn budgets_and_errors_choose_from_any_hierarchy() {
+        let mesh = crate::builtins::torus(1.0, 0.3, 32, 16);
+        let p = crate::simplify::progressive::record(
+            &mesh,
+            Default::default(),
+            50,
+            &Default::default(),
+        );
+        let mut h =
+            crate::simplify::progressive::ProgressiveCut::new(std::sync::Arc::new(p.unwrap()));
+        let view = View::orbit(glam::Vec3::ZERO, 4.0, 0.2, 0.3);
+        let within = choose(&mut h, &view, ChainItem::Primitives(300));
+        assert!(within.primitive_count() <= 300 && within.primitive_count() > 150);
+        let coarse = choose(&mut h, &view, ChainItem::Error(0.05));
+        assert!(coarse.error_bound <= 0.05 * h.diagonal());
+        let finer = choose(&mut h, &view, ChainItem::Error(0.01));
+        assert!(finer.primitive_count() > coarse.primitive_count());
+    }
 
     #[test]
     fn screen_coverage_is_where_the_next_bound_projects_to_the_tolerance() {

@@ -39,26 +39,10 @@ pub trait Hierarchy: Send + Sync {
 
 /// The finest cut of `hierarchy` with at most `n` triangles: its own where
 /// its cuts form one sequence, else the cut at the least relative tolerance
-/// that keeps to `n` (bisected to 1e-6 of the diagonal; the coarsest cut if
-/// none does).
+/// that keeps to `n` (the coarsest cut if none does).
 pub fn select_triangles(hierarchy: &mut dyn Hierarchy, view: &View, n: usize) -> DrawSet {
-    if let Some(set) = hierarchy.select_triangles(n) {
-        return set;
+    match hierarchy.select_triangles(n) {
+        Some(set) => set,
+        None => super::chain::finest_within(hierarchy, view, |s| s.mesh.triangles.len() <= n),
     }
-    let mut cut = |f: f32| hierarchy.select(view, Tolerance::Relative(f));
-    let (mut lo, mut hi) = (0.0f32, 1.0f32);
-    let mut best = cut(hi);
-    if best.mesh.triangles.len() > n {
-        return best;
-    }
-    while hi - lo > 1e-6 {
-        let mid = 0.5 * (lo + hi);
-        let set = cut(mid);
-        if set.mesh.triangles.len() <= n {
-            (hi, best) = (mid, set);
-        } else {
-            lo = mid;
-        }
-    }
-    best
 }

@@ -8,7 +8,7 @@
 //!   layers, with their bounds);
 //! - `pick`: the studio's click to inspect, on any cut;
 //! - `method`: the five methods, listed once ([`Method`]);
-//! - `chain`: where each LOD of a chain takes over (screen coverage);
+//! - `chain`: which cut each LOD of a chain is, and where it takes over;
 //! - `knobs`: what changes a cut at run time ([`Knobs`]), typed.
 
 pub mod chain;
