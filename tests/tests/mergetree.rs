@@ -132,7 +132,23 @@ fn displayed_vertices_meet_the_screen_space_threshold() {
         let view = orbit(&tree, i, 12, 3.0 - 0.2 * i as f32);
         view_state.update(&view, Tolerance::Pixels(t));
         let set = view_state.draw_set();
-        assert!(set.error_bound >= 0.0);
+        if i % 5 == 0 {
+            // The cut's bound against a dense two-sided measurement of the original.
+            let opts = lodstudio_core::distance::SamplingOptions {
+                samples: 100_000,
+                ..Default::default()
+            };
+            let d = lodstudio_core::distance::hausdorff_mesh_mesh(tree.mesh(), &set.mesh, &opts);
+            assert!(
+                d.two_sided() <= set.error_bound * 1.0001 + 1e-7,
+                "frame {i}: {d:?} > {}",
+                set.error_bound
+            );
+            assert!(
+                set.mesh.triangles.len() < tree.mesh().triangles.len(),
+                "frame {i}: coarser"
+            );
+        }
         let mut shown: Vec<u32> = view_state
             .display_triangles()
             .flat_map(|tri| tree.triangle(tri))
@@ -229,6 +245,9 @@ fn cli_reports_table_one_and_writes_the_last_frame() {
         assert!(j.get(key).is_some(), "{key}");
     }
     assert_eq!(j["folds"], 0);
+    // Compared frame by frame with a cold start from all vertices.
+    assert_eq!(j["frames_differing_from_cold"], 0, "{j}");
+    assert_eq!(j["fan_mismatches"], 0);
     assert_eq!(j["incremental_equals_cold"], true);
     let levels = j["levels"].as_array().unwrap();
     assert_eq!(levels[0], j["vertices"]);
@@ -250,6 +269,20 @@ fn cli_reports_table_one_and_writes_the_last_frame() {
         "--zoom",
     ]);
     assert_eq!(zoom["folds"], 0);
+    // Flying in from 3 diagonals to 0.75 at a fixed pixel threshold: more
+    // triangles near than far.
+    let per_frame: Vec<f64> = zoom["adaptive_triangles"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_f64().unwrap())
+        .collect();
+    assert_eq!(per_frame.len(), 10);
+    assert!(per_frame[9] > 1.1 * per_frame[0], "{per_frame:?}");
+    assert!(
+        per_frame.windows(2).all(|w| w[1] >= 0.9 * w[0]),
+        "{per_frame:?}"
+    );
 }
 
 #[test]

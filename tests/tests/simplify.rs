@@ -180,6 +180,24 @@ fn simplify_cli_writes_every_format_and_reports_the_contract_keys() {
     let o = out.to_str().unwrap();
     let j = lodstudio_json(&["simplify", "builtin:sphere", "-o", o, "--error", "1%"]);
     assert!(j["error_bound_relative"].as_f64().unwrap() <= 0.01);
+    // The fewest triangles within the error, to the search's 2 %: 3 % fewer
+    // break it.
+    let n = j["output_triangles"].as_u64().unwrap();
+    let fewer = ((n as f64) * 0.97).floor().to_string();
+    let f = lodstudio_json(&[
+        "simplify",
+        "builtin:sphere",
+        "-o",
+        o,
+        "--triangles",
+        &fewer,
+        "--force",
+    ]);
+    assert!(f["output_triangles"].as_u64().unwrap() < n);
+    assert!(
+        f["error_bound_relative"].as_f64().unwrap() > 0.01,
+        "{f} vs {j}"
+    );
     for bad in [
         &[
             "simplify",
