@@ -136,8 +136,9 @@ impl Pyramid {
         let opts = BoundOptions::for_diagonal(diagonal);
         let mut bounds = Vec::with_capacity(self.levels.len());
         for i in 0..self.levels.len() {
-            progress.stage("certifying the levels' bounds");
             let mesh = self.level(i, progress)?.mesh;
+            // After the extraction, which names its own stage.
+            progress.stage("certifying the levels' bounds");
             bounds.push(level_bound(&original, &mesh, &opts, progress)?);
         }
         self.error_bounds = bounds;
