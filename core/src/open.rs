@@ -126,9 +126,7 @@ pub fn reopen(bytes: &[u8]) -> Result<(Header, Box<dyn Hierarchy>), HierarchyFil
             let texel = if texel.is_finite() && texel > 0.0 {
                 texel
             } else {
-                let mut r = ms.radii.clone();
-                r.sort_by(f32::total_cmp);
-                r[r.len() / 2]
+                ms.default_texel()
             };
             Box::new(crate::amg::AmgHierarchy::new(ms, texel))
         }

@@ -2,7 +2,8 @@
 //! on a shared model, answers the same questions with the same guarantees:
 //! - the bound it reports is at least an independent dense two-sided
 //!   measurement against the original (points as balls, splats as their
-//!   quads, layers as surfaces);
+//!   quads, layers as surfaces), at object-space and at pixel tolerances,
+//!   unless it is labelled an estimate (AMG's plane error);
 //! - the triangle part of a cut covers the model once (no edge shared by
 //!   more than two triangles, and closed where nothing else stands in);
 //! - saved, reopened and cut again, it gives the same cut;
@@ -69,9 +70,7 @@ fn build(method: Method, mesh: &TriMesh) -> (Box<dyn Hierarchy>, serde_json::Val
             let model = lodstudio_core::Model::Mesh(mesh.clone());
             let points = lodstudio_core::amg::point_set(&model).unwrap();
             let ms = lodstudio_core::amg::decompose(&points, &Default::default(), &p).unwrap();
-            let mut radii = ms.radii.clone();
-            radii.sort_by(f32::total_cmp);
-            let texel = radii[radii.len() / 2];
+            let texel = ms.default_texel();
             let h = lodstudio_core::amg::AmgHierarchy::new(ms, texel);
             (Box::new(h), serde_json::json!({ "texel": texel }))
         }
@@ -156,6 +155,23 @@ fn every_method_answers_through_one_interface_with_measured_bounds() {
                 assert!(topo.is_closed(), "{tag}: no cracks");
             }
             counts.push(set.primitive_count());
+        }
+        // Pixel tolerances: the cut's object-space bound still holds, and a
+        // tighter one never bounds more.
+        let mut last = f32::INFINITY;
+        for px in [16.0, 2.0] {
+            let set = h.select(&view, Tolerance::Pixels(px));
+            if set.error_bound_kind == BoundKind::Certified {
+                let d = measured(&mesh, &set);
+                let tag = format!("{method:?} at {px} px");
+                assert!(
+                    d <= set.error_bound * 1.0001 + 1e-6 * diagonal,
+                    "{tag}: {d} > {}",
+                    set.error_bound
+                );
+            }
+            assert!(set.error_bound <= last, "{method:?} at {px} px");
+            last = set.error_bound;
         }
         // Saved and reopened, the same cut.
         let bytes = h.save(&params).expect("every method saves");

@@ -40,9 +40,7 @@ pub fn run(
         Err(AmgError::BadInput(m)) => return Ok(Err(m)),
     };
     let seconds = start.elapsed().as_secs_f32();
-    let mut radii = ms.radii.clone();
-    radii.sort_by(f32::total_cmp);
-    let texel = settings.texel * radii.get(radii.len() / 2).copied().unwrap_or(0.0);
+    let texel = settings.texel * ms.default_texel();
     let sizes = ms.level_sizes();
     let plot = Plot {
         title: "unknowns per AMG level",

@@ -75,11 +75,7 @@ pub fn run(args: AmgArgs) -> Result<(), CliError> {
             "--level {level}: the coarsest level is {coarsest}"
         )));
     }
-    let texel = args.texel.unwrap_or_else(|| {
-        let mut r = ms.radii.clone();
-        r.sort_by(f32::total_cmp);
-        r[r.len() / 2]
-    });
+    let texel = args.texel.unwrap_or_else(|| ms.default_texel());
     let start = std::time::Instant::now();
     let prims = amg::primitives(&ms, level, texel, &progress)
         .map_err(|_| CliError::Failure("cancelled".into()))?;
@@ -87,7 +83,7 @@ pub fn run(args: AmgArgs) -> Result<(), CliError> {
     if args.save.save.is_some() {
         args.save.write(
             &amg::AmgHierarchy::new(ms.clone(), texel),
-            serde_json::json!({"k": args.k, "file": args.file.display().to_string()}),
+            serde_json::json!({"k": args.k, "texel": texel, "file": args.file.display().to_string()}),
         )?;
     }
     if let Some(out) = &args.matrix_out {

@@ -498,9 +498,7 @@ fn build_hierarchy(
                     AmgError::BadInput(m) => CliError::BadInput(m),
                     AmgError::Cancelled => CliError::Failure("cancelled".into()),
                 })?;
-            let mut radii = ms.radii.clone();
-            radii.sort_by(f32::total_cmp);
-            let texel = radii.get(radii.len() / 2).copied().unwrap_or(0.0);
+            let texel = ms.default_texel();
             Box::new(amg::AmgHierarchy::new(ms, texel))
         }
         Method::EdgeCollapse => unreachable!("edge-collapse LODs are simplified from the original"),

@@ -91,6 +91,14 @@ pub struct Multiscale {
 }
 
 impl Multiscale {
+    /// The texel size splats get unless told otherwise: the median point
+    /// radius (§3.2), so a texel is about one point's spacing; 0 without points.
+    pub fn default_texel(&self) -> f32 {
+        let mut r = self.radii.clone();
+        r.sort_by(f32::total_cmp);
+        r.get(r.len() / 2).copied().unwrap_or(0.0)
+    }
+
     /// The stiffness matrix A (eq. 5–7).
     pub fn stiffness(&self) -> &CsMat<f64> {
         &self.coarsening.operators[0]
