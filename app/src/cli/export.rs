@@ -472,9 +472,10 @@ fn build_hierarchy(
         // The pyramid of the mesh's solid, each level certified against the input.
         Method::Voxel => {
             use lodstudio_core::voxel::{Filter, Pyramid, Source, pyramid::PyramidCut};
-            if !(8..=512).contains(&args.resolution) {
+            let resolutions = lodstudio_core::voxel::RESOLUTION_RANGE;
+            if !resolutions.contains(&args.resolution) {
                 return Err(CliError::BadInput(format!(
-                    "--resolution must be in 8..=512, got {}",
+                    "--resolution must be in {resolutions:?}, got {}",
                     args.resolution
                 )));
             }

@@ -89,15 +89,16 @@ fn voxel_input(args: &VoxelArgs) -> Result<VoxelInput, CliError> {
 
 pub fn run(args: VoxelArgs) -> Result<(), CliError> {
     use lodstudio_core::voxel::{self, DENSITY_ISO, Filter, Pyramid, Source};
-    if !(8..=1024).contains(&args.resolution) {
+    let (resolutions, radii) = (voxel::RESOLUTION_RANGE, voxel::RADIUS_RANGE);
+    if !resolutions.contains(&args.resolution) {
         return Err(CliError::BadInput(format!(
-            "--resolution must be in 8..=1024, got {}",
+            "--resolution must be in {resolutions:?}, got {}",
             args.resolution
         )));
     }
-    if !(args.radius.is_finite() && (0.0..=64.0).contains(&args.radius)) {
+    if !(args.radius.is_finite() && radii.contains(&args.radius)) {
         return Err(CliError::BadInput(format!(
-            "--radius must be in 0..=64 voxels, got {}",
+            "--radius must be in {radii:?} voxels, got {}",
             args.radius
         )));
     }

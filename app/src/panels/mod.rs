@@ -146,7 +146,10 @@ mod tests {
         assert!(restored.auto_rebuild, "missing fields take their defaults");
         assert_eq!(restored.edge_collapse.ratio, 1.0);
         assert_eq!(restored.edge_collapse.min_quality, 0.0);
-        assert_eq!(restored.voxel.resolution, 256);
+        assert_eq!(
+            restored.voxel.resolution,
+            *lodstudio_core::voxel::RESOLUTION_RANGE.end()
+        );
         assert_eq!(restored.voxel.iso, 0.05);
         assert_eq!(restored.voxel.radius, VoxelSettings::default().radius);
     }

@@ -9,9 +9,7 @@ use lodstudio_core::geom::Volume;
 use lodstudio_core::voxel::{DENSITY_ISO, Filter};
 use serde::{Deserialize, Serialize};
 
-const RESOLUTION_RANGE: RangeInclusive<usize> = 16..=256;
-/// Filter support radius R, in voxels of the sampling grid.
-const RADIUS_RANGE: RangeInclusive<f32> = 0.0..=16.0;
+use lodstudio_core::voxel::{RADIUS_RANGE, RESOLUTION_RANGE};
 const ISO_RANGE: RangeInclusive<f32> = 0.05..=0.95;
 /// Pyramid positions the slider offers (levels beyond the pyramid clamp).
 const POSITION_RANGE: RangeInclusive<f32> = 0.0..=6.0;
@@ -246,11 +244,16 @@ impl VoxelSettings {
                 self.threshold = Some(threshold);
             }
         } else {
-            ui.add(egui::Slider::new(&mut self.resolution, RESOLUTION_RANGE).text("resolution"))
-                .on_hover_text(RESOLUTION_HINT);
+            ui.add(
+                egui::Slider::new(&mut self.resolution, RESOLUTION_RANGE)
+                    .logarithmic(true)
+                    .text("resolution"),
+            )
+            .on_hover_text(RESOLUTION_HINT);
         }
         ui.add(
             egui::Slider::new(&mut self.radius, RADIUS_RANGE)
+                .logarithmic(true)
                 .suffix(" vx")
                 .text("filter radius"),
         )
@@ -310,7 +313,7 @@ mod tests {
         assert_eq!(odd.layers_error, 0.5);
         assert_eq!(odd.threshold, None);
         assert_eq!(odd.filter.filter(), Filter::Cone);
-        assert_eq!(odd.resolution, 16);
+        assert_eq!(odd.resolution, *RESOLUTION_RANGE.start());
         assert_eq!(odd.radius, VoxelSettings::default().radius);
         assert_eq!(odd.iso, 0.95);
         assert_eq!(

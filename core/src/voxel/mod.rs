@@ -21,6 +21,13 @@ use crate::geom::{Topology, TriMesh, Volume};
 use crate::implicit::Implicit;
 use crate::progress::{Cancelled, Progress};
 
+/// Voxels along the longest side a build may ask for, everywhere (CLI,
+/// export, studio): below 8 the filter leaves nothing of §2's levels; 512³
+/// floats are 0.5 GiB, what a desktop holds beside the pyramid.
+pub const RESOLUTION_RANGE: std::ops::RangeInclusive<usize> = 8..=512;
+/// Filter support radius R, in voxels of the sampling grid.
+pub const RADIUS_RANGE: std::ops::RangeInclusive<f32> = 0.0..=64.0;
+
 /// Sub-samples per voxel edge when sampling S (k³ per voxel).
 const SUPERSAMPLE: usize = 3;
 
