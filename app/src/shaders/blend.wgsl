@@ -1,0 +1,76 @@
+// Translucent layers and textured splats (AMG §4).
+struct BlendIn {
+    @location(0) position: vec3<f32>,
+    @location(1) normal: vec3<f32>,
+    @location(2) color: vec4<f32>,
+};
+struct BlendOut {
+    @builtin(position) clip: vec4<f32>,
+    @location(0) world: vec3<f32>,
+    @location(1) normal: vec3<f32>,
+    @location(2) color: vec4<f32>,
+};
+
+@vertex
+fn vs_blend(v: BlendIn) -> BlendOut {
+    var out: BlendOut;
+    out.clip = frame.view_proj * vec4<f32>(v.position, 1.0);
+    out.world = v.position;
+    out.normal = v.normal;
+    out.color = v.color;
+    return out;
+}
+
+@fragment
+fn fs_blend(in: BlendOut) -> @location(0) vec4<f32> {
+    let v = normalize(frame.eye.xyz - in.world);
+    var n_dot_v = 1.0;
+    if (dot(in.normal, in.normal) > 1e-12) {
+        n_dot_v = dot(normalize(in.normal), v);
+    }
+    return vec4<f32>(shade(in.color.rgb, n_dot_v), in.color.a);
+}
+
+@group(1) @binding(0) var atlas: texture_2d<f32>;
+@group(1) @binding(1) var atlas_sampler: sampler;
+
+struct SplatIn {
+    @location(0) position: vec3<f32>,
+    @location(1) normal: vec3<f32>,
+    @location(2) uv: vec2<f32>,
+};
+struct SplatOut {
+    @builtin(position) clip: vec4<f32>,
+    @location(0) uv: vec2<f32>,
+    @location(1) facing: f32,
+};
+
+@vertex
+fn vs_splat(v: SplatIn) -> SplatOut {
+    var out: SplatOut;
+    out.clip = frame.view_proj * vec4<f32>(v.position, 1.0);
+    out.uv = v.uv;
+    out.facing = dot(v.normal, frame.eye.xyz - v.position);
+    return out;
+}
+
+// Back-facing primitives are skipped (§4); only the core of a domain
+// (Ψ ≥ ½) locks the depth, and clears the background there.
+@fragment
+fn fs_splat_depth(in: SplatOut) -> @location(0) vec4<f32> {
+    let t = textureSample(atlas, atlas_sampler, in.uv);
+    if (t.a < 0.5 || in.facing < 0.0) {
+        discard;
+    }
+    return vec4<f32>(0.0, 0.0, 0.0, 1.0);
+}
+
+// Colour weighted by Ψ; the weights of overlapping domains sum to one.
+@fragment
+fn fs_splat(in: SplatOut) -> @location(0) vec4<f32> {
+    let t = textureSample(atlas, atlas_sampler, in.uv);
+    if (t.a <= 0.0 || in.facing < 0.0) {
+        discard;
+    }
+    return vec4<f32>(t.rgb * t.a, t.a);
+}
