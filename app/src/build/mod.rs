@@ -24,7 +24,7 @@ use lodstudio_core::simplify::progressive::{self, Progressive, ProgressiveCut};
 use lodstudio_core::view::{Tolerance, View};
 use lodstudio_core::voxel::layers::{self, Layered};
 use lodstudio_core::voxel::pyramid::{Pyramid, PyramidCut};
-use lodstudio_core::voxel::{self, DENSITY_ISO, Source, VoxelLevel, density, marching_cubes};
+use lodstudio_core::voxel::{DENSITY_ISO, Source, VoxelLevel, density};
 
 use crate::live_cut::LiveCut;
 use crate::panels::simplify::EdgeCollapseSettings;
@@ -333,45 +333,24 @@ fn voxel_built(
     start: Instant,
     progress: &Progress,
 ) -> Result<Result<Built, String>, Cancelled> {
-    let plan = layers::plan(
-        &layers::profile(settings.filter.filter()),
-        settings.layers_error,
-    );
     let iso = match settings.threshold {
         Some(_) => DENSITY_ISO,
         None => settings.iso,
     };
-    let (level, layered) = if plan.isodensities.len() > 1 {
-        let layers = layers::extract(&f, &plan, progress)?;
-        // The level proper is the layer nearest the 0.5 isodensity.
-        let main = layers
-            .iter()
-            .min_by(|a, b| {
-                (a.isodensity - DENSITY_ISO)
-                    .abs()
-                    .total_cmp(&(b.isodensity - DENSITY_ISO).abs())
-            })
-            .map(|l| l.mesh.clone())
-            .unwrap_or_default();
-        let layered = Layered {
-            layers,
-            origin: f.origin,
-            spacing: f.spacing,
-        };
-        (
-            voxel::level(main, resolution, settings.radius),
-            Some(layered),
-        )
-    } else {
-        (
-            voxel::level(
-                marching_cubes(&f, iso, progress)?,
-                resolution,
-                settings.radius,
-            ),
-            None,
-        )
-    };
+    let layers::LayeredLevel { level, layers, .. } = layers::layered_level(
+        &f,
+        (resolution, settings.radius),
+        settings.filter.filter(),
+        settings.layers_error,
+        iso,
+        progress,
+    )?;
+    // More than one surface: the translucent layers, cut live for the camera.
+    let layered = (layers.len() > 1).then_some(Layered {
+        layers,
+        origin: f.origin,
+        spacing: f.spacing,
+    });
     let seconds = start.elapsed().as_secs_f32();
     progress.check()?;
     progress.stage("preparing the view");

@@ -241,21 +241,19 @@ pub fn run(args: VoxelArgs) -> Result<(), CliError> {
     };
     let density =
         voxel::density(source, resolution, 1, args.radius, filter, &progress).map_err(failed)?;
-    let plan = voxel::layers::plan(
-        &voxel::layers::profile(filter),
+    let voxel::layers::LayeredLevel {
+        level: l,
+        plan,
+        layers,
+    } = voxel::layers::layered_level(
+        &density,
+        (resolution, args.radius),
+        filter,
         args.layers_error.unwrap_or(f32::INFINITY),
-    );
-    let layers = voxel::layers::extract(&density, &plan, &progress).map_err(failed)?;
-    // The level proper is the layer nearest the 0.5 isodensity.
-    let main = layers
-        .iter()
-        .min_by(|a, b| {
-            (a.isodensity - DENSITY_ISO)
-                .abs()
-                .total_cmp(&(b.isodensity - DENSITY_ISO).abs())
-        })
-        .expect("a plan has a layer");
-    let l = voxel::level(main.mesh.clone(), resolution, args.radius);
+        DENSITY_ISO,
+        &progress,
+    )
+    .map_err(failed)?;
     if let Some(out) = &args.output {
         write_cut(
             out,

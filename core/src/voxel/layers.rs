@@ -15,7 +15,7 @@
 
 use glam::Vec3;
 
-use super::{Filter, filter, marching_cubes};
+use super::{DENSITY_ISO, Filter, filter, marching_cubes};
 use crate::geom::Volume;
 use crate::lod::{DrawSet, Hierarchy, Layer};
 use crate::progress::{Cancelled, Progress};
@@ -161,6 +161,51 @@ pub fn back_to_front(layers: &[Layer], origin: Vec3, spacing: Vec3, view: &View)
         items.sort_by_key(|(s, _)| *s);
     }
     items.into_iter().map(|(_, id)| id).collect()
+}
+
+/// One level of §2 from its filtered density, with §3's translucent layers
+/// when the layers error `delta` asks for more than one surface (else the
+/// one surface at `iso`, a layer of its own): the pipeline the CLI and the
+/// studio share.
+pub struct LayeredLevel {
+    /// The level proper: the layer nearest the 0.5 isodensity, its topology measured.
+    pub level: super::VoxelLevel,
+    pub plan: LayerPlan,
+    pub layers: Vec<Layer>,
+}
+
+pub fn layered_level(
+    density: &Volume,
+    (resolution, radius): (usize, f32),
+    filter: Filter,
+    delta: f32,
+    iso: f32,
+    progress: &Progress,
+) -> Result<LayeredLevel, Cancelled> {
+    let plan = plan(&profile(filter), delta);
+    let layers = if plan.isodensities.len() > 1 {
+        extract(density, &plan, progress)?
+    } else {
+        vec![Layer {
+            mesh: marching_cubes(density, iso, progress)?,
+            alpha: plan.opacities.first().copied().unwrap_or(1.0),
+            isodensity: iso,
+        }]
+    };
+    let main = layers
+        .iter()
+        .min_by(|a, b| {
+            (a.isodensity - DENSITY_ISO)
+                .abs()
+                .total_cmp(&(b.isodensity - DENSITY_ISO).abs())
+        })
+        .map(|l| l.mesh.clone())
+        .unwrap_or_default();
+    Ok(LayeredLevel {
+        level: super::level(main, resolution, radius),
+        plan,
+        layers,
+    })
 }
 
 /// A multi-layered level on its volume grid: the hierarchy the studio shows,
