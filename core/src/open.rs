@@ -19,11 +19,7 @@ pub fn open(path: &Path, opts: &LoadOptions, progress: &Progress) -> Result<Load
         let model = crate::builtins::build(name, progress)?;
         return crate::io::prepared(path, model, Format::Builtin, opts);
     }
-    progress.stage("reading file");
-    let bytes = std::fs::read(path).map_err(|source| LoadError::Io {
-        file: path.to_path_buf(),
-        source,
-    })?;
+    let bytes = crate::io::read_file(path, progress)?;
     open_bytes(path, &bytes, opts, progress)
 }
 

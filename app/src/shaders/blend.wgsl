@@ -23,12 +23,7 @@ fn vs_blend(v: BlendIn) -> BlendOut {
 
 @fragment
 fn fs_blend(in: BlendOut) -> @location(0) vec4<f32> {
-    let v = normalize(frame.eye.xyz - in.world);
-    var n_dot_v = 1.0;
-    if (dot(in.normal, in.normal) > 1e-12) {
-        n_dot_v = dot(normalize(in.normal), v);
-    }
-    return vec4<f32>(shade(in.color.rgb, n_dot_v), in.color.a);
+    return vec4<f32>(shade(in.color.rgb, facing(in.normal, in.world)), in.color.a);
 }
 
 @group(1) @binding(0) var atlas: texture_2d<f32>;

@@ -11,3 +11,11 @@ fn shade(base: vec3<f32>, n_dot_v: f32) -> vec3<f32> {
     let d = abs(n_dot_v);
     return base * (0.16 + 0.84 * d) + vec3<f32>(0.18 * pow(d, 40.0));
 }
+
+// How squarely a surface point faces the eye (1 without a normal).
+fn facing(normal: vec3<f32>, world: vec3<f32>) -> f32 {
+    if (dot(normal, normal) <= 1e-12) {
+        return 1.0;
+    }
+    return dot(normalize(normal), normalize(frame.eye.xyz - world));
+}

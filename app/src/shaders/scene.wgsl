@@ -24,12 +24,7 @@ fn vs_mesh(v: MeshIn) -> MeshOut {
 
 @fragment
 fn fs_mesh(in: MeshOut) -> @location(0) vec4<f32> {
-    let v = normalize(frame.eye.xyz - in.world);
-    var n_dot_v = 1.0;
-    if (dot(in.normal, in.normal) > 1e-12) {
-        n_dot_v = dot(normalize(in.normal), v);
-    }
-    return vec4<f32>(shade(in.color, n_dot_v), 1.0);
+    return vec4<f32>(shade(in.color, facing(in.normal, in.world)), 1.0);
 }
 
 @fragment

@@ -79,12 +79,17 @@ pub struct LoadOptions {
 /// Loads a model file, detects its format, and repairs meshes (`open::open`
 /// also opens `builtin:` names and saved hierarchies).
 pub fn load(path: &Path, opts: &LoadOptions, progress: &Progress) -> Result<Loaded, LoadError> {
+    let bytes = read_file(path, progress)?;
+    load_bytes(path, &bytes, opts, progress)
+}
+
+/// A file's bytes, read under the stage "reading file".
+pub fn read_file(path: &Path, progress: &Progress) -> Result<Vec<u8>, LoadError> {
     progress.stage("reading file");
-    let bytes = std::fs::read(path).map_err(|source| LoadError::Io {
+    std::fs::read(path).map_err(|source| LoadError::Io {
         file: path.to_path_buf(),
         source,
-    })?;
-    load_bytes(path, &bytes, opts, progress)
+    })
 }
 
 /// Loads from bytes already in memory; `path` names the file in errors, gives
