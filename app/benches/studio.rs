@@ -21,7 +21,7 @@ use std::time::Instant;
 use common::{save_ppm, studio, wait_while};
 use egui_kittest::Harness;
 use egui_kittest::kittest::Queryable as _;
-use lodstudio::panels::Method;
+use lodstudio::settings::Method;
 use lodstudio::studio::StudioApp;
 
 /// Milliseconds of one UI step, and of the step plus rendering the frame.

@@ -8,6 +8,7 @@ pub mod job;
 pub mod live_cut;
 pub mod panels;
 pub mod session;
+pub mod settings;
 pub mod studio;
 pub mod viewport;
 

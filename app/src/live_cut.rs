@@ -7,82 +7,8 @@ use std::time::Instant;
 
 use lodstudio_core::lod::{DrawSet, Hierarchy, Method};
 use lodstudio_core::view::{Tolerance, View};
-use serde::{Deserialize, Serialize};
 
 use crate::viewport::{Scene, SceneStyle};
-
-/// The error threshold of a cut, as the slider sets it.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(default)]
-pub struct Threshold {
-    /// Screen space (pixels) rather than object space (% of the diagonal).
-    pub in_pixels: bool,
-    pub percent: f32,
-    pub pixels: f32,
-}
-
-impl Default for Threshold {
-    fn default() -> Self {
-        Threshold {
-            in_pixels: true,
-            percent: 1.0,
-            pixels: 2.0,
-        }
-    }
-}
-
-impl Threshold {
-    pub fn tolerance(&self) -> Tolerance {
-        if self.in_pixels {
-            Tolerance::Pixels(self.pixels)
-        } else {
-            Tolerance::Relative(self.percent / 100.0)
-        }
-    }
-
-    /// Values out of range (an older or hand-edited settings file) replaced.
-    pub fn sanitized(self) -> Self {
-        let d = Threshold::default();
-        let clamp = |v: f32, lo: f32, hi: f32, fallback: f32| {
-            if v.is_finite() {
-                v.clamp(lo, hi)
-            } else {
-                fallback
-            }
-        };
-        Threshold {
-            in_pixels: self.in_pixels,
-            percent: clamp(self.percent, 0.0, 50.0, d.percent),
-            pixels: clamp(self.pixels, 0.0, 200.0, d.pixels),
-        }
-    }
-
-    /// The slider and its unit switch; true when the threshold changed.
-    pub fn ui(&mut self, ui: &mut egui::Ui) -> bool {
-        let before = *self;
-        ui.horizontal(|ui| {
-            ui.selectable_value(&mut self.in_pixels, true, "pixels")
-                .on_hover_text("Screen-space error: each element's bound, projected through the camera (conservatively, by its bounding sphere), stays within this many pixels.");
-            ui.selectable_value(&mut self.in_pixels, false, "% of diagonal")
-                .on_hover_text("Object-space error: each element's guaranteed bound stays within this fraction of the bounding-box diagonal.");
-        });
-        let slider = if self.in_pixels {
-            egui::Slider::new(&mut self.pixels, 0.0..=64.0)
-                .logarithmic(true)
-                .suffix(" px")
-                .text("error threshold")
-        } else {
-            egui::Slider::new(&mut self.percent, 0.0..=20.0)
-                .logarithmic(true)
-                .suffix(" %")
-                .text("error threshold")
-        };
-        ui.add(slider).on_hover_text(
-            "Drag to change the cut live: coarser elements are drawn wherever their error bound stays within the threshold.",
-        );
-        *self != before
-    }
-}
 
 /// How a cut is drawn: coloured by its error bounds (a heat map, first), by
 /// primitive type, or by the hierarchy's regions (merge-tree levels, AMG
@@ -322,7 +248,7 @@ mod tests {
             origin: glam::Vec3::splat(-2.0),
             spacing: glam::Vec3::splat(0.1),
         };
-        let tol = Threshold::default().tolerance();
+        let tol = crate::settings::threshold::Threshold::default().tolerance();
         let view = View::orbit(glam::Vec3::ZERO, 4.0, 0.1, 0.1);
         let mut live = LiveCut::new(Box::new(h), &view, tol);
         assert_eq!(live.stats.layer_triangles, 2 * mesh.triangles.len());

@@ -12,7 +12,7 @@ use std::time::{Duration, Instant};
 
 use serde::{Deserialize, Serialize};
 
-use crate::panels::MethodSettings;
+use crate::settings::MethodSettings;
 
 /// At most this much tuning is lost when the studio dies.
 pub const INTERVAL: Duration = Duration::from_secs(2);

@@ -9,10 +9,10 @@ mod common;
 use common::{save_ppm, studio, wait_while};
 use egui_kittest::Harness;
 use egui_kittest::kittest::Queryable as _;
-use lodstudio::panels::Method;
-use lodstudio::panels::simplify::TargetMode;
-use lodstudio::panels::voxel::FilterKind;
 use lodstudio::session::{Autosave, Session};
+use lodstudio::settings::Method;
+use lodstudio::settings::simplify::TargetMode;
+use lodstudio::settings::voxel::FilterKind;
 use lodstudio::studio::StudioApp;
 
 /// Steps frames until the studio has no load running (bounded), then settles.
@@ -680,7 +680,7 @@ fn autosave_restores_a_killed_session() {
     wait_for_load(&mut third);
     assert_eq!(
         third.state().methods(),
-        &lodstudio::panels::MethodSettings::default()
+        &lodstudio::settings::MethodSettings::default()
     );
     assert!(third.state().log_lines().any(|l| l.contains("damaged")));
 }

@@ -8,8 +8,8 @@ use lodstudio_core::io::Model;
 use lodstudio_core::progress::{Cancelled, Progress};
 
 use super::{Built, Plot, Row};
-use crate::panels::BuildParams;
-use crate::panels::amg::AmgSettings;
+use crate::settings::BuildParams;
+use crate::settings::amg::AmgSettings;
 
 /// Decomposes the points of `model` (a point set, or a mesh's vertices).
 ///

@@ -10,8 +10,8 @@ use lodstudio_core::io::Model;
 use lodstudio_core::progress::{Cancelled, Progress};
 
 use super::{Built, Plot, Row, mesh_of};
-use crate::panels::BuildParams;
-use crate::panels::hybrid::HybridSettings;
+use crate::settings::BuildParams;
+use crate::settings::hybrid::HybridSettings;
 
 /// Points of the curves kept for the plot.
 const CURVE_STEPS: usize = 120;

@@ -9,8 +9,8 @@ use lodstudio_core::mergetree::{self, MergeTreeView};
 use lodstudio_core::progress::{Cancelled, Progress};
 
 use super::{Built, Plot, Row, mesh_of};
-use crate::panels::BuildParams;
-use crate::panels::mergetree::MergeTreeSettings;
+use crate::settings::BuildParams;
+use crate::settings::mergetree::MergeTreeSettings;
 
 /// Builds the merge tree of `model`'s mesh.
 ///

@@ -27,9 +27,9 @@ use lodstudio_core::voxel::pyramid::{Pyramid, PyramidCut};
 use lodstudio_core::voxel::{DENSITY_ISO, Source, VoxelLevel, density};
 
 use crate::live_cut::LiveCut;
-use crate::panels::simplify::EdgeCollapseSettings;
-use crate::panels::voxel::{VolumeGrid, VoxelSettings};
-use crate::panels::{BuildParams, Method};
+use crate::settings::simplify::EdgeCollapseSettings;
+use crate::settings::voxel::{VolumeGrid, VoxelSettings};
+use crate::settings::{BuildParams, Method};
 use crate::viewport::Scene;
 
 /// What a cut without a live hierarchy shows (never built that way).

@@ -10,7 +10,7 @@ use lodstudio_core::view::{Tolerance, View};
 
 use super::{Built, Lod, Row};
 use crate::live_cut::LiveCut;
-use crate::panels::{Method, MethodSettings};
+use crate::settings::{Method, MethodSettings};
 
 /// A saved hierarchy, decoded.
 pub struct Reopened {

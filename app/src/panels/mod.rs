@@ -1,114 +1,17 @@
-//! The left panel's "Method" section: which LOD method builds, and the
-//! parameters of each (one module per method). Everything here is persisted
-//! between sessions except the voxel threshold, which is in the units of one
-//! volume's values (see [`voxel::VoxelSettings::threshold`]).
+//! The left panel's "Method" section: the list of methods and each one's
+//! controls (`*_ui`-style: each takes its settings by `&mut`). What the
+//! controls set lives in `settings`, which builds use without any UI.
 
 pub mod amg;
 pub mod hybrid;
 pub mod mergetree;
 pub mod simplify;
+pub mod threshold;
 pub mod voxel;
 
-use lodstudio_core::simplify::CollapseOptions;
-use serde::{Deserialize, Serialize};
-
-use lodstudio_core::mergetree::MergeTreeOptions;
-
-use self::amg::AmgSettings;
-use self::hybrid::HybridSettings;
-use self::mergetree::MergeTreeSettings;
-use self::simplify::EdgeCollapseSettings;
-use self::voxel::{VolumeGrid, VoxelSettings};
-use crate::live_cut::Threshold;
-
-/// The LOD methods the studio can build: core's list, written once.
-pub use lodstudio_core::lod::Method;
-
-/// The chosen method, the parameters of every method, and how builds start.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(default)]
-pub struct MethodSettings {
-    pub method: Method,
-    /// Rebuild by itself shortly after a parameter changes.
-    pub auto_rebuild: bool,
-    pub edge_collapse: EdgeCollapseSettings,
-    pub voxel: VoxelSettings,
-    pub merge_tree: MergeTreeSettings,
-    pub hybrid: HybridSettings,
-    pub amg: AmgSettings,
-    /// The error threshold of live cuts (hierarchies).
-    pub threshold: Threshold,
-}
-
-/// What one build of one method depends on besides its input: a result built
-/// with other parameters than the shown ones is stale.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub enum BuildParams {
-    /// The collapses' legality rules (the target chooses a prefix at run time).
-    EdgeCollapse(CollapseOptions),
-    Voxel(VoxelSettings),
-    /// The tree's build options (its criteria apply at run time).
-    MergeTree(MergeTreeOptions),
-    Hybrid(HybridSettings),
-    /// The decomposition's parameters (the level is chosen at run time).
-    Amg(AmgSettings),
-}
-
-impl BuildParams {
-    pub fn method(&self) -> Method {
-        match self {
-            BuildParams::EdgeCollapse(_) => Method::EdgeCollapse,
-            BuildParams::Voxel(_) => Method::Voxel,
-            BuildParams::MergeTree(_) => Method::MergeTree,
-            BuildParams::Hybrid(_) => Method::Hybrid,
-            BuildParams::Amg(_) => Method::Amg,
-        }
-    }
-}
-
-impl Default for MethodSettings {
-    fn default() -> Self {
-        MethodSettings {
-            method: Method::default(),
-            auto_rebuild: true,
-            edge_collapse: EdgeCollapseSettings::default(),
-            voxel: VoxelSettings::default(),
-            merge_tree: MergeTreeSettings::default(),
-            hybrid: HybridSettings::default(),
-            amg: AmgSettings::default(),
-            threshold: Threshold::default(),
-        }
-    }
-}
+use crate::settings::{Method, MethodSettings};
 
 impl MethodSettings {
-    /// Settings with any value out of range (a hand-edited or older session)
-    /// replaced, so a build never starts from nonsense.
-    pub fn sanitized(mut self) -> MethodSettings {
-        self.edge_collapse = self.edge_collapse.sanitized();
-        self.voxel = self.voxel.sanitized();
-        self.threshold = self.threshold.sanitized();
-        self.merge_tree = self.merge_tree.sanitized();
-        self.hybrid = self.hybrid.sanitized();
-        self.amg = self.amg.sanitized();
-        self
-    }
-
-    /// What a build of the chosen method gets; `volume` is the grid of the
-    /// open model when it is a volume (voxel builds depend on other values then).
-    pub fn params(&self, volume: Option<&VolumeGrid>) -> BuildParams {
-        match self.method {
-            Method::EdgeCollapse => BuildParams::EdgeCollapse(self.edge_collapse.collapse()),
-            Method::Voxel => BuildParams::Voxel(match volume {
-                Some(grid) => self.voxel.for_volume(grid),
-                None => self.voxel.for_implicit(),
-            }),
-            Method::MergeTree => BuildParams::MergeTree(self.merge_tree.sanitized().options()),
-            Method::Hybrid => BuildParams::Hybrid(self.hybrid.sanitized()),
-            Method::Amg => BuildParams::Amg(self.amg.build_params()),
-        }
-    }
-
     /// The list of methods; true when the choice changed.
     pub fn method_list(&mut self, ui: &mut egui::Ui) -> bool {
         let before = self.method;
@@ -117,40 +20,5 @@ impl MethodSettings {
                 .on_hover_text(method.description());
         }
         self.method != before
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn settings_round_trip_and_bad_values_are_replaced() {
-        let settings = MethodSettings {
-            auto_rebuild: false,
-            edge_collapse: EdgeCollapseSettings {
-                ratio: 0.3,
-                ..Default::default()
-            },
-            ..Default::default()
-        };
-        let json = serde_json::to_string(&settings).expect("serialises");
-        let back: MethodSettings = serde_json::from_str(&json).expect("parses");
-        assert_eq!(back.sanitized(), settings);
-
-        let odd = r#"{"edge_collapse": {"ratio": 7.0, "min_quality": -2.0},
-                      "voxel": {"resolution": 9999, "iso": 0.0}}"#;
-        let restored = serde_json::from_str::<MethodSettings>(odd)
-            .expect("partial settings parse")
-            .sanitized();
-        assert!(restored.auto_rebuild, "missing fields take their defaults");
-        assert_eq!(restored.edge_collapse.ratio, 1.0);
-        assert_eq!(restored.edge_collapse.min_quality, 0.0);
-        assert_eq!(
-            restored.voxel.resolution,
-            *lodstudio_core::voxel::RESOLUTION_RANGE.end()
-        );
-        assert_eq!(restored.voxel.iso, 0.05);
-        assert_eq!(restored.voxel.radius, VoxelSettings::default().radius);
     }
 }

@@ -27,6 +27,10 @@ use crate::progress::{Cancelled, Progress};
 pub use coarsening::RugeStuben;
 pub use primitive::{Primitives, primitives};
 
+/// The neighbourhood sizes k a decomposition accepts (§2.1: the paper uses
+/// 50–100; fewer than 3 neighbours span no plane).
+pub const K_RANGE: std::ops::RangeInclusive<usize> = 3..=1000;
+
 /// User parameters of the decomposition (§6: neighbourhood size; τ and the
 /// neighbour fraction are the paper's fixed values).
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -151,8 +155,13 @@ pub fn point_set(model: &Model) -> Option<PointSet> {
 /// Checks a point set and options before a decomposition.
 pub fn validate(points: &PointSet, opts: &AmgOptions) -> Result<(), AmgError> {
     let bad = |m: String| Err(AmgError::BadInput(m));
-    if !(3..=1000).contains(&opts.k) {
-        return bad(format!("k must be between 3 and 1000, got {}", opts.k));
+    if !K_RANGE.contains(&opts.k) {
+        return bad(format!(
+            "k must be between {} and {}, got {}",
+            K_RANGE.start(),
+            K_RANGE.end(),
+            opts.k
+        ));
     }
     if !(opts.contrast.is_finite() && (0.0..=8.0).contains(&opts.contrast)) {
         return bad(format!("contrast must be in 0..=8, got {}", opts.contrast));

@@ -27,6 +27,7 @@
 //! merged parents) are on it: so the two-sided Hausdorff distance of any cut
 //! is at most its largest node error.
 
+use std::ops::RangeInclusive;
 use std::sync::Mutex;
 
 use glam::Vec3;
@@ -39,6 +40,13 @@ use crate::geom::TriMesh;
 use crate::progress::{Cancelled, Progress};
 use crate::simplify::step_bounds::{BoundedRun, run_bounded};
 use crate::simplify::{CollapseOptions, EdgeCollapser};
+
+/// The performance ratios κ a build accepts (κ ≤ 1 never replaces triangles
+/// by points; each replacement makes at most ⌊κ⌋ points).
+pub const KAPPA_RANGE: RangeInclusive<f32> = 0.0..=64.0;
+/// The transition factors τ a build accepts: both ends are far past where
+/// the curve stops changing (all triangles, or points at once).
+pub const TAU_RANGE: RangeInclusive<f32> = 0.01..=100.0;
 
 /// Parameters of the hybrid build (§5.1, §5.3).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -67,11 +75,21 @@ impl HybridOptions {
     }
 
     pub fn validate(&self) -> Result<(), String> {
-        if !(self.kappa.is_finite() && self.kappa >= 0.0 && self.kappa <= 64.0) {
-            return Err(format!("kappa must be in 0..=64, got {}", self.kappa));
+        if !KAPPA_RANGE.contains(&self.kappa) {
+            return Err(format!(
+                "kappa must be in {}..={}, got {}",
+                KAPPA_RANGE.start(),
+                KAPPA_RANGE.end(),
+                self.kappa
+            ));
         }
-        if !(self.tau.is_finite() && self.tau > 0.0) {
-            return Err(format!("tau must be finite and > 0, got {}", self.tau));
+        if !TAU_RANGE.contains(&self.tau) {
+            return Err(format!(
+                "tau must be in {}..={}, got {}",
+                TAU_RANGE.start(),
+                TAU_RANGE.end(),
+                self.tau
+            ));
         }
         Ok(())
     }

@@ -17,6 +17,6 @@ pub mod mrg;
 pub mod point_replacement;
 pub mod point_simplification;
 
-pub use build::{HybridOptions, Snapshot, build, build_observed};
+pub use build::{HybridOptions, KAPPA_RANGE, Snapshot, TAU_RANGE, build, build_observed};
 pub use cut::HybridCut;
 pub use mrg::{Mrg, NodeKind};

@@ -1,0 +1,140 @@
+//! Parameters of edge-collapse simplification (hybrid paper §5.2). The build records the collapses
+//! once, down to a floor (`simplify::progressive`); the target only chooses
+//! a prefix, live.
+
+use std::ops::RangeInclusive;
+
+use lodstudio_core::lod::PrefixTarget;
+use lodstudio_core::simplify::CollapseOptions;
+use serde::{Deserialize, Serialize};
+
+use super::clamp_or;
+
+/// Which prefix of the recorded collapses is shown; each mode keeps its own
+/// value so switching back restores it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+pub enum TargetMode {
+    #[default]
+    Ratio,
+    Triangles,
+    Error,
+    /// The view's error threshold, as for every other hierarchy.
+    Threshold,
+}
+
+pub const RATIO_RANGE: RangeInclusive<f32> = 0.001..=1.0;
+/// Error targets as a percentage of the bounding-box diagonal.
+pub const ERROR_PERCENT_RANGE: RangeInclusive<f32> = 0.001..=10.0;
+/// The sliver and fold guards (a quality, a cosine; 0 turns either off).
+pub const GUARD_RANGE: RangeInclusive<f32> = 0.0..=1.0;
+/// DragValue needs a finite upper end; no model comes close.
+pub const MAX_TRIANGLES: usize = 1_000_000_000;
+
+/// Everything edge collapse needs besides the mesh.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct EdgeCollapseSettings {
+    pub mode: TargetMode,
+    /// Fraction of the input's triangles to keep.
+    pub ratio: f32,
+    pub triangles: usize,
+    /// Largest certified error, in percent of the bounding-box diagonal.
+    pub error_percent: f32,
+    pub lock_borders: bool,
+    /// Smallest triangle quality a collapse may create (0 disables the guard).
+    pub min_quality: f32,
+    /// Smallest cosine between a triangle's normals before and after a collapse.
+    pub min_normal_cos: f32,
+}
+
+impl Default for EdgeCollapseSettings {
+    fn default() -> Self {
+        let collapse = CollapseOptions::default();
+        EdgeCollapseSettings {
+            mode: TargetMode::Ratio,
+            ratio: 0.1,
+            triangles: 1000,
+            error_percent: 0.5,
+            lock_borders: collapse.lock_borders,
+            min_quality: collapse.min_quality,
+            min_normal_cos: collapse.min_normal_cos,
+        }
+    }
+}
+
+impl EdgeCollapseSettings {
+    /// The same settings with every value inside the range its control offers.
+    pub fn sanitized(self) -> Self {
+        let d = Self::default();
+        EdgeCollapseSettings {
+            mode: self.mode,
+            ratio: clamp_or(self.ratio, RATIO_RANGE, d.ratio),
+            triangles: self.triangles.clamp(1, MAX_TRIANGLES),
+            error_percent: clamp_or(self.error_percent, ERROR_PERCENT_RANGE, d.error_percent),
+            lock_borders: self.lock_borders,
+            min_quality: clamp_or(self.min_quality, GUARD_RANGE, d.min_quality),
+            min_normal_cos: clamp_or(self.min_normal_cos, GUARD_RANGE, d.min_normal_cos),
+        }
+    }
+
+    /// What the build depends on: the collapses' legality rules.
+    pub fn collapse(&self) -> CollapseOptions {
+        let s = self.sanitized();
+        CollapseOptions {
+            lock_borders: s.lock_borders,
+            min_quality: s.min_quality,
+            min_normal_cos: s.min_normal_cos,
+        }
+    }
+
+    /// The triangles a build records collapses down to, for `input` triangles:
+    /// the ratio slider's low end.
+    pub fn floor(input: usize) -> usize {
+        (f64::from(*RATIO_RANGE.start()) * input as f64) as usize
+    }
+
+    /// The run-time choice of a recorded collapse's prefix (the live cut's
+    /// knob): `None` follows the view's threshold.
+    pub fn runtime(&self, input_triangles: usize) -> Option<PrefixTarget> {
+        let s = self.sanitized();
+        match s.mode {
+            TargetMode::Ratio => {
+                let n = (f64::from(s.ratio) * input_triangles as f64).round();
+                Some(PrefixTarget::Triangles(n as usize))
+            }
+            TargetMode::Triangles => Some(PrefixTarget::Triangles(s.triangles)),
+            TargetMode::Error => Some(PrefixTarget::RelativeError(s.error_percent / 100.0)),
+            TargetMode::Threshold => None,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_mode_chooses_the_prefix_and_only_legality_rebuilds() {
+        let mut s = EdgeCollapseSettings {
+            ratio: 0.25,
+            triangles: 500,
+            error_percent: 1.0,
+            ..Default::default()
+        };
+        assert_eq!(s.runtime(1000), Some(PrefixTarget::Triangles(250)));
+        s.mode = TargetMode::Triangles;
+        assert_eq!(s.runtime(1000), Some(PrefixTarget::Triangles(500)));
+        s.mode = TargetMode::Error;
+        assert_eq!(s.runtime(1000), Some(PrefixTarget::RelativeError(0.01)));
+        s.mode = TargetMode::Threshold;
+        assert_eq!(s.runtime(1000), None);
+        let moved = EdgeCollapseSettings { ratio: 0.5, ..s };
+        assert_eq!(moved.collapse(), s.collapse(), "a target is no rebuild");
+        s.min_normal_cos = f32::NAN;
+        assert_eq!(
+            s.collapse().min_normal_cos,
+            CollapseOptions::default().min_normal_cos
+        );
+        assert_eq!(EdgeCollapseSettings::floor(100_000), 100);
+    }
+}

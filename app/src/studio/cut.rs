@@ -1,0 +1,142 @@
+//! The live cut on screen: re-selecting it for the camera and the knobs,
+//! choosing the scene the view shows, side by side, and picking.
+
+use lodstudio_core::lod::Picked;
+
+use super::{StudioApp, View};
+use crate::build;
+use crate::live_cut::CutStyle;
+
+impl StudioApp {
+    /// Re-selects a live cut for the camera and the threshold (only when the
+    /// hierarchy says they change it).
+    pub(super) fn update_cut(&mut self) {
+        let heat = self.heat && self.view.shows_lod();
+        if let Some(live) = self.result.as_mut().and_then(|b| b.live.as_mut()) {
+            live.set_style(CutStyle {
+                heat,
+                by_type: self.by_type && self.view.shows_lod(),
+                regions: self.regions && self.view.shows_lod(),
+                outlines: self.outlines,
+            });
+            let mut view = self.viewport.core_view();
+            let input_triangles = self
+                .current
+                .as_ref()
+                .and_then(|c| build::mesh_of(&c.loaded.model).ok())
+                .map_or(0, |m| m.triangles.len());
+            let mt = &self.methods.merge_tree;
+            if let Some(light) = mt.light() {
+                view.light_dir = light;
+            }
+            live.set_knobs(&lodstudio_core::lod::Knobs {
+                criteria: lodstudio_core::lod::Criteria {
+                    backface: mt.backface,
+                    silhouette: mt.silhouette,
+                    lighting: mt.lighting,
+                },
+                pyramid_position: self.methods.voxel.runtime_position(),
+                amg_level: self.methods.amg.runtime_level(),
+                collapse: self.methods.edge_collapse.runtime(input_triangles),
+            });
+            live.update(&view, self.methods.threshold.tolerance());
+        }
+    }
+
+    /// Shows the scene the view toggles ask for (uploads only on a change).
+    pub(super) fn sync_view(&mut self) {
+        let Some(current) = &self.current else {
+            return;
+        };
+        if let Some(preview) = &self.preview {
+            // Watching the build: its intermediate state.
+            self.viewport.swap_scene(preview);
+            return;
+        }
+        let scene = match (&self.result, self.view) {
+            (Some(built), View::Simplified | View::SideBySide) => match &built.live {
+                Some(live) => live.scene(),
+                None => &built.scene,
+            },
+            _ => &current.scene,
+        };
+        self.viewport.swap_scene(scene);
+    }
+
+    /// Shows a new result, side by side with the original if that is the view.
+    pub(super) fn show_result(&mut self) {
+        if self.view == View::Original {
+            self.view = View::Simplified;
+        }
+    }
+
+    /// Compares the original (left) with the result (right, the main viewport:
+    /// cuts are taken and picked there) through one camera.
+    pub(super) fn show_side_by_side(&mut self, ui: &mut egui::Ui) {
+        let Some(current) = &self.current else {
+            return;
+        };
+        self.compare.swap_scene(&current.scene);
+        self.compare.follow(&self.viewport);
+        let full = ui.available_rect_before_wrap();
+        let (left, right) = full.split_left_right_at_fraction(0.5);
+        let gap = egui::vec2(1.0, 0.0);
+        ui.scope_builder(egui::UiBuilder::new().max_rect(left.shrink2(gap)), |ui| {
+            self.compare.show(ui);
+        });
+        if !self.compare.same_camera(&self.viewport) {
+            self.viewport.follow(&self.compare);
+        }
+        ui.scope_builder(egui::UiBuilder::new().max_rect(right.shrink2(gap)), |ui| {
+            self.viewport.show(ui);
+        });
+    }
+
+    /// Inspects what a click in the viewport hit on the live cut.
+    pub(super) fn pick(&mut self) {
+        let Some((origin, dir)) = self.viewport.take_click() else {
+            return;
+        };
+        let Some(live) = self.result.as_ref().and_then(|b| b.live.as_ref()) else {
+            return;
+        };
+        let diagonal = self
+            .current
+            .as_ref()
+            .map_or(1.0, |c| c.scene.bounds().diagonal())
+            .max(f32::MIN_POSITIVE);
+        let bound = |e: f32| format!("bound {} ({:.3} %)", build::length(e), 100.0 * e / diagonal);
+        let set = live.draw_set();
+        // Merge-tree triangles also tell their tree level.
+        let level = |t: usize| {
+            set.triangle_levels
+                .get(t)
+                .map_or(String::new(), |l| format!(", level {l}"))
+        };
+        self.picked = Some(match set.pick(origin, dir) {
+            None => "nothing under the pointer".to_string(),
+            Some((_, Picked::Triangle { index, error })) => match error {
+                Some(e) => format!("triangle {index}, {}{}", bound(e), level(index)),
+                None => format!("triangle {index}{}", level(index)),
+            },
+            Some((
+                _,
+                Picked::Point {
+                    index,
+                    radius,
+                    error,
+                },
+            )) => {
+                format!(
+                    "point {index}, radius {}, {}",
+                    build::length(radius),
+                    bound(error)
+                )
+            }
+            Some((_, Picked::Splat { index, domain })) => format!("splat {index}, domain {domain}"),
+            Some((_, Picked::Layer { layer, isodensity })) => {
+                format!("voxel layer {layer}, isodensity {isodensity:.3}")
+            }
+        });
+    }
+}

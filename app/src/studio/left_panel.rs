@@ -1,0 +1,140 @@
+//! The left panel: the model (open, built-in, recent) and the method with
+//! its parameters, the cut threshold and Build / Export / Save.
+
+use lodstudio_core::builtins;
+
+use super::StudioApp;
+use crate::build;
+use crate::settings::Method;
+
+impl StudioApp {
+    /// The model section, then the method section, scrolling together.
+    pub(super) fn left_panel(&mut self, ui: &mut egui::Ui) {
+        egui::ScrollArea::vertical().show(ui, |ui| {
+            self.model_section(ui);
+            ui.separator();
+            self.method_section(ui);
+        });
+    }
+
+    fn model_section(&mut self, ui: &mut egui::Ui) {
+        ui.heading("Model");
+        match &self.current {
+            Some(c) => {
+                ui.label(egui::RichText::new(&c.name).strong())
+                    .on_hover_text(c.path.display().to_string());
+            }
+            None => {
+                ui.label("No model loaded");
+            }
+        }
+        if ui.button("Open…").clicked() {
+            self.open_dialog(ui.ctx());
+        }
+        egui::CollapsingHeader::new("Built-in models")
+            .default_open(true)
+            .show(ui, |ui| {
+                for (name, description) in builtins::NAMES {
+                    if ui.button(*name).on_hover_text(*description).clicked() {
+                        self.open(format!("builtin:{name}"));
+                    }
+                }
+            });
+        egui::CollapsingHeader::new("Recent files")
+            .default_open(true)
+            .show(ui, |ui| {
+                if self.recent.is_empty() {
+                    ui.weak("none yet");
+                } else if let Some(path) = self.recent_list(ui) {
+                    self.open(path);
+                }
+            });
+    }
+
+    /// The method list, its parameters, and Build / Export.
+    fn method_section(&mut self, ui: &mut egui::Ui) {
+        ui.heading("Method");
+        let mut changed = self.methods.method_list(ui);
+        ui.add_space(4.0);
+        let input_triangles = self
+            .current
+            .as_ref()
+            .and_then(|c| build::mesh_of(&c.loaded.model).ok())
+            .map(|m| m.triangles.len());
+        match self.methods.method {
+            Method::EdgeCollapse => {
+                changed |= self.methods.edge_collapse.ui(ui, input_triangles);
+            }
+            Method::Voxel => {
+                let volume = self.current.as_ref().and_then(|c| c.volume);
+                changed |= self.methods.voxel.ui(ui, volume.as_ref());
+            }
+            Method::Hybrid => {
+                changed |= self.methods.hybrid.ui(ui);
+            }
+            Method::Amg => {
+                let levels = self
+                    .result
+                    .as_ref()
+                    .filter(|b| b.method() == Method::Amg)
+                    .and_then(|b| b.plots.first())
+                    .and_then(|p| p.series.first())
+                    .map(|s| s.1.len());
+                changed |= self.methods.amg.ui(ui, levels);
+            }
+            Method::MergeTree => {
+                // Criteria changes re-cut the live tree; only build options rebuild.
+                changed |= self.methods.merge_tree.ui(ui).0;
+            }
+        }
+        if self.result.as_ref().is_some_and(|b| b.live.is_some()) {
+            ui.add_space(4.0);
+            ui.label("Cut").on_hover_text(
+                "The built hierarchy is cut live for the camera: no rebuild needed.",
+            );
+            self.methods.threshold.ui(ui);
+        }
+        ui.add_space(4.0);
+        let auto = ui
+            .checkbox(&mut self.methods.auto_rebuild, "Auto rebuild")
+            .on_hover_text("Rebuild by itself 0.4 s after the last parameter change.");
+        if changed || (auto.changed() && self.methods.auto_rebuild && self.result_is_stale()) {
+            self.parameters_changed();
+        }
+        let input = self.input_check();
+        let can_build = matches!(input, Some(Ok(())));
+        ui.horizontal(|ui| {
+            let build = ui
+                .add_enabled(can_build, egui::Button::new("Build"))
+                .on_hover_text("Build the LOD now with these parameters.");
+            if build.clicked() {
+                self.build();
+            }
+            let can_export = self.result.is_some() && self.export.is_none();
+            let export = ui
+                .add_enabled(can_export, egui::Button::new("Export…"))
+                .on_hover_text("Save the simplified mesh as glb, obj or ply.")
+                .on_disabled_hover_text("Build a LOD first.");
+            if export.clicked() {
+                self.export_dialog(ui.ctx());
+            }
+            let can_save = self.export.is_none()
+                && self.result.as_ref().is_some_and(|b| b.live.is_some());
+            let save = ui
+                .add_enabled(can_save, egui::Button::new("Save hierarchy…"))
+                .on_hover_text("Save the built hierarchy (versioned, checksummed .lodh) to reopen it later without rebuilding.")
+                .on_disabled_hover_text("Build a hybrid, merge-tree or voxel-pyramid hierarchy first.");
+            if save.clicked() {
+                self.save_hierarchy_dialog(ui.ctx());
+            }
+        });
+        let error_color = ui.visuals().error_fg_color;
+        if let Some(Err(why)) = &input {
+            ui.colored_label(error_color, why);
+        } else if let Some(note) = &self.build_note {
+            ui.colored_label(error_color, note);
+        } else if self.result.is_some() && !self.is_building() && self.result_is_stale() {
+            ui.weak("Parameters changed since the last build.");
+        }
+    }
+}

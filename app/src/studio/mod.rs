@@ -1,0 +1,391 @@
+//! The studio window: menu, model list, LOD method and its parameters, 3D
+//! viewport, inspector and log. This file is the frame loop and the state it
+//! works on; each part of the window and each kind of job has its own file.
+//!
+//! Everything slow (loading, summarising, building a LOD, preparing GPU
+//! geometry, file dialogs, exporting) runs on worker threads; the UI polls
+//! them each frame so it never blocks, and a failed or cancelled load or build
+//! keeps the previous model and result.
+
+mod building;
+mod cut;
+mod inspector;
+mod left_panel;
+mod loading;
+mod menu;
+mod saving;
+mod status;
+mod view_bar;
+
+use std::path::PathBuf;
+use std::sync::Arc;
+use std::sync::mpsc::Receiver;
+use std::time::Duration;
+
+use lodstudio_core::io::Loaded;
+use lodstudio_core::stats::ModelSummary;
+
+use self::building::BuildRequest;
+use self::loading::{LoadJob, MAX_RECENT, absolute, default_model, display_name, is_builtin};
+use self::status::{LogLine, drop_hint};
+pub use self::view_bar::View;
+use crate::build::Built;
+use crate::export::{self, Saved};
+use crate::frame_stats::FrameStats;
+use crate::job::Job;
+use crate::session::{Autosave, Session};
+use crate::settings::MethodSettings;
+use crate::settings::voxel::VolumeGrid;
+use crate::viewport::{Scene, Viewport};
+
+/// How often the UI refreshes the progress bar while a worker runs; the worker
+/// also wakes the UI the moment it finishes.
+const POLL_INTERVAL: Duration = Duration::from_millis(50);
+
+/// The model on screen.
+struct Current {
+    name: String,
+    path: PathBuf,
+    loaded: Arc<Loaded>,
+    summary: ModelSummary,
+    /// Inspector rows, computed once so drawing allocates nothing new.
+    rows: Vec<(String, String)>,
+    /// The model as the viewport draws it.
+    scene: Arc<Scene>,
+    /// The grid and value range of a volume model.
+    volume: Option<VolumeGrid>,
+}
+
+/// The lodstudio GUI.
+pub struct StudioApp {
+    viewport: Viewport,
+    /// The original beside the result (View::SideBySide).
+    compare: Viewport,
+    current: Option<Current>,
+    job: Option<LoadJob>,
+    /// Requested by [`StudioApp::open`]; started at the next frame, which has a context.
+    pending: Option<PathBuf>,
+    /// An open file dialog's answer.
+    picker: Option<Receiver<Option<PathBuf>>>,
+    recent: Vec<PathBuf>,
+    log: Vec<LogLine>,
+    /// Message of the last failed load, shown in a window until dismissed.
+    error: Option<String>,
+    /// The chosen method and its parameters (persisted, except the voxel
+    /// threshold: see `threshold_volume`).
+    methods: MethodSettings,
+    /// The volume the voxel threshold (`methods.voxel.threshold`) was chosen
+    /// for. The threshold is in that volume's value units, so it resets to the
+    /// middle of the value range when a different volume opens (and is not
+    /// persisted between sessions); reopening the same volume keeps it.
+    threshold_volume: Option<PathBuf>,
+    build: Option<Job<Result<Built, String>>>,
+    /// The last finished build of the model on screen.
+    result: Option<Built>,
+    /// Time of the last frame, for the inspector.
+    frame_ms: f32,
+    /// CPU time of the last frame (layout, cuts, tessellation, submission), as
+    /// eframe measures it; `None` outside eframe.
+    cpu_ms: Option<f32>,
+    frame_stats: FrameStats,
+    /// What the running build has made so far (shown while it runs).
+    preview: Option<Arc<Scene>>,
+    /// What the last click hit on the live cut.
+    picked: Option<String>,
+    /// Live cuts coloured by primitive type or by region, and splats outlined.
+    by_type: bool,
+    regions: bool,
+    outlines: bool,
+    /// A build asked for but not started yet.
+    build_at: Option<BuildRequest>,
+    /// Why the last build request failed, shown under the Build button.
+    build_note: Option<String>,
+    view: View,
+    /// Colour the simplified mesh by each triangle's certified bound.
+    heat: bool,
+    export: Option<Job<Saved>>,
+    autosave: Autosave,
+}
+
+impl StudioApp {
+    /// Called by eframe: reopens the last session (and its model unless
+    /// `initial` names one), or opens the default model.
+    pub fn new(cc: &eframe::CreationContext<'_>, initial: Option<PathBuf>) -> Self {
+        let reopen_model = initial.is_none();
+        let mut app = Self::with_render_state(cc.wgpu_render_state.as_ref(), initial);
+        app.resume(Autosave::from_env(), reopen_model);
+        app
+    }
+
+    /// Takes the session `autosave` holds (recent files, method settings,
+    /// thresholds and, with `reopen_model`, the model) and autosaves into it
+    /// from now on. A damaged session is reported and left for the defaults.
+    pub fn resume(&mut self, autosave: Autosave, reopen_model: bool) {
+        match autosave.load() {
+            Ok(Some(session)) => {
+                self.recent = session.recent.into_iter().take(MAX_RECENT).collect();
+                self.methods = session.methods;
+                if let Some((volume, threshold)) = session.volume_threshold {
+                    self.methods.voxel.threshold = Some(threshold);
+                    self.threshold_volume = Some(volume);
+                }
+                match session.model {
+                    Some(model) if reopen_model && (is_builtin(&model) || model.is_file()) => {
+                        self.info(format!(
+                            "Reopening the last session ({})",
+                            display_name(&model)
+                        ));
+                        self.pending = Some(model);
+                    }
+                    Some(model) if reopen_model => self.error(format!(
+                        "The last session's model {} is gone; opening the default model",
+                        model.display()
+                    )),
+                    _ => {}
+                }
+            }
+            Ok(None) => {}
+            Err(e) => self.error(e),
+        }
+        self.autosave = autosave;
+    }
+
+    /// What the autosave keeps.
+    fn session(&self) -> Session {
+        Session {
+            model: self.current.as_ref().map(|c| absolute(&c.path)),
+            recent: self.recent.clone(),
+            methods: self.methods,
+            volume_threshold: self
+                .threshold_volume
+                .as_deref()
+                .map(absolute)
+                .zip(self.methods.voxel.threshold.filter(|t| t.is_finite())),
+        }
+    }
+
+    /// Autosaves when a check is due; otherwise asks for a frame when it will
+    /// be, so the last change before the studio goes idle is saved too.
+    fn autosave(&mut self, ctx: &egui::Context) {
+        match self.autosave.wait() {
+            Some(wait) if wait.is_zero() => {
+                let session = self.session();
+                if let Err(e) = self.autosave.offer(&session) {
+                    self.error(e);
+                }
+            }
+            Some(wait) => ctx.request_repaint_after(wait),
+            None => {}
+        }
+    }
+
+    /// A studio without eframe (for tests): draws with `render_state` if given.
+    pub fn with_render_state(
+        render_state: Option<&egui_wgpu::RenderState>,
+        initial: Option<PathBuf>,
+    ) -> Self {
+        StudioApp {
+            viewport: Viewport::new(render_state),
+            compare: Viewport::second(render_state, "original viewport"),
+            current: None,
+            job: None,
+            pending: Some(initial.unwrap_or_else(default_model)),
+            picker: None,
+            recent: Vec::new(),
+            log: Vec::new(),
+            error: None,
+            methods: MethodSettings::default(),
+            threshold_volume: None,
+            build: None,
+            result: None,
+            frame_ms: 0.0,
+            cpu_ms: None,
+            frame_stats: FrameStats::default(),
+            preview: None,
+            picked: None,
+            by_type: false,
+            regions: false,
+            outlines: false,
+            build_at: None,
+            build_note: None,
+            view: View::Simplified,
+            heat: false,
+            export: None,
+            autosave: Autosave::off(),
+        }
+    }
+
+    /// Starts loading `path` (a file or `builtin:NAME`) in the background,
+    /// cancelling any load in progress.
+    pub fn open(&mut self, path: impl Into<PathBuf>) {
+        self.pending = Some(path.into());
+    }
+
+    pub fn is_loading(&self) -> bool {
+        self.pending.is_some() || self.job.is_some()
+    }
+
+    /// Summary of the model on screen.
+    pub fn summary(&self) -> Option<&ModelSummary> {
+        self.current.as_ref().map(|c| &c.summary)
+    }
+
+    /// The model on screen, as loaded.
+    pub fn loaded(&self) -> Option<&Loaded> {
+        self.current.as_ref().map(|c| c.loaded.as_ref())
+    }
+
+    /// The 3D view (its camera is public).
+    /// The camera, for scripted sessions and tests.
+    pub fn viewport_mut(&mut self) -> &mut Viewport {
+        &mut self.viewport
+    }
+
+    pub fn viewport(&self) -> &Viewport {
+        &self.viewport
+    }
+
+    /// Messages of the log panel, oldest first.
+    pub fn log_lines(&self) -> impl Iterator<Item = &str> {
+        self.log.iter().map(|l| l.text.as_str())
+    }
+
+    /// The chosen method and its parameters.
+    pub fn methods(&self) -> &MethodSettings {
+        &self.methods
+    }
+
+    /// Changes parameters as the controls do (so with auto rebuild on, a
+    /// build follows after the usual delay).
+    pub fn set_methods(&mut self, methods: MethodSettings) {
+        if methods != self.methods {
+            self.methods = methods;
+            self.parameters_changed();
+        }
+    }
+
+    /// Builds the chosen method on the model on screen (starting at the next
+    /// frame), replacing any build in progress.
+    pub fn build(&mut self) {
+        self.build_at = Some(BuildRequest::Now);
+    }
+
+    /// Whether a build is waiting to start or running.
+    pub fn is_building(&self) -> bool {
+        self.build_at.is_some() || self.build.is_some()
+    }
+
+    /// The last finished build of the model on screen.
+    pub fn result(&self) -> Option<&Built> {
+        self.result.as_ref()
+    }
+
+    /// Which version of the model the viewport shows.
+    pub fn view(&self) -> View {
+        self.view
+    }
+
+    /// Writes the last result to `path` (format by extension) on a worker
+    /// thread, without a dialog; the outcome goes to the log.
+    pub fn export_to(&mut self, path: impl Into<PathBuf>, ctx: &egui::Context) {
+        let path = path.into();
+        self.start_export(ctx, move |set| export::write(set, &path));
+    }
+
+    /// Whether an export (its dialog or its writing) is under way.
+    pub fn is_exporting(&self) -> bool {
+        self.export.is_some()
+    }
+
+    /// Draws the whole studio into `ui` (the root of the window).
+    pub fn show(&mut self, ui: &mut egui::Ui) {
+        let ctx = ui.ctx().clone();
+        self.handle_global_input(&ctx);
+        self.poll_picker();
+        if let Some(path) = self.pending.take() {
+            self.start_load(path, &ctx);
+        }
+        self.poll_job(&ctx);
+        self.poll_build();
+        self.poll_preview();
+        self.poll_export();
+        self.start_build_when_due(&ctx);
+        self.autosave(&ctx);
+
+        egui::Panel::top("menu").show(ui, |ui| self.menu_bar(ui));
+        egui::Panel::bottom("status")
+            .resizable(true)
+            .default_size(110.0)
+            .show(ui, |ui| self.status_panel(ui));
+        egui::Panel::left("model")
+            .default_size(250.0)
+            .show(ui, |ui| {
+                egui::ScrollArea::vertical().show(ui, |ui| self.left_panel(ui));
+            });
+        egui::Panel::right("inspector")
+            .default_size(260.0)
+            .show(ui, |ui| {
+                egui::ScrollArea::vertical().show(ui, |ui| self.inspector(ui));
+            });
+        egui::CentralPanel::no_frame().show(ui, |ui| {
+            self.view_bar(ui);
+            self.update_cut();
+            self.sync_view();
+            if self.view == View::SideBySide && self.result.is_some() && self.preview.is_none() {
+                self.show_side_by_side(ui);
+            } else {
+                self.viewport.show(ui);
+            }
+            self.pick();
+        });
+        self.frame_ms = ctx.input(|i| i.unstable_dt) * 1000.0;
+        self.frame_stats.record(
+            ctx.input(|i| i.time),
+            self.frame_ms,
+            self.cpu_ms,
+            self.build.is_some(),
+        );
+
+        self.error_window(&ctx);
+        drop_hint(&ctx);
+        if self.job.is_some()
+            || self.picker.is_some()
+            || self.build.is_some()
+            || self.export.is_some()
+        {
+            ctx.request_repaint_after(POLL_INTERVAL);
+        }
+    }
+
+    /// Dropped files and the Ctrl+O shortcut.
+    fn handle_global_input(&mut self, ctx: &egui::Context) {
+        let open_shortcut = egui::KeyboardShortcut::new(egui::Modifiers::COMMAND, egui::Key::O);
+        if ctx.input_mut(|i| i.consume_shortcut(&open_shortcut)) {
+            self.open_dialog(ctx);
+        }
+        let (dropped, count) = ctx.input(|i| {
+            let files = &i.raw.dropped_files;
+            (files.first().map(|f| f.path().to_path_buf()), files.len())
+        });
+        if let Some(path) = dropped {
+            if count > 1 {
+                self.info(format!("{count} files dropped; opening only the first"));
+            }
+            self.open(path);
+        }
+    }
+}
+
+impl eframe::App for StudioApp {
+    fn ui(&mut self, ui: &mut egui::Ui, frame: &mut eframe::Frame) {
+        self.cpu_ms = frame.info().cpu_usage.map(|s| s * 1000.0);
+        self.show(ui);
+    }
+
+    fn on_exit(&mut self) {
+        let session = self.session();
+        if let Err(e) = self.autosave.save_now(&session) {
+            eprintln!("lodstudio: {e}");
+        }
+    }
+}

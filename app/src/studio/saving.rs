@@ -1,0 +1,145 @@
+//! Exporting what is on screen and saving the built hierarchy, on workers.
+
+use std::path::PathBuf;
+
+use super::StudioApp;
+use crate::export::{self, Saved};
+use crate::job::{Job, Poll};
+use crate::settings::Method;
+
+impl StudioApp {
+    /// Runs `write` (which may show a dialog) on the last result, on a worker.
+    pub(super) fn start_export(
+        &mut self,
+        ctx: &egui::Context,
+        write: impl FnOnce(&lodstudio_core::lod::DrawSet) -> Saved + Send + 'static,
+    ) {
+        if self.export.is_some() {
+            return;
+        }
+        let Some(built) = &self.result else {
+            self.error("Nothing to export yet: build a LOD first".into());
+            return;
+        };
+        // What is on screen: a live cut, every primitive of it, or the built mesh.
+        let set = match &built.live {
+            Some(live) => live.draw_set().clone(),
+            None => lodstudio_core::lod::DrawSet {
+                mesh: built.mesh().clone(),
+                ..Default::default()
+            },
+        };
+        match Job::spawn("export", "Exporting".into(), ctx, move |_| Ok(write(&set))) {
+            Ok(job) => self.export = Some(job),
+            Err(e) => self.error(format!("cannot start the export: {e}")),
+        }
+    }
+
+    pub(super) fn export_dialog(&mut self, ctx: &egui::Context) {
+        let (Some(current), Some(built)) = (&self.current, &self.result) else {
+            return;
+        };
+        let name = export::suggested_name(&current.path, built.mesh().triangles.len());
+        self.start_export(ctx, move |set| export::choose_and_write(set, &name));
+    }
+
+    /// The running result's hierarchy as saved-hierarchy bytes, with the shown
+    /// parameters of its method.
+    fn hierarchy_bytes(&self) -> Option<Vec<u8>> {
+        let live = self.result.as_ref()?.live.as_ref()?;
+        let m = &self.methods;
+        let params = match m.method {
+            Method::Hybrid => serde_json::json!({"kappa": m.hybrid.kappa, "tau": m.hybrid.tau}),
+            Method::MergeTree => serde_json::json!({
+                "min_vertices": m.merge_tree.min_vertices,
+                "min_quality": m.merge_tree.min_quality,
+            }),
+            Method::Voxel => {
+                serde_json::json!({"resolution": m.voxel.resolution, "radius": m.voxel.radius})
+            }
+            Method::Amg => serde_json::json!({"k": m.amg.k}),
+            Method::EdgeCollapse => serde_json::json!({
+                "lock_borders": m.edge_collapse.lock_borders,
+                "min_quality": m.edge_collapse.min_quality,
+                "min_normal_cos": m.edge_collapse.min_normal_cos,
+            }),
+        };
+        live.save(&params)
+    }
+
+    /// Saves the built hierarchy to `path` on a worker (no dialog).
+    pub fn save_hierarchy_to(&mut self, path: impl Into<PathBuf>, ctx: &egui::Context) {
+        let path = path.into();
+        match self.hierarchy_bytes() {
+            Some(bytes) => self.spawn_save(ctx, move || export::write_bytes(&bytes, &path)),
+            None => self.error(
+                "Nothing to save: only whole hierarchies save (hybrid, merge tree, voxel pyramid)"
+                    .into(),
+            ),
+        }
+    }
+
+    pub(super) fn save_hierarchy_dialog(&mut self, ctx: &egui::Context) {
+        let (Some(current), Some(bytes)) = (&self.current, self.hierarchy_bytes()) else {
+            self.error(
+                "Nothing to save: only whole hierarchies save (hybrid, merge tree, voxel pyramid)"
+                    .into(),
+            );
+            return;
+        };
+        let name = format!(
+            "{}.lodh",
+            current
+                .name
+                .trim_start_matches("builtin:")
+                .split('.')
+                .next()
+                .unwrap_or("model")
+        );
+        self.spawn_save(ctx, move || {
+            export::choose_and_write_hierarchy(&bytes, &name)
+        });
+    }
+
+    /// Runs a save (dialog and writing) on a worker, reported like exports.
+    fn spawn_save(&mut self, ctx: &egui::Context, save: impl FnOnce() -> Saved + Send + 'static) {
+        if self.export.is_some() {
+            return;
+        }
+        match Job::spawn("export", "Saving".into(), ctx, move |_| Ok(save())) {
+            Ok(job) => self.export = Some(job),
+            Err(e) => self.error(format!("cannot start saving: {e}")),
+        }
+    }
+
+    pub(super) fn poll_export(&mut self) {
+        let Some(job) = &self.export else {
+            return;
+        };
+        let saved = match job.poll() {
+            Poll::Running => return,
+            Poll::Done(saved) => saved,
+            Poll::Lost => Saved::Failed("the export stopped unexpectedly (internal error)".into()),
+        };
+        self.export = None;
+        match saved {
+            Saved::Written {
+                path,
+                bytes,
+                beside,
+            } => {
+                let beside: Vec<String> = beside.iter().map(|p| p.display().to_string()).collect();
+                let also = if beside.is_empty() {
+                    String::new()
+                } else {
+                    format!(", with {}", beside.join(", "))
+                };
+                self.info(format!("Exported {}{also} ({bytes} bytes)", path.display()));
+            }
+            Saved::NoFile => self.info(
+                "Nothing exported: no file chosen (the dialog needs xdg-desktop-portal)".into(),
+            ),
+            Saved::Failed(message) => self.error(format!("Export failed: {message}")),
+        }
+    }
+}
