@@ -96,7 +96,7 @@ fn method_row(h: &mut Harness<'_, StudioApp>, model: &str, method: Method) {
             .set_value_accesskit(4.0);
         h.run();
         for _ in 0..24 {
-            h.state_mut().viewport_mut().yaw += 0.05;
+            h.state_mut().viewport_mut().camera.yaw += 0.05;
             cut_frame(h, &mut orbit_cut, &mut orbit_frame);
         }
     }

@@ -7,10 +7,10 @@ pub mod heatmap;
 pub mod job;
 pub mod live_cut;
 pub mod panels;
+pub mod render;
 pub mod session;
 pub mod settings;
 pub mod studio;
-pub mod viewport;
 
 use std::path::PathBuf;
 

@@ -8,7 +8,7 @@ use std::time::Instant;
 use lodstudio_core::lod::{DrawSet, Hierarchy, Method};
 use lodstudio_core::view::{Tolerance, View};
 
-use crate::viewport::{Scene, SceneStyle};
+use crate::render::{Scene, SceneStyle};
 
 /// How a cut is drawn: coloured by its error bounds (a heat map, first), by
 /// primitive type, or by the hierarchy's regions (merge-tree levels, AMG

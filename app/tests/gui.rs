@@ -246,7 +246,7 @@ fn point_set_is_drawn() {
 
 /// (yaw, pitch, distance, target) of the studio's camera.
 fn camera(harness: &Harness<'_, StudioApp>) -> (f32, f32, f32, glam::Vec3) {
-    let v = harness.state().viewport();
+    let v = harness.state().viewport().camera;
     (v.yaw, v.pitch, v.distance, v.target)
 }
 
@@ -1011,8 +1011,8 @@ fn merge_tree_refines_live_with_the_threshold_and_the_camera() {
     );
 
     // Moving the camera away coarsens further; every move re-cuts.
-    let distance = harness.state().viewport().distance;
-    harness.state_mut().viewport_mut().distance = distance * 6.0;
+    let distance = harness.state().viewport().camera.distance;
+    harness.state_mut().viewport_mut().camera.distance = distance * 6.0;
     harness.run();
     let far = cut_stats(&harness);
     assert!(far.cuts > coarse.cuts);
@@ -1072,7 +1072,7 @@ fn voxel_layers_and_the_pyramid_are_shown_live() {
         "studio_voxel_layer_hues",
     );
     // Turning the camera to another slicing axis re-orders them.
-    harness.state_mut().viewport_mut().yaw += std::f32::consts::FRAC_PI_2;
+    harness.state_mut().viewport_mut().camera.yaw += std::f32::consts::FRAC_PI_2;
     harness.run();
     assert!(cut_stats(&harness).cuts > stats.cuts);
 
@@ -1172,7 +1172,7 @@ fn hybrid_cut_mixes_triangles_and_points_live() {
     let (_, _, heated) = viewport_pixels(&mut harness, "studio_hybrid_heat");
     assert_ne!(plain, heated, "the colours changed");
     // Object-space cuts ignore the camera: orbiting re-cuts nothing.
-    harness.state_mut().viewport_mut().yaw += 1.0;
+    harness.state_mut().viewport_mut().camera.yaw += 1.0;
     harness.run();
     assert_eq!(cut_stats(&harness).cuts, coarse.cuts);
     // Export writes the cut's triangles and, beside them, its points.
@@ -1313,7 +1313,7 @@ fn fly_mode_walks_through_the_scene() {
     wait_for_load(&mut harness);
     harness.get_by_label("Fly").click();
     harness.run();
-    assert!(harness.state().viewport().fly);
+    assert!(harness.state().viewport().camera.fly);
     let before = harness.state().viewport().core_view();
     harness.key_down(egui::Key::W);
     for _ in 0..10 {

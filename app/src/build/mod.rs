@@ -27,10 +27,10 @@ use lodstudio_core::voxel::pyramid::{Pyramid, PyramidCut};
 use lodstudio_core::voxel::{DENSITY_ISO, Source, VoxelLevel, density};
 
 use crate::live_cut::LiveCut;
+use crate::render::Scene;
 use crate::settings::simplify::EdgeCollapseSettings;
 use crate::settings::voxel::{VolumeGrid, VoxelSettings};
 use crate::settings::{BuildParams, Method};
-use crate::viewport::Scene;
 
 /// What a cut without a live hierarchy shows (never built that way).
 static EMPTY: TriMesh = TriMesh {

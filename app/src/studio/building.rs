@@ -9,9 +9,9 @@ use lodstudio_core::progress::{Cancelled, Progress};
 use super::StudioApp;
 use crate::build::{self, Built};
 use crate::job::{Job, Poll};
+use crate::render::{Scene, SceneStyle};
 use crate::settings::BuildParams;
 use crate::settings::voxel::VolumeGrid;
-use crate::viewport::{Scene, SceneStyle};
 
 /// With auto rebuild, a build starts once parameters have been still this long
 /// (seconds), so dragging a slider does not start a build every frame.

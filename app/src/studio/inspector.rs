@@ -65,7 +65,7 @@ impl StudioApp {
                     let st = live.stats;
                     let pixels = self.viewport.core_view().pixels(
                         st.error_bound,
-                        self.viewport.target,
+                        self.viewport.camera.target,
                         0.0,
                     );
                     egui::Grid::new("cut grid").num_columns(2).striped(true).show(ui, |ui| {

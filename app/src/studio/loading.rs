@@ -12,8 +12,8 @@ use lodstudio_core::stats::ModelSummary;
 use super::{Current, StudioApp};
 use crate::build;
 use crate::job::{Job, Poll};
+use crate::render::Scene;
 use crate::settings::voxel::VolumeGrid;
-use crate::viewport::Scene;
 
 pub(super) const MAX_RECENT: usize = 10;
 

@@ -33,10 +33,10 @@ use crate::build::Built;
 use crate::export::{self, Saved};
 use crate::frame_stats::FrameStats;
 use crate::job::Job;
+use crate::render::{Scene, Viewport};
 use crate::session::{Autosave, Session};
 use crate::settings::MethodSettings;
 use crate::settings::voxel::VolumeGrid;
-use crate::viewport::{Scene, Viewport};
 
 /// How often the UI refreshes the progress bar while a worker runs; the worker
 /// also wakes the UI the moment it finishes.

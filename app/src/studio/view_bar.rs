@@ -101,10 +101,11 @@ impl StudioApp {
                     .on_hover_text("Outline every domain primitive (AMG paper, Fig. 12).")
                     .on_disabled_hover_text("Build a hierarchy first.");
                     ui.separator();
-                    ui.checkbox(&mut self.viewport.fly, "Fly").on_hover_text(
-                        "Walk through the scene: W/S forward and back, A/D sideways, Q/E down \
+                    ui.checkbox(&mut self.viewport.camera.fly, "Fly")
+                        .on_hover_text(
+                            "Walk through the scene: W/S forward and back, A/D sideways, Q/E down \
                          and up (Shift: faster); drag to look around.",
-                    );
+                        );
                 });
             });
         if has_result {

@@ -1,0 +1,17 @@
+//! The studio's 3D view, by concept:
+//!
+//! - [`scene`]: models, cuts and previews as GPU-ready geometry (CPU only, tested);
+//! - [`camera`]: the orbit / fly camera, its matrices and rays (tested);
+//! - [`gpu`]: pipelines, buffers, uploads and the offscreen render;
+//! - [`viewport`]: the egui widget that ties them together;
+//! - `shaders/`: the WGSL, with the frame's uniforms and shading written once.
+
+pub mod camera;
+mod gpu;
+pub mod scene;
+pub mod viewport;
+
+pub use camera::Camera;
+pub use gpu::init;
+pub use scene::{Scene, SceneStyle};
+pub use viewport::Viewport;
