@@ -44,7 +44,7 @@ fn spread(v: &[f64]) -> String {
 }
 
 fn cut_ms(h: &Harness<'_, StudioApp>) -> Option<(f64, u64)> {
-    let live = h.state().result()?.live.as_ref()?;
+    let live = &h.state().result()?.live;
     Some((live.stats.cut_ms as f64, live.stats.cuts))
 }
 
@@ -83,7 +83,7 @@ fn method_row(h: &mut Harness<'_, StudioApp>, model: &str, method: Method) {
     h.run();
     let (mut drag_cut, mut drag_frame, mut orbit_cut, mut orbit_frame) =
         (Vec::new(), Vec::new(), Vec::new(), Vec::new());
-    if h.state().result().is_some_and(|b| b.live.is_some()) {
+    if h.state().result().is_some_and(|b| b.live.has_levels()) {
         // Drag the threshold over its range, one value a frame.
         for i in 0..24 {
             let px = 0.5 * 2f64.powf(i as f64 * 7.0 / 23.0);

@@ -215,6 +215,12 @@ impl LiveCut {
         true
     }
 
+    /// Whether the hierarchy has levels for the threshold to choose between
+    /// (and so something to save).
+    pub fn has_levels(&self) -> bool {
+        self.hierarchy.has_levels()
+    }
+
     /// The hierarchy as a saved-hierarchy file with `params`, when it saves.
     pub fn save(&self, params: &serde_json::Value) -> Option<Vec<u8>> {
         self.hierarchy.save(params)
@@ -247,6 +253,7 @@ mod tests {
             layers: vec![layer(1.0), layer(0.5)],
             origin: glam::Vec3::splat(-2.0),
             spacing: glam::Vec3::splat(0.1),
+            error_bound: f32::INFINITY,
         };
         let tol = crate::settings::threshold::Threshold::default().tolerance();
         let view = View::orbit(glam::Vec3::ZERO, 4.0, 0.1, 0.1);

@@ -449,7 +449,7 @@ fn edge_collapse_builds_shows_certificate_and_exports() {
     harness.run();
     let built = harness.state().result().expect("the build finished");
     let triangles = built.mesh().triangles.len();
-    let live = built.live.as_ref().expect("the collapses are cut live");
+    let live = &built.live;
     let bound = live.stats.error_bound;
     assert!(triangles > 900 && triangles <= 929, "{triangles} triangles");
     assert!(bound.is_finite() && bound > 0.0, "bound {bound}");
@@ -485,7 +485,7 @@ fn edge_collapse_builds_shows_certificate_and_exports() {
         .set_value_accesskit(0.1);
     harness.run();
     assert!(!harness.state().is_building(), "a target is no rebuild");
-    let live = harness.state().result().unwrap().live.as_ref().unwrap();
+    let live = &harness.state().result().unwrap().live;
     let coarser = live.stats.triangles;
     assert!(coarser > 350 && coarser <= 371, "{coarser}");
     assert!(live.stats.error_bound >= bound && live.stats.cuts > cuts);
@@ -690,7 +690,7 @@ fn voxel_genus(harness: &Harness<'_, StudioApp>) -> i64 {
     harness
         .state()
         .result()
-        .and_then(|b| b.voxel())
+        .and_then(|b| b.voxel.as_deref())
         .expect("a voxel result")
         .genus
 }
@@ -955,7 +955,7 @@ fn cut_stats(harness: &Harness<'_, StudioApp>) -> lodstudio::live_cut::CutStats 
     harness
         .state()
         .result()
-        .and_then(|b| b.live.as_ref())
+        .map(|b| &b.live)
         .expect("a live cut")
         .stats
 }

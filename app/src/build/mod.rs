@@ -27,36 +27,15 @@ use lodstudio_core::voxel::pyramid::{Pyramid, PyramidCut};
 use lodstudio_core::voxel::{DENSITY_ISO, Source, VoxelLevel, density};
 
 use crate::live_cut::LiveCut;
-use crate::render::Scene;
 use crate::settings::simplify::EdgeCollapseSettings;
 use crate::settings::voxel::{VolumeGrid, VoxelSettings};
 use crate::settings::{BuildParams, Method};
-
-/// What a cut without a live hierarchy shows (never built that way).
-static EMPTY: TriMesh = TriMesh {
-    positions: Vec::new(),
-    triangles: Vec::new(),
-    normals: None,
-    colors: None,
-    uvs: None,
-    parts: None,
-    materials: None,
-    wedges: None,
-};
 
 /// One inspector row, with what it means when hovered.
 pub struct Row {
     pub label: &'static str,
     pub value: String,
     pub hint: &'static str,
-}
-
-/// What a build made, by method.
-pub enum Lod {
-    /// Voxel simplification: the iso-surface and its topology.
-    Voxel(Box<VoxelLevel>),
-    /// A hierarchy cut live ([`Built::live`]): what is shown is its cut.
-    Cut,
 }
 
 /// A curve or bar series for the inspector's plots.
@@ -69,20 +48,20 @@ pub struct Plot {
     pub series: Vec<(String, Vec<[f64; 2]>)>,
 }
 
-/// A finished build.
+/// A finished build: always a hierarchy, cut live for the camera and the
+/// threshold, so picking, cutting, heat colouring and export take one path.
 pub struct Built {
-    pub lod: Lod,
+    /// The hierarchy and its current cut.
+    pub live: LiveCut,
     /// The parameters it was built with.
     pub params: BuildParams,
     /// Time for the method itself (without preparing the view).
     pub seconds: f32,
-    /// The simplified mesh as the viewport draws it.
-    pub scene: Arc<Scene>,
     pub rows: Vec<Row>,
     pub plots: Vec<Plot>,
-    /// Hierarchies cut live for the camera and the threshold (and layered
-    /// voxel levels, ordered back to front for the camera).
-    pub live: Option<LiveCut>,
+    /// A voxel build's level (the surface nearest the 0.5 density) and its
+    /// topology; the finest level of a pyramid.
+    pub voxel: Option<Box<VoxelLevel>>,
 }
 
 impl Built {
@@ -96,20 +75,14 @@ impl Built {
         rows: Vec<Row>,
         plots: Vec<Plot>,
     ) -> Built {
-        let view = lodstudio_core::view::View::orbit(bounds.center(), bounds.diagonal(), 0.6, 0.4);
-        let live = LiveCut::new(
-            hierarchy,
-            &view,
-            lodstudio_core::view::Tolerance::Pixels(1.0),
-        );
+        let view = View::orbit(bounds.center(), bounds.diagonal(), 0.6, 0.4);
         Built {
-            lod: Lod::Cut,
+            live: LiveCut::new(hierarchy, &view, Tolerance::Pixels(1.0)),
             params,
             seconds,
-            scene: Arc::clone(live.scene()),
             rows,
             plots,
-            live: Some(live),
+            voxel: None,
         }
     }
 
@@ -117,27 +90,15 @@ impl Built {
         self.params.method()
     }
 
-    /// The mesh the build made (a live cut's current triangles).
+    /// The triangles of the current cut.
     pub fn mesh(&self) -> &TriMesh {
-        match (&self.lod, &self.live) {
-            (Lod::Voxel(level), _) => &level.mesh,
-            (Lod::Cut, Some(live)) => &live.draw_set().mesh,
-            (Lod::Cut, None) => &EMPTY,
-        }
-    }
-
-    /// The voxel level, if this was one.
-    pub fn voxel(&self) -> Option<&VoxelLevel> {
-        match &self.lod {
-            Lod::Voxel(level) => Some(level),
-            Lod::Cut => None,
-        }
+        &self.live.draw_set().mesh
     }
 
     /// One line for the log, after the job's label.
     pub fn report(&self) -> String {
-        match &self.lod {
-            Lod::Voxel(level) => format!(
+        match &self.voxel {
+            Some(level) => format!(
                 "{} triangles, {} components, genus {} (resolution {}, filter radius {:.1} voxels), {:.2} s",
                 level.mesh.triangles.len(),
                 level.components,
@@ -146,7 +107,7 @@ impl Built {
                 level.radius,
                 self.seconds
             ),
-            Lod::Cut => {
+            None => {
                 let rows: Vec<String> = self
                     .rows
                     .iter()
@@ -284,7 +245,7 @@ pub fn run_voxel(
         settings.filter.filter(),
         progress,
     )?;
-    voxel_built(f, settings.resolution, settings, start, progress)
+    voxel_built(f, source, settings.resolution, settings, start, progress)
 }
 
 /// Thresholds the volume `model` (whose grid is `grid`) into S, filters it and
@@ -320,7 +281,7 @@ pub fn run_voxel_volume(
         progress,
     )?;
     let resolution = volume.dims.into_iter().max().unwrap_or(0);
-    voxel_built(f, resolution, settings, start, progress)
+    voxel_built(f, source, resolution, settings, start, progress)
 }
 
 /// Extracts a voxel build from the filtered density `f` (one surface at the
@@ -328,6 +289,7 @@ pub fn run_voxel_volume(
 /// prepares its scene and inspector rows.
 fn voxel_built(
     f: Volume,
+    source: Source,
     resolution: usize,
     settings: VoxelSettings,
     start: Instant,
@@ -345,43 +307,35 @@ fn voxel_built(
         iso,
         progress,
     )?;
-    // More than one surface: the translucent layers, cut live for the camera.
-    let layered = (layers.len() > 1).then_some(Layered {
-        layers,
-        origin: f.origin,
-        spacing: f.spacing,
-    });
+    // One surface, or the translucent layers ordered for the camera; a mesh's
+    // level is certified against it like the pyramid's levels.
+    let mut hierarchy = Layered::new(layers, &f);
+    if let Some(surface) = source.surface() {
+        hierarchy.certify(surface, progress)?;
+    }
     let seconds = start.elapsed().as_secs_f32();
     progress.check()?;
     progress.stage("preparing the view");
-    let layer_count = layered.as_ref().map_or(1, |l| l.layers.len());
-    let live = layered.map(|l| {
-        let view = View::orbit(f.bounds().center(), f.bounds().diagonal(), 0.6, 0.4);
-        LiveCut::new(Box::new(l), &view, Tolerance::Pixels(1.0))
-    });
-    let scene = match &live {
-        Some(live) => Arc::clone(live.scene()),
-        None => Arc::new(Scene::from_mesh(&level.mesh)),
-    };
     let mut rows = voxel_rows(&level, settings, seconds);
     rows.insert(
         rows.len() - 1,
         Row {
             label: "layers",
-            value: layer_count.to_string(),
+            value: hierarchy.layers.len().to_string(),
             hint: "Translucent iso-surfaces of §3 (eq. 4-6): the fewest whose fit of the \
                    density fall-off meets the layers error δ; drawn back to front.",
         },
     );
-    Ok(Ok(Built {
-        lod: Lod::Voxel(Box::new(level)),
-        params: BuildParams::Voxel(settings),
+    let mut built = Built::live(
+        Box::new(hierarchy),
+        f.bounds(),
+        BuildParams::Voxel(settings),
         seconds,
-        scene,
         rows,
-        plots: Vec::new(),
-        live,
-    }))
+        Vec::new(),
+    );
+    built.voxel = Some(Box::new(level));
+    Ok(Ok(built))
 }
 
 /// Builds the whole pyramid (§2, Tables 1–3) for browsing at any position
@@ -451,22 +405,16 @@ fn voxel_pyramid(
         },
     );
     let finest = levels.swap_remove(0);
-    let bounds = finest.mesh.bounds();
-    let view = View::orbit(bounds.center(), bounds.diagonal(), 0.6, 0.4);
-    let live = LiveCut::new(
+    let mut built = Built::live(
         Box::new(PyramidCut::new(pyramid, settings.runtime_position())),
-        &view,
-        Tolerance::Pixels(1.0),
-    );
-    Ok(Ok(Built {
-        lod: Lod::Voxel(Box::new(finest)),
-        params: BuildParams::Voxel(settings),
+        finest.mesh.bounds(),
+        BuildParams::Voxel(settings),
         seconds,
-        scene: Arc::clone(live.scene()),
         rows,
         plots,
-        live: Some(live),
-    }))
+    );
+    built.voxel = Some(Box::new(finest));
+    Ok(Ok(built))
 }
 
 /// The rows of a voxel build; `settings.threshold` is set for volumes only.
@@ -640,7 +588,7 @@ mod tests {
             .expect("a mesh builds");
         assert_eq!(built.method(), Method::EdgeCollapse);
         // The target moves the cut without a rebuild: a quarter of the triangles.
-        let live = built.live.as_mut().expect("cut live");
+        let live = &mut built.live;
         let knobs = |n| lodstudio_core::lod::Knobs {
             collapse: Some(lodstudio_core::lod::PrefixTarget::Triangles(n)),
             ..Default::default()
@@ -683,10 +631,14 @@ mod tests {
         let built = run_voxel(solid.as_ref(), settings, &Progress::new())
             .expect("not cancelled")
             .expect("csg-part builds");
-        let level = built.voxel().expect("a voxel result");
+        let level = built.voxel.as_deref().expect("a voxel result");
         assert!(!level.mesh.triangles.is_empty());
         assert_eq!(built.mesh().triangles.len(), level.mesh.triangles.len());
         assert_eq!(built.method(), Method::Voxel);
+        // A single level is a hierarchy of one; an implicit solid has no
+        // surface to certify it against.
+        assert!(!built.live.has_levels());
+        assert!(built.live.stats.error_bound.is_infinite());
 
         let mesh = Model::Mesh(torus(1.0, 0.35, 8, 4));
         assert!(check(Method::EdgeCollapse, Path::new("builtin:torus"), &mesh).is_ok());
@@ -697,7 +649,12 @@ mod tests {
         let built = run_voxel(&MeshSolid::new(torus_mesh), settings, &Progress::new())
             .expect("not cancelled")
             .expect("a closed mesh builds");
-        let level = built.voxel().expect("a voxel result");
+        let level = built.voxel.as_deref().expect("a voxel result");
+        let bound = built.live.stats.error_bound;
+        assert!(
+            bound > 0.0 && bound < 0.2,
+            "certified against the torus: {bound}"
+        );
         assert_eq!(
             (level.components, level.genus),
             (1, 1),
@@ -738,7 +695,7 @@ mod tests {
         let built = run_voxel_volume(&model, &grid, settings, &Progress::new())
             .expect("not cancelled")
             .expect("a volume builds");
-        let level = built.voxel().expect("a voxel result");
+        let level = built.voxel.as_deref().expect("a voxel result");
         assert_eq!((level.resolution, level.components, level.genus), (n, 1, 0));
         assert_eq!(built.params, BuildParams::Voxel(settings.for_volume(&grid)));
         let threshold = built.rows.iter().find(|r| r.label == "threshold");

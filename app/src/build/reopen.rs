@@ -2,13 +2,12 @@
 //! once, and its parameters become the shown ones, so nothing is rebuilt.
 
 use std::path::Path;
-use std::sync::Arc;
 
 use lodstudio_core::io::{LoadError, Location, ParseError};
 use lodstudio_core::lod::Hierarchy;
 use lodstudio_core::view::{Tolerance, View};
 
-use super::{Built, Lod, Row};
+use super::{Built, Row};
 use crate::live_cut::LiveCut;
 use crate::settings::{Method, MethodSettings};
 
@@ -87,12 +86,10 @@ impl Reopened {
     /// The result the studio shows: the hierarchy cut live, built with
     /// `methods` (as [`Reopened::apply`] made them).
     pub fn built(self, methods: &MethodSettings, view: &View, tolerance: Tolerance) -> Built {
-        let live = LiveCut::new(self.hierarchy, view, tolerance);
         Built {
-            lod: Lod::Cut,
+            live: LiveCut::new(self.hierarchy, view, tolerance),
             params: methods.params(None),
             seconds: 0.0,
-            scene: Arc::clone(live.scene()),
             rows: vec![Row {
                 label: "saved with",
                 value: self.params.to_string(),
@@ -100,7 +97,7 @@ impl Reopened {
                        its file, not rebuilt.",
             }],
             plots: Vec::new(),
-            live: Some(live),
+            voxel: None,
         }
     }
 }

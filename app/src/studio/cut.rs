@@ -12,7 +12,7 @@ impl StudioApp {
     /// hierarchy says they change it).
     pub(super) fn update_cut(&mut self) {
         let heat = self.heat && self.view.shows_lod();
-        if let Some(live) = self.result.as_mut().and_then(|b| b.live.as_mut()) {
+        if let Some(live) = self.result.as_mut().map(|b| &mut b.live) {
             live.set_style(CutStyle {
                 heat,
                 by_type: self.by_type && self.view.shows_lod(),
@@ -54,10 +54,7 @@ impl StudioApp {
             return;
         }
         let scene = match (&self.result, self.view) {
-            (Some(built), View::Simplified | View::SideBySide) => match &built.live {
-                Some(live) => live.scene(),
-                None => &built.scene,
-            },
+            (Some(built), View::Simplified | View::SideBySide) => built.live.scene(),
             _ => &current.scene,
         };
         self.viewport.swap_scene(scene);
@@ -97,7 +94,7 @@ impl StudioApp {
         let Some((origin, dir)) = self.viewport.take_click() else {
             return;
         };
-        let Some(live) = self.result.as_ref().and_then(|b| b.live.as_ref()) else {
+        let Some(live) = self.result.as_ref().map(|b| &b.live) else {
             return;
         };
         let diagonal = self

@@ -59,44 +59,52 @@ impl StudioApp {
                         }
                     });
                 }
-                if let Some(live) = &built.live {
-                    ui.separator();
-                    ui.label(egui::RichText::new("Cut").strong());
-                    let st = live.stats;
-                    let pixels = self.viewport.core_view().pixels(
-                        st.error_bound,
-                        self.viewport.camera.target,
-                        0.0,
-                    );
-                    egui::Grid::new("cut grid").num_columns(2).striped(true).show(ui, |ui| {
-                        let diagonal = current.scene.bounds().diagonal().max(f32::MIN_POSITIVE);
-                        for (label, value, hint) in [
-                            ("cut triangles", st.triangles.to_string(), "Triangles on the current cut."),
-                            ("cut points", st.points.to_string(), "Point primitives (discs) on the current cut."),
-                            ("cut splats", st.splats.to_string(), "Textured domain primitives on the current cut."),
-                            ("layer triangles", st.layer_triangles.to_string(), "Triangles of the translucent voxel layers."),
-                            ("cut bound", format!("{} ({:.3} %)", build::length(st.error_bound), 100.0 * st.error_bound / diagonal), "The cut's object-space error bound (max over its elements)."),
-                            ("bound is", st.error_bound_kind.name().to_string(), "Certified: no point of the cut or of the original lies farther than the bound from the other (a dense measurement never exceeds it). Estimate: a measure of the method's own (AMG: the largest distance of a domain's points to its splat's plane), not a bound on the distance to the original."),
-                            ("bound at target", format!("{pixels:.2} px"), "The cut's bound projected at the camera's target distance."),
-                            ("cut time", format!("{:.2} ms", st.cut_ms), "Time of the last re-selection of the cut and its scene."),
-                            ("frame time", self.frame_summary(), "Median time between frames of the studio over the last second, and the median CPU time of a frame (layout, cut, tessellation and submitting the draw)."),
-                            ("picked", self.picked.clone().unwrap_or_else(|| "click the model".into()), "What the last click in the viewport hit on the cut: its type, index and error bound (or domain, layer)."),
-                        ] {
-                            ui.label(label).on_hover_text(hint);
-                            ui.label(value);
-                            ui.end_row();
-                        }
-                    });
-                }
-                if let Some(live) = built.live.as_ref().filter(|l| l.has_errors())
-                    && self.heat
-                    && self.view.shows_lod()
-                {
+                let live = &built.live;
+                ui.separator();
+                ui.label(egui::RichText::new("Cut").strong());
+                let st = live.stats;
+                let pixels = self.viewport.core_view().pixels(
+                    st.error_bound,
+                    self.viewport.camera.target,
+                    0.0,
+                );
+                egui::Grid::new("cut grid").num_columns(2).striped(true).show(ui, |ui| {
+                    let diagonal = current.scene.bounds().diagonal().max(f32::MIN_POSITIVE);
+                    for (label, value, hint) in [
+                        ("cut triangles", st.triangles.to_string(), "Triangles on the current cut."),
+                        ("cut points", st.points.to_string(), "Point primitives (discs) on the current cut."),
+                        ("cut splats", st.splats.to_string(), "Textured domain primitives on the current cut."),
+                        ("layer triangles", st.layer_triangles.to_string(), "Triangles of the translucent voxel layers."),
+                        ("cut bound", bound_text(st.error_bound, diagonal), "The cut's object-space error bound (max over its elements); unbounded where there is no input surface to certify against (an implicit solid, a volume)."),
+                        ("bound is", st.error_bound_kind.name().to_string(), "Certified: no point of the cut or of the original lies farther than the bound from the other (a dense measurement never exceeds it). Estimate: a measure of the method's own (AMG: the largest distance of a domain's points to its splat's plane), not a bound on the distance to the original."),
+                        ("bound at target", format!("{pixels:.2} px"), "The cut's bound projected at the camera's target distance."),
+                        ("cut time", format!("{:.2} ms", st.cut_ms), "Time of the last re-selection of the cut and its scene."),
+                        ("frame time", self.frame_summary(), "Median time between frames of the studio over the last second, and the median CPU time of a frame (layout, cut, tessellation and submitting the draw)."),
+                        ("picked", self.picked.clone().unwrap_or_else(|| "click the model".into()), "What the last click in the viewport hit on the cut: its type, index and error bound (or domain, layer)."),
+                    ] {
+                        ui.label(label).on_hover_text(hint);
+                        ui.label(value);
+                        ui.end_row();
+                    }
+                });
+                if live.has_errors() && self.heat && self.view.shows_lod() {
                     ui.add_space(4.0);
                     ui.label("error bound per primitive");
                     heatmap::legend(ui, &build::length(live.stats.error_bound));
                 }
             }
         });
+    }
+}
+
+/// A bound and its share of the diagonal ("unbounded" alone when infinite).
+fn bound_text(bound: f32, diagonal: f32) -> String {
+    match bound.is_finite() {
+        true => format!(
+            "{} ({:.3} %)",
+            build::length(bound),
+            100.0 * bound / diagonal
+        ),
+        false => build::length(bound),
     }
 }

@@ -87,7 +87,7 @@ impl StudioApp {
                 changed |= self.methods.merge_tree.ui(ui).0;
             }
         }
-        if self.result.as_ref().is_some_and(|b| b.live.is_some()) {
+        if self.result.as_ref().is_some_and(|b| b.live.has_levels()) {
             ui.add_space(4.0);
             ui.label("Cut").on_hover_text(
                 "The built hierarchy is cut live for the camera: no rebuild needed.",
@@ -113,17 +113,17 @@ impl StudioApp {
             let can_export = self.result.is_some() && self.export.is_none();
             let export = ui
                 .add_enabled(can_export, egui::Button::new("Export…"))
-                .on_hover_text("Save the simplified mesh as glb, obj or ply.")
+                .on_hover_text("Save what is on screen: glb holds triangles, points, splats and layers; obj and ply get the points in a .points.ply beside them.")
                 .on_disabled_hover_text("Build a LOD first.");
             if export.clicked() {
                 self.export_dialog(ui.ctx());
             }
             let can_save = self.export.is_none()
-                && self.result.as_ref().is_some_and(|b| b.live.is_some());
+                && self.result.as_ref().is_some_and(|b| b.live.has_levels());
             let save = ui
                 .add_enabled(can_save, egui::Button::new("Save hierarchy…"))
                 .on_hover_text("Save the built hierarchy (versioned, checksummed .lodh) to reopen it later without rebuilding.")
-                .on_disabled_hover_text("Build a hybrid, merge-tree or voxel-pyramid hierarchy first.");
+                .on_disabled_hover_text("Build a hierarchy first (a single voxel level is none: build the whole pyramid).");
             if save.clicked() {
                 self.save_hierarchy_dialog(ui.ctx());
             }

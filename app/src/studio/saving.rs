@@ -7,6 +7,10 @@ use crate::export::{self, Saved};
 use crate::job::{Job, Poll};
 use crate::settings::Method;
 
+/// Why Save hierarchy has nothing to write.
+const NOTHING_TO_SAVE: &str = "Nothing to save: build a hierarchy first (a single voxel \
+    level is no hierarchy; build the whole pyramid to save one)";
+
 impl StudioApp {
     /// Runs `write` (which may show a dialog) on the last result, on a worker.
     pub(super) fn start_export(
@@ -21,14 +25,8 @@ impl StudioApp {
             self.error("Nothing to export yet: build a LOD first".into());
             return;
         };
-        // What is on screen: a live cut, every primitive of it, or the built mesh.
-        let set = match &built.live {
-            Some(live) => live.draw_set().clone(),
-            None => lodstudio_core::lod::DrawSet {
-                mesh: built.mesh().clone(),
-                ..Default::default()
-            },
-        };
+        // What is on screen: the live cut, every primitive of it.
+        let set = built.live.draw_set().clone();
         match Job::spawn("export", "Exporting".into(), ctx, move |_| Ok(write(&set))) {
             Ok(job) => self.export = Some(job),
             Err(e) => self.error(format!("cannot start the export: {e}")),
@@ -46,7 +44,7 @@ impl StudioApp {
     /// The running result's hierarchy as saved-hierarchy bytes, with the shown
     /// parameters of its method.
     fn hierarchy_bytes(&self) -> Option<Vec<u8>> {
-        let live = self.result.as_ref()?.live.as_ref()?;
+        let live = &self.result.as_ref()?.live;
         let m = &self.methods;
         let params = match m.method {
             Method::Hybrid => serde_json::json!({"kappa": m.hybrid.kappa, "tau": m.hybrid.tau}),
@@ -72,19 +70,13 @@ impl StudioApp {
         let path = path.into();
         match self.hierarchy_bytes() {
             Some(bytes) => self.spawn_save(ctx, move || export::write_bytes(&bytes, &path)),
-            None => self.error(
-                "Nothing to save: only whole hierarchies save (hybrid, merge tree, voxel pyramid)"
-                    .into(),
-            ),
+            None => self.error(NOTHING_TO_SAVE.into()),
         }
     }
 
     pub(super) fn save_hierarchy_dialog(&mut self, ctx: &egui::Context) {
         let (Some(current), Some(bytes)) = (&self.current, self.hierarchy_bytes()) else {
-            self.error(
-                "Nothing to save: only whole hierarchies save (hybrid, merge tree, voxel pyramid)"
-                    .into(),
-            );
+            self.error(NOTHING_TO_SAVE.into());
             return;
         };
         let name = format!(

@@ -24,10 +24,7 @@ impl StudioApp {
     /// Original / simplified toggle and the heat-map switch above the viewport.
     pub(super) fn view_bar(&mut self, ui: &mut egui::Ui) {
         let has_result = self.result.is_some();
-        let has_heat = self
-            .result
-            .as_ref()
-            .is_some_and(|r| r.live.as_ref().is_some_and(|l| l.has_errors()));
+        let has_heat = self.result.as_ref().is_some_and(|r| r.live.has_errors());
         // Without a result the original is what is shown, whatever was chosen.
         let mut shown = if has_result {
             self.view
@@ -67,7 +64,7 @@ impl StudioApp {
                         );
                     });
                     ui.separator();
-                    let live = self.result.as_ref().is_some_and(|b| b.live.is_some());
+                    let live = self.result.is_some();
                     ui.add_enabled(
                         live,
                         egui::Checkbox::new(&mut self.by_type, "Colour by type"),
@@ -75,7 +72,7 @@ impl StudioApp {
                     .on_hover_text("Triangles orange, points blue; splats keep their textures.")
                     .on_disabled_hover_text("Build a hierarchy first.");
                     let region = self.result.as_ref().and_then(|b| {
-                        let live = b.live.as_ref()?;
+                        let live = &b.live;
                         live_cut::region_name(live.method()).filter(|_| live.has_regions())
                     });
                     ui.add_enabled(

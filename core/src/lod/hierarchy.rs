@@ -30,6 +30,11 @@ pub trait Hierarchy: Send + Sync {
     fn set_knobs(&mut self, _knobs: &super::Knobs) -> bool {
         false
     }
+    /// Whether it has levels to choose between; a single extracted level is
+    /// a hierarchy of one (the tolerance changes nothing, nothing to save).
+    fn has_levels(&self) -> bool {
+        true
+    }
     /// The built hierarchy in a saved-hierarchy file with `params` (see
     /// `io::hierarchy_file`); `None` for hierarchies that do not save.
     fn save(&self, _params: &serde_json::Value) -> Option<Vec<u8>> {

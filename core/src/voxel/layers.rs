@@ -16,9 +16,10 @@
 use glam::Vec3;
 
 use super::{DENSITY_ISO, Filter, filter, marching_cubes};
-use crate::geom::Volume;
+use crate::geom::{TriMesh, Volume};
 use crate::lod::{DrawSet, Hierarchy, Layer};
 use crate::progress::{Cancelled, Progress};
+use crate::simplify::{BoundOptions, Original};
 use crate::view::{Tolerance, View};
 
 /// Samples of the profile per filter radius.
@@ -208,13 +209,45 @@ pub fn layered_level(
     })
 }
 
-/// A multi-layered level on its volume grid: the hierarchy the studio shows,
+/// One extracted level on its volume grid, as a hierarchy of one: a single
+/// surface is drawn opaque; several layers (§3) are translucent and
 /// re-ordered back to front for every view.
 #[derive(Debug, Clone)]
 pub struct Layered {
     pub layers: Vec<Layer>,
     pub origin: Vec3,
     pub spacing: Vec3,
+    /// Certified two-sided Hausdorff bound of the layers against the input
+    /// surface ([`Layered::certify`]); infinite while there is none (an
+    /// implicit solid or a volume has no surface to measure against).
+    pub error_bound: f32,
+}
+
+impl Layered {
+    /// `layers` on the grid of `density`, not certified yet.
+    pub fn new(layers: Vec<Layer>, density: &Volume) -> Layered {
+        Layered {
+            layers,
+            origin: density.origin,
+            spacing: density.spacing,
+            error_bound: f32::INFINITY,
+        }
+    }
+
+    /// Certifies the level against the input surface `reference` with the
+    /// simplifier's machinery (as the pyramid's levels are): every layer is
+    /// drawn, so the bound covers all of them.
+    pub fn certify(&mut self, reference: &TriMesh, progress: &Progress) -> Result<(), Cancelled> {
+        let mut all = TriMesh::default();
+        for layer in &self.layers {
+            all.append(&layer.mesh);
+        }
+        progress.stage("certifying the level's bound");
+        let original = Original::new(reference);
+        let opts = BoundOptions::for_diagonal(reference.bounds().diagonal());
+        self.error_bound = super::pyramid::level_bound(&original, &all, &opts, progress)?;
+        Ok(())
+    }
 }
 
 impl Hierarchy for Layered {
@@ -229,27 +262,83 @@ impl Hierarchy for Layered {
         if b.is_empty() { 0.0 } else { b.diagonal() }
     }
 
-    /// The layers are one level: the tolerance does not change them, the view
-    /// orders them.
+    /// The level is the only one: the tolerance does not change it, the view
+    /// orders its layers.
     fn select(&mut self, view: &View, _tolerance: Tolerance) -> DrawSet {
-        DrawSet {
-            layer_order: back_to_front(&self.layers, self.origin, self.spacing, view),
-            layers: self.layers.clone(),
-            ..Default::default()
+        let bound = |set: DrawSet| DrawSet {
+            error_bound: self.error_bound,
+            ..set
+        };
+        match &self.layers[..] {
+            [one] => bound(DrawSet {
+                mesh: one.mesh.clone(),
+                ..Default::default()
+            }),
+            layers => bound(DrawSet {
+                layer_order: back_to_front(layers, self.origin, self.spacing, view),
+                layers: layers.to_vec(),
+                ..Default::default()
+            }),
         }
     }
 
-    /// The order changes only with the slicing axis and its direction.
+    /// The order changes only with the slicing axis and its direction (one
+    /// surface: never).
     fn view_key(&self, view: &View, _tolerance: Tolerance) -> Option<u64> {
+        if self.layers.len() == 1 {
+            return Some(0);
+        }
         let f = view.forward();
         let axis = f.abs().max_position();
         Some(2 * axis as u64 + u64::from(f[axis] > 0.0))
+    }
+
+    fn has_levels(&self) -> bool {
+        false
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_level_of_one_surface_is_opaque_and_its_bound_holds() {
+        let torus = crate::builtins::torus(1.0, 0.4, 48, 24);
+        let solid = crate::implicit::MeshSolid::new(&torus);
+        let source = super::super::Source::Solid(&solid);
+        let progress = Progress::new();
+        let f = super::super::density(source, 32, 1, 1.5, Filter::Gaussian, &progress)
+            .expect("not cancelled");
+        let built = layered_level(&f, (32, 1.5), Filter::Gaussian, 0.5, DENSITY_ISO, &progress)
+            .expect("not cancelled");
+        let mut level = Layered::new(built.layers, &f);
+        let view = View::orbit(Vec3::ZERO, 4.0, 0.3, 0.2);
+        let tolerance = Tolerance::Pixels(1.0);
+        assert!(
+            level.select(&view, tolerance).error_bound.is_infinite(),
+            "not certified yet"
+        );
+        level.certify(&torus, &progress).expect("not cancelled");
+        let set = level.select(&view, tolerance);
+        assert!(
+            set.layers.is_empty() && !set.mesh.triangles.is_empty(),
+            "opaque"
+        );
+        assert!(!level.has_levels());
+        assert_eq!(level.view_key(&view, tolerance), Some(0));
+        // The certified bound is at least a dense two-sided measurement.
+        let opts = crate::distance::SamplingOptions {
+            samples: 40_000,
+            ..Default::default()
+        };
+        let measured = crate::distance::hausdorff_mesh_mesh(&torus, &set.mesh, &opts).two_sided();
+        assert!(
+            set.error_bound >= measured && set.error_bound < 0.25,
+            "bound {} vs measured {measured}",
+            set.error_bound
+        );
+    }
 
     #[test]
     fn profiles_fall_from_one_to_zero_through_a_half() {
