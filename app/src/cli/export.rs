@@ -307,6 +307,7 @@ fn export_one(
     let radius = 0.5 * diag;
     // p pixels at coverage C: e = p · 2r / (H · C).
     let pixels_to_error = |p: f32| p * 2.0 * radius / (args.viewport_height * args.coverage);
+    let triangles = mesh.triangles.len();
     let mut lods = match args.method {
         Method::EdgeCollapse => simplify_lods(args, items, &mesh, pixels_to_error)?,
         Method::Amg => {
@@ -315,12 +316,22 @@ fn export_one(
                 None => lodstudio_core::amg::point_set(&Model::Mesh(mesh.clone()))
                     .ok_or_else(|| CliError::BadInput("no points to decompose".into()))?,
             };
-            let hierarchy = build_hierarchy(args, &mesh, Some(&points))?;
+            let hierarchy = amg_hierarchy(&points)?;
             hierarchy_lods(hierarchy, items, points.positions.len(), pixels_to_error)?
         }
-        Method::Hybrid | Method::MergeTree | Method::Voxel => {
-            let hierarchy = build_hierarchy(args, &mesh, None)?;
-            hierarchy_lods(hierarchy, items, mesh.triangles.len(), pixels_to_error)?
+        Method::Hybrid => hierarchy_lods(
+            hybrid_hierarchy(args, &mesh)?,
+            items,
+            triangles,
+            pixels_to_error,
+        )?,
+        Method::MergeTree => {
+            let hierarchy = merge_tree_hierarchy(&mesh)?;
+            hierarchy_lods(hierarchy, items, triangles, pixels_to_error)?
+        }
+        Method::Voxel => {
+            let hierarchy = voxel_hierarchy(args, &mesh)?;
+            hierarchy_lods(hierarchy, items, triangles, pixels_to_error)?
         }
     };
     // Decreasing quality: increasing bound, then decreasing primitive count.
@@ -379,6 +390,10 @@ fn export_one(
 }
 
 /// Edge collapse: every LOD simplified from the original, one thread each.
+/// Each equals the prefix of the progressive collapse at its count (the
+/// `progressive` tests check it triangle for triangle); fresh runs in
+/// parallel are faster than recording the whole sequence with a bound per
+/// step (the dragon: 3.5 s a run, 46 s to record; BENCHMARKS.md).
 fn simplify_lods(
     args: &ExportArgs,
     items: &[(String, LodTolerance)],
@@ -440,70 +455,68 @@ fn simplify_lods(
         .collect()
 }
 
-/// The hierarchy `args.method` builds on `mesh` (or on `points`, AMG), as
-/// every other part of lodstudio cuts it.
-fn build_hierarchy(
-    args: &ExportArgs,
-    mesh: &lodstudio_core::TriMesh,
-    points: Option<&lodstudio_core::PointSet>,
-) -> Result<Box<dyn lodstudio_core::lod::Hierarchy>, CliError> {
-    use std::sync::Arc;
+/// A hierarchy built for export, as every other part of lodstudio cuts it.
+type Built = Result<Box<dyn lodstudio_core::lod::Hierarchy>, CliError>;
+
+fn cancelled(_: lodstudio_core::progress::Cancelled) -> CliError {
+    CliError::Failure("cancelled".into())
+}
+
+/// The hybrid MRG of `mesh` with `--kappa` and `--tau`.
+fn hybrid_hierarchy(args: &ExportArgs, mesh: &lodstudio_core::TriMesh) -> Built {
+    let opts = lodstudio_core::hybrid::HybridOptions {
+        kappa: args.kappa,
+        tau: args.tau,
+        ..Default::default()
+    };
+    opts.validate().map_err(CliError::BadInput)?;
+    let mrg = lodstudio_core::hybrid::build(mesh, &opts, &Progress::new()).map_err(cancelled)?;
+    Ok(Box::new(lodstudio_core::hybrid::HybridCut::new(
+        std::sync::Arc::new(mrg),
+    )))
+}
+
+/// The merge tree of `mesh` with the default build options and criteria.
+fn merge_tree_hierarchy(mesh: &lodstudio_core::TriMesh) -> Built {
+    let tree = lodstudio_core::mergetree::build(mesh, &Default::default(), &Progress::new())
+        .map_err(cancelled)?;
+    Ok(Box::new(lodstudio_core::mergetree::MergeTreeView::new(
+        std::sync::Arc::new(tree),
+        Default::default(),
+    )))
+}
+
+/// The pyramid of the mesh's solid, each level certified against the input.
+fn voxel_hierarchy(args: &ExportArgs, mesh: &lodstudio_core::TriMesh) -> Built {
+    use lodstudio_core::voxel::{Filter, Pyramid, Source, pyramid::PyramidCut};
+    let resolutions = lodstudio_core::voxel::RESOLUTION_RANGE;
+    if !resolutions.contains(&args.resolution) {
+        return Err(CliError::BadInput(format!(
+            "--resolution must be in {resolutions:?}, got {}",
+            args.resolution
+        )));
+    }
     let progress = Progress::new();
-    let failed = |_| CliError::Failure("cancelled".into());
-    Ok(match args.method {
-        Method::Hybrid => {
-            let opts = lodstudio_core::hybrid::HybridOptions {
-                kappa: args.kappa,
-                tau: args.tau,
-                ..Default::default()
-            };
-            opts.validate().map_err(CliError::BadInput)?;
-            let mrg = lodstudio_core::hybrid::build(mesh, &opts, &progress).map_err(failed)?;
-            Box::new(lodstudio_core::hybrid::HybridCut::new(Arc::new(mrg)))
-        }
-        Method::MergeTree => {
-            let tree = lodstudio_core::mergetree::build(mesh, &Default::default(), &progress)
-                .map_err(failed)?;
-            Box::new(lodstudio_core::mergetree::MergeTreeView::new(
-                Arc::new(tree),
-                Default::default(),
-            ))
-        }
-        // The pyramid of the mesh's solid, each level certified against the input.
-        Method::Voxel => {
-            use lodstudio_core::voxel::{Filter, Pyramid, Source, pyramid::PyramidCut};
-            let resolutions = lodstudio_core::voxel::RESOLUTION_RANGE;
-            if !resolutions.contains(&args.resolution) {
-                return Err(CliError::BadInput(format!(
-                    "--resolution must be in {resolutions:?}, got {}",
-                    args.resolution
-                )));
-            }
-            let solid = lodstudio_core::implicit::MeshSolid::new(mesh);
-            let source = Source::Solid(&solid);
-            let mut pyramid =
-                Pyramid::build(source, args.resolution, 1.0, Filter::Gaussian, &progress)
-                    .map_err(failed)?;
-            pyramid
-                .certify(source.surface(), &progress)
-                .map_err(failed)?;
-            Box::new(PyramidCut::new(pyramid, None))
-        }
-        // The multiscale of the points (a mesh's vertices), splats at the median radius.
-        Method::Amg => {
-            use lodstudio_core::amg::{self, AmgError, AmgOptions};
-            let points =
-                points.ok_or_else(|| CliError::BadInput("no points to decompose".into()))?;
-            let ms =
-                amg::decompose(points, &AmgOptions::default(), &progress).map_err(|e| match e {
-                    AmgError::BadInput(m) => CliError::BadInput(m),
-                    AmgError::Cancelled => CliError::Failure("cancelled".into()),
-                })?;
-            let texel = ms.default_texel();
-            Box::new(amg::AmgHierarchy::new(ms, texel))
-        }
-        Method::EdgeCollapse => unreachable!("edge-collapse LODs are simplified from the original"),
-    })
+    let solid = lodstudio_core::implicit::MeshSolid::new(mesh);
+    let source = Source::Solid(&solid);
+    let mut pyramid = Pyramid::build(source, args.resolution, 1.0, Filter::Gaussian, &progress)
+        .map_err(cancelled)?;
+    pyramid
+        .certify(source.surface(), &progress)
+        .map_err(cancelled)?;
+    Ok(Box::new(PyramidCut::new(pyramid, None)))
+}
+
+/// The multiscale of the points (a mesh's vertices), splats at the median radius.
+fn amg_hierarchy(points: &lodstudio_core::PointSet) -> Built {
+    use lodstudio_core::amg::{self, AmgError, AmgOptions};
+    let ms =
+        amg::decompose(points, &AmgOptions::default(), &Progress::new()).map_err(|e| match e {
+            AmgError::BadInput(m) => CliError::BadInput(m),
+            AmgError::Cancelled => CliError::Failure("cancelled".into()),
+        })?;
+    let texel = ms.default_texel();
+    Ok(Box::new(amg::AmgHierarchy::new(ms, texel)))
 }
 
 /// Hybrid, merge tree, voxel pyramid, AMG: one hierarchy built once, and an
