@@ -230,8 +230,12 @@ pub struct PyramidCut {
     pub pyramid: Pyramid,
     /// The explicit override: a continuous position (0 = finest).
     pub position: Option<f32>,
-    /// The level last extracted and its position (re-extracted on a move).
-    cached: Option<(f32, TriMesh)>,
+    /// The level last extracted, its position and its bound (re-extracted
+    /// and re-certified on a move).
+    cached: Option<(f32, TriMesh, f32)>,
+    /// The finest level's surface, extracted once: what in-between levels
+    /// are certified against.
+    finest: Option<TriMesh>,
 }
 
 impl PyramidCut {
@@ -240,7 +244,34 @@ impl PyramidCut {
             pyramid,
             position,
             cached: None,
+            finest: None,
         }
+    }
+
+    /// A certified bound of the in-between level `mesh` by the triangle
+    /// inequality: its certified distance to the finest level, plus the
+    /// finest level's own bound (infinite before [`Pyramid::certify`]).
+    /// Certifying against the finest level needs no input surface, so
+    /// reopened pyramids certify theirs too.
+    fn in_between_bound(&mut self, mesh: &TriMesh) -> f32 {
+        let Some(&finest_bound) = self.pyramid.error_bounds.first() else {
+            return f32::INFINITY;
+        };
+        let progress = Progress::new();
+        let opts = BoundOptions::for_diagonal(self.diagonal());
+        let pyramid = &self.pyramid;
+        let finest = self.finest.get_or_insert_with(|| {
+            pyramid
+                .level(0, &progress)
+                .map(|l| l.mesh)
+                .unwrap_or_default()
+        });
+        if finest.triangles.is_empty() {
+            return f32::INFINITY;
+        }
+        // Never cancelled here: the bound stands or is infinite.
+        level_bound(&Original::new(finest), mesh, &opts, &progress)
+            .map_or(f32::INFINITY, |d| d + finest_bound)
     }
 
     /// The position a cut shows.
@@ -268,26 +299,27 @@ impl Hierarchy for PyramidCut {
         crate::lod::Method::Voxel
     }
 
-    /// A whole level carries its certified bound; an in-between one has
-    /// none here (infinite), as certifying it would cost a slider move.
+    /// A whole level carries its certified bound; an in-between one is
+    /// certified when it is extracted ([`PyramidCut::in_between_bound`]).
     fn select(&mut self, view: &View, tolerance: Tolerance) -> DrawSet {
         let t = self.position_for(view, tolerance);
-        if self.cached.as_ref().is_none_or(|(at, _)| *at != t) {
+        if self.cached.as_ref().is_none_or(|(at, ..)| *at != t) {
             // Extraction is never cancelled here; an empty mesh stands in if it were.
             let level = self.pyramid.in_between(t, &Progress::new());
-            self.cached = Some((t, level.map(|l| l.mesh).unwrap_or_default()));
+            let mesh = level.map(|l| l.mesh).unwrap_or_default();
+            let bound = match self.pyramid.error_bounds.get(t as usize) {
+                Some(b) if t.fract() == 0.0 => *b,
+                _ => self.in_between_bound(&mesh),
+            };
+            self.cached = Some((t, mesh, bound));
         }
-        let whole = t.fract() == 0.0;
+        let (mesh, error_bound) = self
+            .cached
+            .as_ref()
+            .map_or((TriMesh::default(), f32::INFINITY), |(_, m, b)| (m.clone(), *b));
         DrawSet {
-            mesh: self
-                .cached
-                .as_ref()
-                .map(|(_, m)| m.clone())
-                .unwrap_or_default(),
-            error_bound: match self.pyramid.error_bounds.get(t as usize) {
-                Some(b) if whole => *b,
-                _ => f32::INFINITY,
-            },
+            mesh,
+            error_bound,
             ..Default::default()
         }
     }
@@ -398,6 +430,35 @@ mod tests {
             ..Default::default()
         });
         assert_eq!(cut.select(&view, tol).mesh, mid.mesh);
+    }
+
+    #[test]
+    fn in_between_levels_carry_a_certified_bound() {
+        let torus = crate::builtins::torus(1.0, 0.4, 48, 24);
+        let solid = crate::implicit::MeshSolid::new(&torus);
+        let source = Source::Solid(&solid);
+        let p = Progress::new();
+        let mut pyr = Pyramid::build(source, 32, 1.5, Filter::Gaussian, &p).unwrap();
+        let view = View::orbit(Vec3::ZERO, 4.0, 0.3, 0.2);
+        let tol = Tolerance::Pixels(1.0);
+        let mut uncertified = PyramidCut::new(pyr.clone(), Some(0.5));
+        assert!(uncertified.select(&view, tol).error_bound.is_infinite());
+        pyr.certify(source.surface(), &p).unwrap();
+        let mut cut = PyramidCut::new(pyr.clone(), Some(0.5));
+        let set = cut.select(&view, tol);
+        // Between its neighbours' bounds plus the step to the finest level:
+        // finite, and at least a dense measurement against the input.
+        let opts = crate::distance::SamplingOptions {
+            samples: 40_000,
+            ..Default::default()
+        };
+        let measured = crate::distance::hausdorff_mesh_mesh(&torus, &set.mesh, &opts).two_sided();
+        assert!(
+            set.error_bound.is_finite() && set.error_bound >= measured,
+            "bound {} vs measured {measured}",
+            set.error_bound
+        );
+        assert!(set.error_bound >= pyr.error_bounds[0]);
     }
 
     #[test]
