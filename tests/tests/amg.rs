@@ -85,3 +85,56 @@ fn bad_amg_arguments_exit_2_with_one_line() {
         assert!(!err.contains("panicked"), "{args:?}: {err}");
     }
 }
+
+/// The plane error AMG reports (an estimate: how flat each domain is) is
+/// what the drawn splats show: recomputed here from each splat's plane and
+/// its domain's points, it agrees; on the octahedron's 8-domain level every
+/// splat lies on a face (normal within 3° of the face's) and no point is
+/// farther than 0.1 from its splat's plane.
+#[test]
+fn plane_errors_are_the_distances_of_the_domains_to_their_splats() {
+    use lodstudio_core::amg;
+    let p = lodstudio_core::Progress::new();
+    let lodstudio_core::Model::Points(points) =
+        lodstudio_core::builtins::build("octahedron-points", &p).unwrap()
+    else {
+        panic!("octahedron-points is a point set");
+    };
+    let ms = amg::decompose(&points, &Default::default(), &p).unwrap();
+    let levels = ms.coarsening.level_sizes().len();
+    let mut faces_checked = false;
+    for level in 1..levels {
+        let domains = ms.domains(level);
+        let prims = amg::primitives(&ms, level, ms.default_texel(), &p).unwrap();
+        assert_eq!(prims.splats.len(), domains.len(), "level {level}");
+        for (splat, &reported) in prims.splats.iter().zip(&prims.errors) {
+            let measured = domains[splat.domain]
+                .iter()
+                .map(|&(i, _)| {
+                    (points.positions[i as usize] - splat.center)
+                        .dot(splat.normal)
+                        .abs()
+                })
+                .fold(0.0f32, f32::max);
+            assert!(
+                (measured - reported).abs() <= 1e-4 * (1.0 + reported),
+                "level {level} domain {}: reported {reported}, measured {measured}",
+                splat.domain
+            );
+        }
+        if domains.len() == 8 {
+            faces_checked = true;
+            for splat in &prims.splats {
+                let face = splat.normal.signum() / 3f32.sqrt();
+                assert!(
+                    splat.normal.dot(face) > 3f32.to_radians().cos(),
+                    "{:?}",
+                    splat.normal
+                );
+            }
+            let worst = prims.errors.iter().copied().fold(0.0, f32::max);
+            assert!(worst < 0.1, "8 faces, plane error {worst}");
+        }
+    }
+    assert!(faces_checked, "a level of 8 domains");
+}

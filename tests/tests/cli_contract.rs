@@ -132,3 +132,29 @@ fn raw_volumes_need_and_use_their_layout() {
     assert_eq!(out.status.code(), Some(2), "too few bytes for the grid");
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// `open FILE` (and no subcommand) starts the studio; with no display it
+/// says so in one line and exits 1 (a failure of the machine, not of the
+/// input), never panicking; a missing FILE is a usage error (exit 2).
+#[test]
+fn open_without_a_display_fails_cleanly() {
+    for args in [&["open", "builtin:torus"][..], &[][..]] {
+        let out = std::process::Command::new(lodstudio_tests::lodstudio_bin())
+            .args(args)
+            .env_remove("DISPLAY")
+            .env_remove("WAYLAND_DISPLAY")
+            .env_remove("WAYLAND_SOCKET")
+            .output()
+            .expect("run lodstudio");
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(1), "{args:?}: {stderr}");
+        assert!(
+            stderr.starts_with("lodstudio: cannot open the studio window"),
+            "{args:?}: {stderr}"
+        );
+        assert_eq!(stderr.trim().lines().count(), 1, "{stderr}");
+        assert!(!stderr.contains("panicked") && out.stdout.is_empty());
+    }
+    let usage = lodstudio(&["open"]);
+    assert_eq!(usage.status.code(), Some(2));
+}

@@ -317,3 +317,92 @@ fn a_pyramid_says_where_a_thin_part_vanishes() {
         assert_eq!(i >= gone, empty, "level {i}: {j}");
     }
 }
+
+/// The density profile across a plane (voxel paper eq. 5) computed here from
+/// the filters' definitions, not from lodstudio's filtered slab: the
+/// Gaussian is separable (σ = R/3, cut at R along each axis), so across a
+/// plane it is its 1D kernel; the hyper-cone (R − r)·w of eq. 3 has the 1D
+/// marginal ∝ R³/6 − R·x²/2 + |x|³/3. `d(r)` is the mass beyond r, for R = 1.
+fn analytic_profile(filter: lodstudio_core::voxel::Filter) -> impl Fn(f64) -> f64 {
+    let kernel = move |x: f64| match filter {
+        lodstudio_core::voxel::Filter::Gaussian => (-x * x * 4.5).exp(),
+        lodstudio_core::voxel::Filter::Cone => 1.0 / 6.0 - x * x / 2.0 + x.abs().powi(3) / 3.0,
+    };
+    let mass = move |a: f64, b: f64| {
+        let n = 2000;
+        let h = (b - a) / n as f64;
+        // Simpson's rule.
+        (0..=n)
+            .map(|i| {
+                let w = if i == 0 || i == n {
+                    1.0
+                } else if i % 2 == 1 {
+                    4.0
+                } else {
+                    2.0
+                };
+                w * kernel(a + i as f64 * h)
+            })
+            .sum::<f64>()
+            * h
+            / 3.0
+    };
+    let total = mass(-1.0, 1.0);
+    move |r: f64| mass(r.clamp(-1.0, 1.0), 1.0) / total
+}
+
+/// Eq. 6 measured independently: for the isodensities the layer plan chose,
+/// the mean density error of the best piecewise-constant fit with those
+/// values (each r takes the nearest isodensity) over the transition band.
+/// It can only be below the plan's own error; above the plan's claim (or
+/// above δ) would mean the layers leave more error than reported.
+#[test]
+fn the_layers_error_holds_against_the_analytic_density_profile() {
+    use lodstudio_core::voxel::Filter;
+    use lodstudio_core::voxel::layers::{plan, profile};
+    for filter in [Filter::Gaussian, Filter::Cone] {
+        let d = analytic_profile(filter);
+        // The profile lodstudio samples matches the analytic one.
+        let sampled = profile(filter);
+        for (i, &s) in sampled.iter().enumerate() {
+            let r = -1.0 + 2.0 * i as f64 / (sampled.len() - 1) as f64;
+            assert!(
+                (s as f64 - d(r)).abs() < 0.03,
+                "{filter:?} at r = {r}: {s} vs {}",
+                d(r)
+            );
+        }
+        let mut last_layers = 0;
+        for delta in [0.2f32, 0.05, 0.03, 0.015] {
+            let p = plan(&sampled, delta);
+            let steps = 4000;
+            let measured = (0..steps)
+                .map(|i| {
+                    let r = -1.0 + 2.0 * (i as f64 + 0.5) / steps as f64;
+                    let density = d(r);
+                    p.isodensities
+                        .iter()
+                        .map(|&c| (c as f64 - density).abs())
+                        .fold(f64::INFINITY, f64::min)
+                })
+                .sum::<f64>()
+                / steps as f64;
+            let tag = format!("{filter:?} δ {delta}: {} layers", p.isodensities.len());
+            eprintln!("{tag}: reported {}, measured {measured:.4}", p.error);
+            assert!(
+                measured <= p.error as f64 + 0.005,
+                "{tag}: measured {measured} > reported {}",
+                p.error
+            );
+            assert!(
+                measured <= delta as f64 + 0.005,
+                "{tag}: measured {measured} > δ"
+            );
+            assert!(
+                p.isodensities.len() >= last_layers,
+                "{tag}: a tighter δ, fewer layers"
+            );
+            last_layers = p.isodensities.len();
+        }
+    }
+}

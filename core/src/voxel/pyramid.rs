@@ -316,7 +316,9 @@ impl Hierarchy for PyramidCut {
         let (mesh, error_bound) = self
             .cached
             .as_ref()
-            .map_or((TriMesh::default(), f32::INFINITY), |(_, m, b)| (m.clone(), *b));
+            .map_or((TriMesh::default(), f32::INFINITY), |(_, m, b)| {
+                (m.clone(), *b)
+            });
         DrawSet {
             mesh,
             error_bound,
