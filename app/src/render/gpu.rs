@@ -17,7 +17,7 @@ use bytemuck::{Pod, Zeroable};
 use egui_wgpu::{CallbackResources, CallbackTrait, ScreenDescriptor, wgpu};
 
 use super::camera::{Camera, Sphere};
-use super::scene::{Atlas, BlendVertex, Geometry, MeshVertex, PointInstance, Scene, SplatVertex};
+use super::scene::{Atlas, Geometry, MeshVertex, PointInstance, Scene, SplatVertex};
 use super::viewport::SLOTS;
 
 /// Background of the viewport (linear RGB).
@@ -320,7 +320,7 @@ impl ViewportResources {
         });
 
         const MESH_ATTRS: [wgpu::VertexAttribute; 3] =
-            wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3, 2 => Float32x3];
+            wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3, 2 => Float32x4];
         const POINT_ATTRS: [wgpu::VertexAttribute; 4] = wgpu::vertex_attr_array![
             0 => Float32x3, 1 => Float32, 2 => Float32x3, 3 => Float32x3
         ];
@@ -366,15 +366,8 @@ impl ViewportResources {
             min_filter: wgpu::FilterMode::Linear,
             ..Default::default()
         });
-        const BLEND_ATTRS: [wgpu::VertexAttribute; 3] =
-            wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3, 2 => Float32x4];
         const SPLAT_ATTRS: [wgpu::VertexAttribute; 3] =
             wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3, 2 => Float32x2];
-        let blend_buffers = [Some(wgpu::VertexBufferLayout {
-            array_stride: std::mem::size_of::<BlendVertex>() as u64,
-            step_mode: wgpu::VertexStepMode::Vertex,
-            attributes: &BLEND_ATTRS,
-        })];
         let splat_buffers = [Some(wgpu::VertexBufferLayout {
             array_stride: std::mem::size_of::<SplatVertex>() as u64,
             step_mode: wgpu::VertexStepMode::Vertex,
@@ -474,9 +467,9 @@ impl ViewportResources {
         );
         let translucent_pipeline = scene_pipeline(
             "viewport translucent layers",
-            "vs_blend",
-            "fs_blend",
-            &blend_buffers,
+            "vs_mesh",
+            "fs_mesh",
+            &mesh_buffers,
             wgpu::PrimitiveTopology::TriangleList,
             &Style {
                 layout: &scene_layout,
@@ -850,7 +843,7 @@ fn supports_4x(rs: &egui_wgpu::RenderState, format: wgpu::TextureFormat) -> bool
 const SCENE_SHADER: &str = concat!(
     include_str!("shaders/frame.wgsl"),
     include_str!("shaders/scene.wgsl"),
-    include_str!("shaders/blend.wgsl"),
+    include_str!("shaders/splat.wgsl"),
 );
 
 /// Copies the offscreen image 1:1 into egui's pass, encoding to sRGB when the

@@ -28,13 +28,14 @@ const LAYER_COLOR: Vec3 = Vec3::new(0.70, 0.62, 0.52);
 /// Cosine of the crease angle (30°): sharper edges get split normals.
 const CREASE_COS: f32 = 0.866;
 
-/// One mesh or line vertex as the GPU reads it.
+/// One vertex of a lit or unlit triangle or line, opaque (alpha 1) or
+/// translucent (voxel layers, §3, alpha from eq. 4), as the GPU reads it.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]
 pub(super) struct MeshVertex {
     position: [f32; 3],
     normal: [f32; 3],
-    color: [f32; 3],
+    color: [f32; 4],
 }
 
 /// One point, drawn as a screen-facing disc (an instance of a 6-vertex quad).
@@ -47,15 +48,6 @@ pub(super) struct PointInstance {
     /// Zero when the point has no normal: it is then shaded as a small sphere.
     normal: [f32; 3],
     color: [f32; 3],
-}
-
-/// A vertex of a translucent surface (voxel layers, §3): colour with alpha.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Pod, Zeroable)]
-pub(super) struct BlendVertex {
-    position: [f32; 3],
-    normal: [f32; 3],
-    color: [f32; 4],
 }
 
 /// A corner of a textured splat quad (AMG domain primitive); `uv` points into
@@ -94,7 +86,7 @@ pub(super) enum Geometry {
     Lines(Vec<MeshVertex>),
     /// Alpha-blended triangles, drawn in index order (back to front).
     Translucent {
-        vertices: Vec<BlendVertex>,
+        vertices: Vec<MeshVertex>,
         indices: Vec<u32>,
     },
     /// Textured quads blended by their Ψ (AMG paper §4).
@@ -142,6 +134,7 @@ impl Scene {
             color: face
                 .and_then(|f| triangle_colors?.get(faces[f]).copied())
                 .unwrap_or_else(|| colors.map_or(CLAY, |c| c[v]))
+                .extend(1.0)
                 .to_array(),
         };
         let geometry = match (normals, triangle_colors) {
@@ -204,7 +197,7 @@ impl Scene {
             .map(|p| MeshVertex {
                 position: p.to_array(),
                 normal: [0.0; 3],
-                color: BOX_COLOR.to_array(),
+                color: BOX_COLOR.extend(1.0).to_array(),
             })
             .collect();
         Scene {
@@ -323,7 +316,7 @@ impl Scene {
                     .map(|p| MeshVertex {
                         position: p.to_array(),
                         normal: [0.0; 3],
-                        color: OUTLINE_COLOR.to_array(),
+                        color: OUTLINE_COLOR.extend(1.0).to_array(),
                     })
                     .collect();
                 parts.push(Geometry::Lines(lines));
@@ -351,7 +344,7 @@ fn translucent_layers(
     layers: &[Layer],
     order: &[[u32; 2]],
     colors: Option<&[Vec3]>,
-) -> (Vec<BlendVertex>, Vec<u32>) {
+) -> (Vec<MeshVertex>, Vec<u32>) {
     let mut vertices = Vec::new();
     let mut base = Vec::with_capacity(layers.len());
     for (l, layer) in layers.iter().enumerate() {
@@ -368,7 +361,7 @@ fn translucent_layers(
                 .positions
                 .iter()
                 .zip(&normals)
-                .map(|(p, n)| BlendVertex {
+                .map(|(p, n)| MeshVertex {
                     position: p.to_array(),
                     normal: n.normalize_or_zero().to_array(),
                     color: tint.to_array(),
@@ -580,7 +573,7 @@ mod tests {
             let n = Vec3::from_array(v.normal);
             assert!((n.length() - 1.0).abs() < 1e-5);
             assert_eq!(n.abs().max_element(), 1.0, "axis-aligned: {n}");
-            assert_eq!(v.color, CLAY.to_array());
+            assert_eq!(v.color, CLAY.extend(1.0).to_array());
         }
         // A fine sphere has no crease: one vertex per input vertex.
         let sphere = lodstudio_core::builtins::icosphere(Vec3::ZERO, 1.0, 3);
@@ -600,8 +593,8 @@ mod tests {
         let (vertices, indices) = triangles(&scene);
         // Corners 0 and 2 carry both colours: 4 + 2 vertices.
         assert_eq!(vertices.len(), 6);
-        assert_eq!(vertices[indices[0] as usize].color, [1.0, 0.0, 0.0]);
-        assert_eq!(vertices[indices[3] as usize].color, [0.0, 0.0, 1.0]);
+        assert_eq!(vertices[indices[0] as usize].color, [1.0, 0.0, 0.0, 1.0]);
+        assert_eq!(vertices[indices[3] as usize].color, [0.0, 0.0, 1.0, 1.0]);
     }
 
     #[test]

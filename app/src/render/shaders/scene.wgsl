@@ -1,15 +1,16 @@
-// Lit meshes (headlight, two-sided), unlit lines, and points as discs.
+// Lit meshes (headlight, two-sided; opaque, or translucent voxel layers by
+// their alpha), unlit lines, and points as discs.
 
 struct MeshIn {
     @location(0) position: vec3<f32>,
     @location(1) normal: vec3<f32>,
-    @location(2) color: vec3<f32>,
+    @location(2) color: vec4<f32>,
 };
 struct MeshOut {
     @builtin(position) clip: vec4<f32>,
     @location(0) world: vec3<f32>,
     @location(1) normal: vec3<f32>,
-    @location(2) color: vec3<f32>,
+    @location(2) color: vec4<f32>,
 };
 
 @vertex
@@ -24,12 +25,12 @@ fn vs_mesh(v: MeshIn) -> MeshOut {
 
 @fragment
 fn fs_mesh(in: MeshOut) -> @location(0) vec4<f32> {
-    return vec4<f32>(shade(in.color, facing(in.normal, in.world)), 1.0);
+    return vec4<f32>(shade(in.color.rgb, facing(in.normal, in.world)), in.color.a);
 }
 
 @fragment
 fn fs_unlit(in: MeshOut) -> @location(0) vec4<f32> {
-    return vec4<f32>(in.color, 1.0);
+    return in.color;
 }
 
 struct PointIn {

@@ -1,31 +1,4 @@
-// Translucent layers and textured splats (AMG §4).
-struct BlendIn {
-    @location(0) position: vec3<f32>,
-    @location(1) normal: vec3<f32>,
-    @location(2) color: vec4<f32>,
-};
-struct BlendOut {
-    @builtin(position) clip: vec4<f32>,
-    @location(0) world: vec3<f32>,
-    @location(1) normal: vec3<f32>,
-    @location(2) color: vec4<f32>,
-};
-
-@vertex
-fn vs_blend(v: BlendIn) -> BlendOut {
-    var out: BlendOut;
-    out.clip = frame.view_proj * vec4<f32>(v.position, 1.0);
-    out.world = v.position;
-    out.normal = v.normal;
-    out.color = v.color;
-    return out;
-}
-
-@fragment
-fn fs_blend(in: BlendOut) -> @location(0) vec4<f32> {
-    return vec4<f32>(shade(in.color.rgb, facing(in.normal, in.world)), in.color.a);
-}
-
+// Textured splats (AMG §4), blended by their partition of unity Ψ.
 @group(1) @binding(0) var atlas: texture_2d<f32>;
 @group(1) @binding(1) var atlas_sampler: sampler;
 
