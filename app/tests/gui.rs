@@ -1428,3 +1428,84 @@ fn the_threshold_moves_every_method_live() {
         assert!(coarse.error_bound >= fine.error_bound, "{method:?}");
     }
 }
+
+/// The viewport's pixels (RGBA) inside its rect, every other row and column.
+fn viewport_image(harness: &mut Harness<'_, StudioApp>, name: &str) -> Vec<[u8; 4]> {
+    let rect = harness.get_by_label("3D viewport").rect();
+    let image = harness.render().expect("render the studio");
+    save_ppm(image.width(), image.height(), image.as_raw(), name);
+    let (x0, y0) = (rect.min.x.ceil() as u32 + 2, rect.min.y.ceil() as u32 + 2);
+    let (x1, y1) = (rect.max.x.floor() as u32 - 2, rect.max.y.floor() as u32 - 2);
+    let mut out = Vec::new();
+    for y in (y0..y1).step_by(2) {
+        for x in (x0..x1).step_by(2) {
+            out.push(image.get_pixel(x, y).0);
+        }
+    }
+    out
+}
+
+/// How colourful a render is: the share of its non-background pixels whose
+/// channels spread by more than 60 of 255 (the truck's white body and dark
+/// glass are grey; its logo and wheels' texture are not).
+fn colourful(pixels: &[[u8; 4]]) -> f32 {
+    let background = pixels[0];
+    let model: Vec<&[u8; 4]> = pixels.iter().filter(|p| **p != background).collect();
+    let spread = |p: &[u8; 4]| p[..3].iter().max().unwrap() - p[..3].iter().min().unwrap();
+    model.iter().filter(|p| spread(p) > 60).count() as f32 / model.len().max(1) as f32
+}
+
+/// Issue 30's render test: the milk truck's base-colour texture is drawn by
+/// the studio's own renderer, and its edge-collapse LOD0 (0.5 % of the
+/// diagonal) looks like the original through the same camera: few pixels
+/// differ by much, where scrambled UVs would move the logo and colours.
+#[test]
+fn the_textured_truck_and_its_lod_look_alike() {
+    let truck = PathBuf::from(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../shared/models/CesiumMilkTruck.glb"
+    ));
+    let mut harness = studio(Some(truck));
+    wait_for_load(&mut harness);
+    let mut methods = *harness.state().methods();
+    methods.method = Method::EdgeCollapse;
+    methods.auto_rebuild = false;
+    harness.state_mut().set_methods(methods);
+    harness.run();
+    let original = viewport_image(&mut harness, "truck-original");
+    let textured = colourful(&original);
+    methods.edge_collapse.mode = TargetMode::Error;
+    methods.edge_collapse.error_percent = 0.5;
+    harness.state_mut().set_methods(methods);
+    harness.state_mut().build();
+    wait_for_build(&mut harness);
+    assert!(harness.state().view().shows_lod());
+    let triangles = harness
+        .state()
+        .result()
+        .expect("a LOD")
+        .mesh()
+        .triangles
+        .len();
+    let lod = viewport_image(&mut harness, "truck-lod0");
+    let background = original[0];
+    let (mut model, mut far) = (0usize, 0usize);
+    let mut sum = 0u64;
+    for (a, b) in original.iter().zip(&lod) {
+        if *a == background && *b == background {
+            continue;
+        }
+        model += 1;
+        let d = (0..3).map(|k| a[k].abs_diff(b[k]) as u64).max().unwrap();
+        sum += d;
+        far += usize::from(d > 64);
+    }
+    let mean = sum as f32 / model.max(1) as f32;
+    let far = far as f32 / model.max(1) as f32;
+    eprintln!(
+        "truck: {textured:.3} colourful, LOD0 {triangles} triangles: mean difference {mean:.2}, {:.2} % of pixels off by > 64",
+        100.0 * far
+    );
+    assert!(textured > 0.05, "the texture is drawn: {textured}");
+    assert!(mean < 12.0 && far < 0.05, "mean {mean}, far {far}");
+}

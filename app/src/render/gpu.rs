@@ -17,7 +17,9 @@ use bytemuck::{Pod, Zeroable};
 use egui_wgpu::{CallbackResources, CallbackTrait, ScreenDescriptor, wgpu};
 
 use super::camera::{Camera, Sphere};
-use super::scene::{Atlas, Geometry, MeshVertex, PointInstance, Scene, SplatVertex};
+use super::scene::{
+    Atlas, Geometry, MeshVertex, PointInstance, Scene, SplatVertex, TexturedVertex,
+};
 use super::viewport::SLOTS;
 
 /// Background of the viewport (linear RGB).
@@ -207,6 +209,7 @@ enum Drawn {
     Points { instances: u32 },
     Lines { vertices: u32 },
     Translucent { indices: u32 },
+    Textured { indices: u32 },
     Splats { indices: u32 },
 }
 
@@ -215,6 +218,9 @@ struct PartGpu {
     vertices: GrowBuffer,
     indices: GrowBuffer,
     drawn: Option<Drawn>,
+    /// The part's image bound as group 1 (splats, textured meshes), and the
+    /// base-colour texels it was uploaded from (re-used while they are shared).
+    image: Option<(Option<Arc<Atlas>>, wgpu::BindGroup)>,
 }
 
 impl PartGpu {
@@ -223,6 +229,7 @@ impl PartGpu {
             vertices: GrowBuffer::new("viewport vertices", wgpu::BufferUsages::VERTEX),
             indices: GrowBuffer::new("viewport indices", wgpu::BufferUsages::INDEX),
             drawn: None,
+            image: None,
         }
     }
 }
@@ -248,9 +255,13 @@ struct ViewportResources {
     /// overlapping neighbours of a domain blend into their partition of unity.
     splat_depth_pipeline: wgpu::RenderPipeline,
     splat_pipeline: wgpu::RenderPipeline,
+    /// Base-colour textured meshes (glTF materials).
+    textured_pipeline: wgpu::RenderPipeline,
+    /// An image and its sampler, bound as group 1 (splat atlas, base colour).
     atlas_layout: wgpu::BindGroupLayout,
+    /// Splat atlases clamp; base-colour textures repeat (glTF's default wrap).
     atlas_sampler: wgpu::Sampler,
-    atlas_bind_group: Option<wgpu::BindGroup>,
+    repeat_sampler: wgpu::Sampler,
     blit_pipeline: wgpu::RenderPipeline,
     blit_layout: wgpu::BindGroupLayout,
     uniform_buffer: wgpu::Buffer,
@@ -366,6 +377,22 @@ impl ViewportResources {
             min_filter: wgpu::FilterMode::Linear,
             ..Default::default()
         });
+        let repeat_sampler = device.create_sampler(&wgpu::SamplerDescriptor {
+            label: Some("viewport base colour"),
+            address_mode_u: wgpu::AddressMode::Repeat,
+            address_mode_v: wgpu::AddressMode::Repeat,
+            mag_filter: wgpu::FilterMode::Linear,
+            min_filter: wgpu::FilterMode::Linear,
+            ..Default::default()
+        });
+        const TEXTURED_ATTRS: [wgpu::VertexAttribute; 4] = wgpu::vertex_attr_array![
+            0 => Float32x3, 1 => Float32x3, 2 => Float32x4, 3 => Float32x2
+        ];
+        let textured_buffers = [Some(wgpu::VertexBufferLayout {
+            array_stride: std::mem::size_of::<TexturedVertex>() as u64,
+            step_mode: wgpu::VertexStepMode::Vertex,
+            attributes: &TEXTURED_ATTRS,
+        })];
         const SPLAT_ATTRS: [wgpu::VertexAttribute; 3] =
             wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3, 2 => Float32x2];
         let splat_buffers = [Some(wgpu::VertexBufferLayout {
@@ -448,6 +475,18 @@ impl ViewportResources {
             &mesh_buffers,
             wgpu::PrimitiveTopology::TriangleList,
             &opaque,
+        );
+        let textured_pipeline = scene_pipeline(
+            "viewport textured mesh",
+            "vs_textured",
+            "fs_textured",
+            &textured_buffers,
+            wgpu::PrimitiveTopology::TriangleList,
+            &Style {
+                layout: &splat_layout,
+                blend: None,
+                depth_bias: 0,
+            },
         );
         let line_pipeline = scene_pipeline(
             "viewport lines",
@@ -557,9 +596,10 @@ impl ViewportResources {
             translucent_pipeline,
             splat_depth_pipeline,
             splat_pipeline,
+            textured_pipeline,
             atlas_layout,
             atlas_sampler,
-            atlas_bind_group: None,
+            repeat_sampler,
             blit_pipeline,
             blit_layout,
             uniform_buffer,
@@ -648,6 +688,7 @@ impl ViewportResources {
             let PartGpu {
                 vertices: vb,
                 indices: ib,
+                image,
                 ..
             } = gpu;
             let mut indexed = |vertices: &[u8], indices: &[u32]| {
@@ -665,18 +706,32 @@ impl ViewportResources {
                     indexed(bytemuck::cast_slice(vertices), indices)
                         .map(|indices| Drawn::Translucent { indices })
                 }
+                Geometry::Textured {
+                    vertices,
+                    indices,
+                    texture,
+                } => {
+                    let uploaded = image
+                        .as_ref()
+                        .and_then(|(from, _)| from.as_ref())
+                        .is_some_and(|from| Arc::ptr_eq(from, texture));
+                    if !uploaded {
+                        let sampler = &self.repeat_sampler;
+                        let group =
+                            upload_atlas(device, queue, &self.atlas_layout, sampler, texture);
+                        *image = Some((Some(Arc::clone(texture)), group));
+                    }
+                    indexed(bytemuck::cast_slice(vertices), indices)
+                        .map(|indices| Drawn::Textured { indices })
+                }
                 Geometry::Splats {
                     vertices,
                     indices,
                     atlas,
                 } => {
-                    self.atlas_bind_group = Some(upload_atlas(
-                        device,
-                        queue,
-                        &self.atlas_layout,
-                        &self.atlas_sampler,
-                        atlas,
-                    ));
+                    let sampler = &self.atlas_sampler;
+                    let group = upload_atlas(device, queue, &self.atlas_layout, sampler, atlas);
+                    *image = Some((None, group));
                     indexed(bytemuck::cast_slice(vertices), indices)
                         .map(|indices| Drawn::Splats { indices })
                 }
@@ -744,8 +799,14 @@ impl ViewportResources {
                 Drawn::Translucent { indices } => {
                     indexed(&mut pass, &self.translucent_pipeline, indices)
                 }
+                Drawn::Textured { indices } => {
+                    if let Some((_, image)) = &part.image {
+                        pass.set_bind_group(1, image, &[]);
+                        indexed(&mut pass, &self.textured_pipeline, indices);
+                    }
+                }
                 Drawn::Splats { indices } => {
-                    if let Some(atlas) = &self.atlas_bind_group {
+                    if let Some((_, atlas)) = &part.image {
                         pass.set_bind_group(1, atlas, &[]);
                         indexed(&mut pass, &self.splat_depth_pipeline, indices);
                         indexed(&mut pass, &self.splat_pipeline, indices);
@@ -764,7 +825,7 @@ impl ViewportResources {
     }
 }
 
-/// Uploads the splat atlas and binds it with its sampler.
+/// Uploads an image (a splat atlas, a base-colour texture) and binds it with `sampler`.
 fn upload_atlas(
     device: &wgpu::Device,
     queue: &wgpu::Queue,
@@ -839,11 +900,13 @@ fn supports_4x(rs: &egui_wgpu::RenderState, format: wgpu::TextureFormat) -> bool
 
 /// Every scene pipeline's shaders, one module: the frame's uniforms and
 /// shading written once (`frame.wgsl`), lit meshes, lines and point discs
-/// (`scene.wgsl`), translucent layers and textured splats (`blend.wgsl`).
+/// and translucent layers (`scene.wgsl`), splats (`splat.wgsl`, which
+/// declares the image bindings) and base-colour textured meshes (`textured.wgsl`).
 const SCENE_SHADER: &str = concat!(
     include_str!("shaders/frame.wgsl"),
     include_str!("shaders/scene.wgsl"),
     include_str!("shaders/splat.wgsl"),
+    include_str!("shaders/textured.wgsl"),
 );
 
 /// Copies the offscreen image 1:1 into egui's pass, encoding to sRGB when the

@@ -1,6 +1,7 @@
 //! The studio's 3D view, by concept:
 //!
 //! - [`scene`]: models, cuts and previews as GPU-ready geometry (CPU only, tested);
+//! - `texture`: materials' base-colour images, decoded once per image;
 //! - [`camera`]: the orbit / fly camera, its matrices and rays (tested);
 //! - [`gpu`]: pipelines, buffers, uploads and the offscreen render;
 //! - [`viewport`]: the egui widget that ties them together;
@@ -9,6 +10,7 @@
 pub mod camera;
 mod gpu;
 pub mod scene;
+mod texture;
 pub mod viewport;
 
 pub use camera::Camera;

@@ -3,13 +3,16 @@
 //! normals, point discs, lines, translucent layers, textured splats and their
 //! atlas), built once, on a worker if wanted, and uploaded when it changes.
 
+use std::sync::Arc;
+
 use bytemuck::{Pod, Zeroable};
-use glam::Vec3;
+use glam::{Vec3, Vec4};
 use lodstudio_core::geom::{Aabb, PointSet, TriMesh, Volume};
 use lodstudio_core::io::Model;
 use lodstudio_core::lod::{DrawSet, Layer};
 
 use super::camera::Sphere;
+use super::texture::decoded;
 
 /// Surface colour of meshes without vertex colours (linear RGB).
 const CLAY: Vec3 = Vec3::new(0.62, 0.56, 0.50);
@@ -31,11 +34,22 @@ const CREASE_COS: f32 = 0.866;
 /// One vertex of a lit or unlit triangle or line, opaque (alpha 1) or
 /// translucent (voxel layers, §3, alpha from eq. 4), as the GPU reads it.
 #[repr(C)]
-#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+#[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
 pub(super) struct MeshVertex {
     position: [f32; 3],
     normal: [f32; 3],
     color: [f32; 4],
+}
+
+/// A vertex of a mesh whose material has a base-colour texture: the colour
+/// (vertex colour × the material's base colour) multiplies the texture at `uv`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
+pub(super) struct TexturedVertex {
+    position: [f32; 3],
+    normal: [f32; 3],
+    color: [f32; 4],
+    uv: [f32; 2],
 }
 
 /// One point, drawn as a screen-facing disc (an instance of a 6-vertex quad).
@@ -60,7 +74,8 @@ pub(super) struct SplatVertex {
     uv: [f32; 2],
 }
 
-/// All splat textures packed into one RGBA8 image (shelf packing).
+/// An RGBA8 image (sRGB): all splat textures packed into one (shelf
+/// packing), or a material's base-colour texture.
 #[derive(Debug, Clone, Default)]
 pub(super) struct Atlas {
     pub(super) width: u32,
@@ -89,6 +104,13 @@ pub(super) enum Geometry {
         vertices: Vec<MeshVertex>,
         indices: Vec<u32>,
     },
+    /// Lit triangles sampling a material's base-colour texture (shared by
+    /// every scene of the model: it is decoded and uploaded once).
+    Textured {
+        vertices: Vec<TexturedVertex>,
+        indices: Vec<u32>,
+        texture: Arc<Atlas>,
+    },
     /// Textured quads blended by their Ψ (AMG paper §4).
     Splats {
         vertices: Vec<SplatVertex>,
@@ -114,6 +136,15 @@ impl Scene {
     }
 
     fn mesh(mesh: &TriMesh, triangle_colors: Option<&[Vec3]>) -> Scene {
+        // Every corner takes its own side of a UV, normal or colour seam.
+        let unwelded;
+        let mesh = match &mesh.wedges {
+            Some(_) => {
+                unwelded = mesh.unwelded();
+                &unwelded
+            }
+            None => mesh,
+        };
         let n = mesh.positions.len();
         // Valid triangles and, for the colours, their index in the input.
         let (triangles, faces): (Vec<[u32; 3]>, Vec<usize>) = mesh
@@ -125,34 +156,91 @@ impl Scene {
             .unzip();
         let colors = mesh.colors.as_ref().filter(|c| c.len() == n);
         let normals = mesh.normals.as_ref().filter(|v| v.len() == n);
-        let vertex = |v: usize, face: Option<usize>, normal: Vec3| MeshVertex {
-            position: mesh.positions[v].to_array(),
-            normal: normals
-                .map_or(normal, |given| given[v])
-                .normalize_or_zero()
-                .to_array(),
-            color: face
-                .and_then(|f| triangle_colors?.get(faces[f]).copied())
-                .unwrap_or_else(|| colors.map_or(CLAY, |c| c[v]))
-                .extend(1.0)
-                .to_array(),
+        let uvs = mesh.uvs.as_ref().filter(|v| v.len() == n);
+        let material = |f: usize| {
+            let m = mesh.materials.as_ref()?;
+            m.table.get(m.of(mesh.part(faces[f])) as usize)
         };
-        let geometry = match (normals, triangle_colors) {
-            // Given normals and per-vertex colours: the mesh's own vertices serve.
-            (Some(_), None) => Geometry::Triangles {
-                vertices: (0..n).map(|v| vertex(v, None, Vec3::ZERO)).collect(),
-                indices: triangles.into_iter().flatten().collect(),
-            },
-            _ => {
-                let (vertices, indices) =
-                    crease_split(&mesh.positions, &triangles, |v, f, normal| {
-                        vertex(v, Some(f), normal)
-                    });
-                Geometry::Triangles { vertices, indices }
+        // glTF's colour: vertex colour (where the material's vertices had
+        // one) × base colour; clay for meshes without materials.
+        let color = |v: usize, f: usize| -> Vec4 {
+            if let Some(c) = triangle_colors.and_then(|c| c.get(faces[f])) {
+                return c.extend(1.0);
+            }
+            match material(f) {
+                None => colors.map_or(CLAY, |c| c[v]).extend(1.0),
+                Some(m) => {
+                    let vertex = colors
+                        .filter(|_| m.vertex_attributes.colors)
+                        .map_or(Vec3::ONE, |c| c[v]);
+                    Vec4::from_array(m.base_color) * vertex.extend(1.0)
+                }
             }
         };
+        // The texture each triangle samples (none while coloured by value).
+        let texture = |f: usize| {
+            let m = material(f).filter(|m| m.vertex_attributes.uvs)?;
+            uvs.filter(|_| triangle_colors.is_none())?;
+            decoded(m.base_color_texture.as_ref()?)
+        };
+        let mut groups: Vec<(Option<Arc<Atlas>>, Vec<usize>)> = Vec::new();
+        for f in 0..triangles.len() {
+            let tex = texture(f);
+            let same = |g: &Option<Arc<Atlas>>| match (g, &tex) {
+                (Some(a), Some(b)) => Arc::ptr_eq(a, b),
+                (None, None) => true,
+                _ => false,
+            };
+            match groups.iter_mut().find(|(g, _)| same(g)) {
+                Some((_, members)) => members.push(f),
+                None => groups.push((tex, vec![f])),
+            }
+        }
+        let normal = |v: usize, computed: Vec3| {
+            normals
+                .map_or(computed, |given| given[v])
+                .normalize_or_zero()
+                .to_array()
+        };
+        let parts = groups
+            .into_iter()
+            .map(|(tex, members)| {
+                let tris: Vec<[u32; 3]> = members.iter().map(|&f| triangles[f]).collect();
+                let split = normals.is_none();
+                match tex {
+                    None => {
+                        let (vertices, indices) =
+                            crease_split(&mesh.positions, &tris, split, |v, k, computed| {
+                                MeshVertex {
+                                    position: mesh.positions[v].to_array(),
+                                    normal: normal(v, computed),
+                                    color: color(v, members[k]).to_array(),
+                                }
+                            });
+                        Geometry::Triangles { vertices, indices }
+                    }
+                    Some(texture) => {
+                        let uvs = uvs.expect("textured triangles have UVs");
+                        let (vertices, indices) =
+                            crease_split(&mesh.positions, &tris, split, |v, k, computed| {
+                                TexturedVertex {
+                                    position: mesh.positions[v].to_array(),
+                                    normal: normal(v, computed),
+                                    color: color(v, members[k]).to_array(),
+                                    uv: uvs[v].to_array(),
+                                }
+                            });
+                        Geometry::Textured {
+                            vertices,
+                            indices,
+                            texture,
+                        }
+                    }
+                }
+            })
+            .collect();
         Scene {
-            parts: vec![geometry],
+            parts,
             bounds: mesh.bounds(),
         }
     }
@@ -238,9 +326,9 @@ impl Scene {
         self.parts
             .iter()
             .map(|g| match g {
-                Geometry::Triangles { indices, .. } | Geometry::Translucent { indices, .. } => {
-                    indices.len() / 3
-                }
+                Geometry::Triangles { indices, .. }
+                | Geometry::Translucent { indices, .. }
+                | Geometry::Textured { indices, .. } => indices.len() / 3,
                 Geometry::Points(_) | Geometry::Lines(_) | Geometry::Splats { .. } => 0,
             })
             .sum()
@@ -458,24 +546,29 @@ fn splat_quads(set: &DrawSet) -> (Vec<SplatVertex>, Vec<u32>, Atlas) {
     (vertices, indices, atlas)
 }
 
-/// Per-corner normals: each corner averages (area-weighted) the normals of the
+/// Per-corner normals (with `compute_normals`; else `vertex` brings its
+/// own): each corner averages (area-weighted) the normals of the
 /// faces around its vertex that lie within the crease angle of its own face.
 /// `vertex(v, face, normal)` makes the output vertex; corners of one vertex
 /// that come out equal (normal and colour) share it, so smooth meshes keep one
 /// vertex per input vertex; unused vertices are dropped.
-fn crease_split(
+fn crease_split<V: Copy + PartialEq>(
     positions: &[Vec3],
     triangles: &[[u32; 3]],
-    vertex: impl Fn(usize, usize, Vec3) -> MeshVertex,
-) -> (Vec<MeshVertex>, Vec<u32>) {
+    compute_normals: bool,
+    vertex: impl Fn(usize, usize, Vec3) -> V,
+) -> (Vec<V>, Vec<u32>) {
     let n = positions.len();
-    let face_normals: Vec<Vec3> = triangles
-        .iter()
-        .map(|t| {
-            let [a, b, c] = t.map(|v| positions[v as usize]);
-            (b - a).cross(c - a)
-        })
-        .collect();
+    let face_normals: Vec<Vec3> = match compute_normals {
+        true => triangles
+            .iter()
+            .map(|t| {
+                let [a, b, c] = t.map(|v| positions[v as usize]);
+                (b - a).cross(c - a)
+            })
+            .collect(),
+        false => Vec::new(),
+    };
     let unit: Vec<Vec3> = face_normals.iter().map(|f| f.normalize_or_zero()).collect();
     // Faces around each vertex, in compressed rows.
     let mut start = vec![0usize; n + 1];
@@ -502,17 +595,17 @@ fn crease_split(
         let first = vertices.len();
         for &f in around {
             let f = f as usize;
-            let normal: Vec3 = around
-                .iter()
-                .map(|&g| g as usize)
-                .filter(|&g| unit[f].dot(unit[g]) >= CREASE_COS)
-                .map(|g| face_normals[g])
-                .sum();
+            let normal: Vec3 = match compute_normals {
+                true => around
+                    .iter()
+                    .map(|&g| g as usize)
+                    .filter(|&g| unit[f].dot(unit[g]) >= CREASE_COS)
+                    .map(|g| face_normals[g])
+                    .sum(),
+                false => Vec3::ZERO,
+            };
             let out = vertex(v, f, normal);
-            let index = match vertices[first..]
-                .iter()
-                .position(|o: &MeshVertex| o.normal == out.normal && o.color == out.color)
-            {
+            let index = match vertices[first..].iter().position(|o| *o == out) {
                 Some(i) => first + i,
                 None => {
                     vertices.push(out);
@@ -531,6 +624,7 @@ fn crease_split(
 
 #[cfg(test)]
 mod tests {
+    use glam::Vec2;
     use lodstudio_core::lod::{CutPoint, Splat, Texture};
 
     use super::*;
@@ -595,6 +689,98 @@ mod tests {
         assert_eq!(vertices.len(), 6);
         assert_eq!(vertices[indices[0] as usize].color, [1.0, 0.0, 0.0, 1.0]);
         assert_eq!(vertices[indices[3] as usize].color, [0.0, 0.0, 1.0, 1.0]);
+    }
+
+    #[test]
+    fn textured_materials_sample_their_image_with_each_sides_uvs() {
+        use lodstudio_core::geom::{Image, Material, Materials, VertexAttributes, Wedges};
+        let png = lodstudio_core::io::image::encode_png(&Texture {
+            width: 1,
+            height: 1,
+            rgba: vec![[200, 100, 50, 255]],
+        });
+        let image = |bytes: &[u8]| Image {
+            mime_type: "image/png".into(),
+            bytes: bytes.into(),
+            mag_filter: None,
+            min_filter: None,
+            wrap_s: 10497,
+            wrap_t: 10497,
+        };
+        let textured = Material {
+            base_color: [0.5, 1.0, 1.0, 1.0],
+            base_color_texture: Some(image(&png)),
+            vertex_attributes: VertexAttributes {
+                colors: false,
+                uvs: true,
+            },
+            ..Default::default()
+        };
+        let plain = Material {
+            base_color: [0.0, 0.5, 0.0, 1.0],
+            ..Default::default()
+        };
+        // Two triangles sharing the edge 0–2, welded across a UV seam: the
+        // wedges give corners 0 and 2 one UV on each side.
+        let mut mesh = TriMesh::new(
+            vec![Vec3::ZERO, Vec3::X, Vec3::new(1.0, 1.0, 0.0), Vec3::Y],
+            vec![[0, 1, 2], [0, 2, 3]],
+        );
+        mesh.uvs = Some(vec![Vec2::ZERO; 4]);
+        mesh.wedges = Some(Wedges {
+            corners: vec![[0, 1, 2], [3, 4, 5]],
+            vertex: vec![0, 1, 2, 0, 2, 3],
+            normals: None,
+            colors: None,
+            uvs: Some((0..6).map(|w| Vec2::splat(w as f32 / 10.0)).collect()),
+        });
+        mesh.parts = Some(vec![0, 0]);
+        mesh.materials = Some(Materials::single(textured.clone()));
+        let scene = Scene::from_mesh(&mesh);
+        let [
+            Geometry::Textured {
+                vertices,
+                indices,
+                texture,
+            },
+        ] = &scene.parts[..]
+        else {
+            panic!("one textured part");
+        };
+        assert_eq!(texture.rgba, vec![[200, 100, 50, 255]]);
+        let uvs: Vec<[f32; 2]> = indices.iter().map(|&i| vertices[i as usize].uv).collect();
+        let want: Vec<[f32; 2]> = (0..6).map(|w| [w as f32 / 10.0; 2]).collect();
+        assert_eq!(uvs, want, "every corner its own side of the seam");
+        assert_eq!(vertices[0].color, [0.5, 1.0, 1.0, 1.0], "the base colour");
+        // The same image is decoded once for every scene of the model.
+        let again = Scene::from_mesh(&mesh);
+        let [Geometry::Textured { texture: other, .. }] = &again.parts[..] else {
+            panic!("one textured part");
+        };
+        assert!(Arc::ptr_eq(texture, other));
+        // A second, untextured part draws in its base colour; an image that
+        // does not decode leaves its material's base colour alone.
+        mesh.parts = Some(vec![0, 1]);
+        mesh.materials = Some(Materials {
+            table: vec![textured, plain],
+            of_part: vec![0, 1],
+        });
+        let two = Scene::from_mesh(&mesh);
+        assert_eq!(two.parts.len(), 2);
+        let Geometry::Triangles { vertices, .. } = &two.parts[1] else {
+            panic!("the plain part");
+        };
+        assert!(vertices.iter().all(|v| v.color == [0.0, 0.5, 0.0, 1.0]));
+        let mut broken = mesh.clone();
+        broken.materials.as_mut().unwrap().table[0].base_color_texture = Some(image(b"no png"));
+        let shown = Scene::from_mesh(&broken);
+        assert!(
+            shown
+                .parts
+                .iter()
+                .all(|p| matches!(p, Geometry::Triangles { .. }))
+        );
+        assert_eq!(shown.triangle_count(), 2);
     }
 
     #[test]

@@ -377,7 +377,7 @@ impl GltfWriter {
         // Splat textures end at their domain's border: clamp, never repeat.
         let sampler = self
             .sampler(json!({"magFilter": 9729, "minFilter": 9729, "wrapS": 33071, "wrapT": 33071}));
-        self.image(&encode_png(tex), "image/png", sampler)
+        self.image(&super::image::encode_png(tex), "image/png", sampler)
     }
 
     /// The index of sampler `s`, added when new (`null` fields left out).
@@ -546,24 +546,6 @@ pub fn write_lod_chain(lods: &[DrawSet], coverages: &[f32], points_as: PointsAs)
     glb_container(doc.to_string().into_bytes(), bin)
 }
 
-/// An RGBA8 texture as PNG.
-pub(crate) fn encode_png(tex: &Texture) -> Vec<u8> {
-    let (w, h) = (tex.width.max(1), tex.height.max(1));
-    let mut data: Vec<u8> = tex.rgba.concat();
-    data.resize((w * h * 4) as usize, 0);
-    let mut out = Vec::new();
-    let mut enc = png::Encoder::new(&mut out, w, h);
-    enc.set_color(png::ColorType::Rgba);
-    enc.set_depth(png::BitDepth::Eight);
-    // Encoding into memory with a matching size cannot fail.
-    let mut writer = enc.write_header().expect("writing to memory");
-    writer
-        .write_image_data(&data)
-        .expect("size matches the header");
-    drop(writer);
-    out
-}
-
 /// Writes one mesh as a binary glTF (GLB): positions, normals (area-weighted
 /// vertex normals when the mesh has none), vertex colours and UVs when it has
 /// them, and 32-bit indices in one buffer, one node, one scene.
@@ -703,7 +685,7 @@ mod round_trips {
     #[test]
     fn materials_round_trip_one_primitive_per_material_with_their_images() {
         use crate::geom::{AlphaMode, Image, Material, Materials};
-        let png = super::super::gltf_writer::encode_png(&crate::lod::Texture {
+        let png = crate::io::image::encode_png(&crate::lod::Texture {
             width: 2,
             height: 1,
             rgba: vec![[255, 0, 0, 255], [0, 0, 255, 128]],

@@ -9,6 +9,7 @@ mod error;
 pub mod gltf;
 pub mod gltf_writer;
 pub mod hierarchy_file;
+pub mod image;
 pub mod limits;
 pub mod obj;
 pub mod off;

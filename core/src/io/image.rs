@@ -1,0 +1,141 @@
+//! Images as PNG: splat textures encoded for glTF, and a material's
+//! base-colour image decoded to RGBA8 for viewers (exports keep the bytes as
+//! the input stored them). PNG is decoded; other formats are reported, and a
+//! viewer then shows the material's base colour alone.
+
+use crate::geom::Image;
+use crate::lod::Texture;
+
+/// Images larger than this many texels per side are not decoded for display
+/// (no GPU samples them, and a hostile header could ask for gigabytes).
+pub const MAX_SIDE: u32 = 16_384;
+
+/// Decoded texels, row by row from the top (glTF's UV origin), sRGB-encoded.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Rgba {
+    pub width: u32,
+    pub height: u32,
+    pub texels: Vec<[u8; 4]>,
+}
+
+/// An RGBA8 texture as PNG.
+pub fn encode_png(tex: &Texture) -> Vec<u8> {
+    let (w, h) = (tex.width.max(1), tex.height.max(1));
+    let mut data: Vec<u8> = tex.rgba.concat();
+    data.resize((w * h * 4) as usize, 0);
+    let mut out = Vec::new();
+    let mut enc = png::Encoder::new(&mut out, w, h);
+    enc.set_color(png::ColorType::Rgba);
+    enc.set_depth(png::BitDepth::Eight);
+    // Encoding into memory with a matching size cannot fail.
+    let mut writer = enc.write_header().expect("writing to memory");
+    writer
+        .write_image_data(&data)
+        .expect("size matches the header");
+    drop(writer);
+    out
+}
+
+/// Decodes `image` to RGBA8.
+///
+/// # Errors
+/// A message naming the problem: an undecoded format, a damaged or
+/// oversized PNG.
+pub fn decode_rgba(image: &Image) -> Result<Rgba, String> {
+    if image.mime_type != "image/png" {
+        return Err(format!(
+            "{} images are not decoded for display",
+            image.mime_type
+        ));
+    }
+    let mut decoder = png::Decoder::new(std::io::Cursor::new(&image.bytes[..]));
+    decoder.set_transformations(png::Transformations::normalize_to_color8());
+    let mut reader = decoder.read_info().map_err(|e| format!("PNG: {e}"))?;
+    let (width, height) = {
+        let info = reader.info();
+        (info.width, info.height)
+    };
+    if width == 0 || height == 0 || width > MAX_SIDE || height > MAX_SIDE {
+        return Err(format!("PNG of {width}×{height} texels is not shown"));
+    }
+    let size = reader
+        .output_buffer_size()
+        .ok_or_else(|| "PNG: image too large".to_string())?;
+    let mut buf = vec![0u8; size];
+    let frame = reader
+        .next_frame(&mut buf)
+        .map_err(|e| format!("PNG: {e}"))?;
+    let bytes = &buf[..frame.buffer_size()];
+    let texels: Vec<[u8; 4]> = match frame.color_type {
+        png::ColorType::Rgba => bytes
+            .chunks_exact(4)
+            .map(|c| [c[0], c[1], c[2], c[3]])
+            .collect(),
+        png::ColorType::Rgb => bytes
+            .chunks_exact(3)
+            .map(|c| [c[0], c[1], c[2], 255])
+            .collect(),
+        png::ColorType::GrayscaleAlpha => bytes
+            .chunks_exact(2)
+            .map(|c| [c[0], c[0], c[0], c[1]])
+            .collect(),
+        png::ColorType::Grayscale => bytes.iter().map(|&g| [g, g, g, 255]).collect(),
+        png::ColorType::Indexed => return Err("PNG: palette not expanded".into()),
+    };
+    if texels.len() != (width * height) as usize {
+        return Err("PNG: short image data".into());
+    }
+    Ok(Rgba {
+        width,
+        height,
+        texels,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn image(bytes: Vec<u8>, mime: &str) -> Image {
+        Image {
+            mime_type: mime.into(),
+            bytes: bytes.into(),
+            mag_filter: None,
+            min_filter: None,
+            wrap_s: 10497,
+            wrap_t: 10497,
+        }
+    }
+
+    #[test]
+    fn pngs_decode_to_rgba_and_bad_ones_say_why() {
+        let mut png_bytes = Vec::new();
+        {
+            let mut enc = png::Encoder::new(&mut png_bytes, 2, 1);
+            enc.set_color(png::ColorType::Rgb);
+            enc.set_depth(png::BitDepth::Eight);
+            let mut w = enc.write_header().unwrap();
+            w.write_image_data(&[255, 0, 0, 0, 0, 255]).unwrap();
+        }
+        let rgba = decode_rgba(&image(png_bytes.clone(), "image/png")).unwrap();
+        assert_eq!((rgba.width, rgba.height), (2, 1));
+        assert_eq!(rgba.texels, vec![[255, 0, 0, 255], [0, 0, 255, 255]]);
+        // What the glTF writer encodes decodes to the same texels.
+        let texture = Texture {
+            width: 2,
+            height: 2,
+            rgba: vec![
+                [1, 2, 3, 4],
+                [5, 6, 7, 8],
+                [9, 10, 11, 12],
+                [13, 14, 15, 16],
+            ],
+        };
+        let back = decode_rgba(&image(encode_png(&texture), "image/png")).unwrap();
+        assert_eq!(back.texels, texture.rgba);
+        assert!(decode_rgba(&image(png_bytes.clone(), "image/jpeg")).is_err());
+        png_bytes.truncate(png_bytes.len() / 2);
+        assert!(decode_rgba(&image(png_bytes, "image/png")).is_err());
+        assert!(decode_rgba(&image(b"not a png".to_vec(), "image/png")).is_err());
+    }
+}
