@@ -370,3 +370,43 @@ fn measure_reports_normals_against_winding() {
     assert_eq!(bad["normals_against_winding"].as_f64(), Some(1.0));
     assert!(bad["hausdorff"].as_f64().unwrap() < 1e-6, "{bad}");
 }
+
+/// The voxel method makes a new surface: it writes its own normals, facing
+/// every triangle's winding, and no colour or UV (it keeps none of the
+/// input's, and invents none) — on the textured truck and the horse.
+#[test]
+fn voxel_surfaces_write_their_own_normals_and_nothing_else() {
+    for model in ["CesiumMilkTruck.glb", "horse.ply"] {
+        let out = temp(&format!("voxel-{model}.glb"));
+        let file = shared_model(model);
+        let report = lodstudio_json(&[
+            "export",
+            file.to_str().unwrap(),
+            "--method",
+            "voxel",
+            "--lods",
+            "6%,12%",
+            "--resolution",
+            "48",
+            "-o",
+            out.to_str().unwrap(),
+            "--force",
+        ]);
+        let (doc, bin) = read_gltf(&out);
+        let lods = report["lods"].as_array().unwrap();
+        assert_eq!(lods.len(), 2, "{report}");
+        for (l, lod) in lods.iter().enumerate() {
+            assert!(
+                lod["uv_error"].is_null(),
+                "{model} LOD {l}: no UVs to measure"
+            );
+            let mesh = doc["nodes"][lod_node(&doc, l)]["mesh"].as_u64().unwrap() as usize;
+            for p in doc["meshes"][mesh]["primitives"].as_array().unwrap() {
+                let mut attrs: Vec<&String> = p["attributes"].as_object().unwrap().keys().collect();
+                attrs.sort();
+                assert_eq!(attrs, ["NORMAL", "POSITION"], "{model} LOD {l}");
+                assert_eq!(area_against_winding(&doc, &bin, p), 0.0, "{model} LOD {l}");
+            }
+        }
+    }
+}
