@@ -106,7 +106,8 @@ fn volumes_use_their_grid_and_point_sets_are_refused_clearly() {
 
 /// Meshes are sampled through their generalised winding number: the bunny's
 /// open base still has an inside, and the holes of the coupling close one by
-/// one as the filter widens (Tables 1–3).
+/// one as the filter widens (Tables 1–3, the raw extraction: marching cubes
+/// makes about 4× the triangles per halving of the voxel size).
 #[test]
 fn meshes_are_solids_and_their_genus_falls_along_the_pyramid() {
     let bunny = shared_model("stanford-bunny.obj");
@@ -130,6 +131,7 @@ fn meshes_are_solids_and_their_genus_falls_along_the_pyramid() {
         "--pyramid",
         "--resolution",
         "64",
+        "--no-simplify",
     ]);
     let levels = j["levels"].as_array().unwrap();
     let column = |k: &str| -> Vec<i64> { levels.iter().map(|l| l[k].as_i64().unwrap()).collect() };
@@ -194,12 +196,14 @@ fn layers_follow_the_error_bound_and_export_together() {
 }
 
 /// Table 3: the MRI head's pyramid pools the thresholded scan into coarser
-/// grids; triangles fall by about 4× per level and the genus never rises.
+/// grids; the raw extraction's triangles fall by about 4× per level and the
+/// genus never rises.
 #[test]
 fn the_mri_head_pyramid_and_in_between_levels() {
     let head = shared_model("ch2.nii.gz");
     let h = head.to_str().unwrap();
-    let j = lodstudio_json(&["voxel", h, "--pyramid", "--radius", "1", "--filter", "cone"]);
+    let raw = ["--radius", "1", "--filter", "cone", "--no-simplify"];
+    let j = lodstudio_json(&[&["voxel", h, "--pyramid"][..], &raw].concat());
     let levels = j["levels"].as_array().unwrap();
     let column = |k: &str| -> Vec<i64> { levels.iter().map(|l| l[k].as_i64().unwrap()).collect() };
     assert_eq!(column("resolution"), [217, 108, 54, 27, 13]);
@@ -210,9 +214,7 @@ fn the_mri_head_pyramid_and_in_between_levels() {
         "{triangles:?}"
     );
     // §5: halfway between the two finest levels lies between them.
-    let mid = lodstudio_json(&[
-        "voxel", h, "--at", "0.5", "--radius", "1", "--filter", "cone",
-    ]);
+    let mid = lodstudio_json(&[&["voxel", h, "--at", "0.5"][..], &raw].concat());
     let t = mid["triangles"].as_i64().unwrap();
     assert!(triangles[1] < t && t < triangles[0], "{t} in {triangles:?}");
 }
@@ -404,5 +406,48 @@ fn the_layers_error_holds_against_the_analytic_density_profile() {
             );
             last_layers = p.isodensities.len();
         }
+    }
+}
+
+/// §5's second stage: every level of the pyramid is collapsed to half a
+/// voxel with the certified edge collapse, so each has fewer triangles than
+/// the raw extraction (and than the input, for the coupling), the same genus
+/// and components, and a certified bound measured on what it draws.
+#[test]
+fn post_simplified_levels_are_smaller_and_keep_their_topology() {
+    let coupling = shared_model("couplingdown.off");
+    let c = coupling.to_str().unwrap();
+    let input = lodstudio_json(&["info", c])["triangles"].as_u64().unwrap();
+    let run = |extra: &[&str]| {
+        let j =
+            lodstudio_json(&[&["voxel", c, "--pyramid", "--resolution", "64"][..], extra].concat());
+        j["levels"].as_array().unwrap().clone()
+    };
+    let (raw, post) = (run(&["--no-simplify"]), run(&[]));
+    assert_eq!(raw.len(), post.len());
+    for (r, p) in raw.iter().zip(&post) {
+        let (rt, pt) = (
+            r["triangles"].as_u64().unwrap(),
+            p["triangles"].as_u64().unwrap(),
+        );
+        assert!(pt < rt && pt < input, "{pt} of {rt} raw, {input} input");
+        assert_eq!(
+            (r["genus"].clone(), r["components"].clone()),
+            (p["genus"].clone(), p["components"].clone())
+        );
+        assert!(p["error_bound"].as_f64().is_some(), "{p}");
+    }
+    let few = run(&["--post-triangles", "200"]);
+    assert!(
+        few.iter().all(|l| l["triangles"].as_u64().unwrap() <= 200),
+        "{few:?}"
+    );
+    for bad in [
+        &["--post-error", "-1"][..],
+        &["--post-triangles", "0"],
+        &["--no-simplify", "--post-error", "1"],
+    ] {
+        let out = lodstudio(&[&["voxel", c][..], bad].concat());
+        assert_eq!(out.status.code(), Some(2), "{bad:?}");
     }
 }

@@ -305,6 +305,7 @@ fn voxel_built(
         settings.filter.filter(),
         settings.layers_error,
         iso,
+        settings.post(),
         progress,
     )?;
     // One surface, or the translucent layers ordered for the camera; a mesh's
@@ -354,6 +355,7 @@ fn voxel_pyramid(
         settings.filter.filter(),
         progress,
     )?;
+    pyramid.post = settings.post();
     pyramid.certify(source.surface(), progress)?;
     progress.stage("extracting the levels");
     let mut levels = Vec::with_capacity(pyramid.levels.len());

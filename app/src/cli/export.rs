@@ -69,6 +69,8 @@ pub struct ExportArgs {
     #[arg(long, value_name = "points|quads|discs", default_value = "points", value_parser = str::parse::<PointsAs>)]
     points_as: PointsAs,
     #[command(flatten)]
+    post: PostArgs,
+    #[command(flatten)]
     report: ReportArgs,
     #[command(flatten)]
     input: InputArgs,
@@ -501,6 +503,7 @@ fn voxel_hierarchy(args: &ExportArgs, mesh: &lodstudio_core::TriMesh) -> Built {
     let source = Source::Solid(&solid);
     let mut pyramid = Pyramid::build(source, args.resolution, 1.0, Filter::Gaussian, &progress)
         .map_err(cancelled)?;
+    pyramid.post = args.post.post()?;
     pyramid
         .certify(source.surface(), &progress)
         .map_err(cancelled)?;

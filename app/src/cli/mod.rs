@@ -129,6 +129,36 @@ impl SaveArgs {
     }
 }
 
+/// How each extracted voxel level is simplified further (voxel paper §5),
+/// for `voxel` and `export --method voxel`.
+#[derive(Args, Debug, Clone, Copy)]
+pub struct PostArgs {
+    /// Voxel: keep the raw marching-cubes extraction (no edge collapse after it).
+    #[arg(long, conflicts_with_all = ["post_error", "post_triangles"])]
+    pub no_simplify: bool,
+    /// Voxel: collapse each level's edges while its certified distance to the
+    /// extraction stays within V voxels [default: 0.5].
+    #[arg(long, value_name = "V")]
+    pub post_error: Option<f32>,
+    /// Voxel: collapse each level down to at most N triangles.
+    #[arg(long, value_name = "N", conflicts_with = "post_error")]
+    pub post_triangles: Option<usize>,
+}
+
+impl PostArgs {
+    pub fn post(&self) -> Result<lodstudio_core::voxel::PostSimplify, CliError> {
+        use lodstudio_core::voxel::PostSimplify;
+        let post = match (self.no_simplify, self.post_error, self.post_triangles) {
+            (true, ..) => PostSimplify::Off,
+            (_, Some(v), _) => PostSimplify::Voxels(v),
+            (_, _, Some(n)) => PostSimplify::Triangles(n),
+            _ => PostSimplify::HALF_VOXEL,
+        };
+        post.check().map_err(CliError::BadInput)?;
+        Ok(post)
+    }
+}
+
 /// How results are reported and written.
 #[derive(Args, Debug)]
 pub struct ReportArgs {

@@ -43,6 +43,8 @@ pub struct VoxelArgs {
     #[arg(short = 'o', long = "output", value_name = "OUT")]
     output: Option<PathBuf>,
     #[command(flatten)]
+    post: PostArgs,
+    #[command(flatten)]
     save: SaveArgs,
     #[command(flatten)]
     report: ReportArgs,
@@ -106,6 +108,7 @@ pub fn run(args: VoxelArgs) -> Result<(), CliError> {
         FilterArg::Gaussian => Filter::Gaussian,
         FilterArg::Cone => Filter::Cone,
     };
+    let post = args.post.post()?;
     let input = voxel_input(&args)?;
     if let Some(out) = &args.output {
         check_output(out, args.report.force || (args.pyramid && out.is_dir()))?;
@@ -151,6 +154,7 @@ pub fn run(args: VoxelArgs) -> Result<(), CliError> {
         args.save.check(args.report.force)?;
         let mut pyramid = Pyramid::build(source, args.resolution, args.radius, filter, &progress)
             .map_err(failed)?;
+        pyramid.post = post;
         let reference = source.surface();
         pyramid.certify(reference, &progress).map_err(failed)?;
         let against = if pyramid.against_input {
@@ -251,6 +255,7 @@ pub fn run(args: VoxelArgs) -> Result<(), CliError> {
         filter,
         args.layers_error.unwrap_or(f32::INFINITY),
         DENSITY_ISO,
+        post,
         &progress,
     )
     .map_err(failed)?;
@@ -274,6 +279,15 @@ pub fn run(args: VoxelArgs) -> Result<(), CliError> {
             .collect::<Vec<_>>()
     );
     j["layers_error"] = plan.error.into();
+    // The level as drawn (collapsed, or every layer), certified against a
+    // mesh's surface.
+    if let Some(surface) = source.surface() {
+        let mut level = voxel::layers::Layered::new(layers, &density);
+        level.certify(surface, &progress).map_err(failed)?;
+        let diagonal = surface.bounds().diagonal().max(f32::MIN_POSITIVE);
+        j["error_bound"] = level.error_bound.into();
+        j["error_bound_relative"] = (level.error_bound / diagonal).into();
+    }
     j["seconds"] = start.elapsed().as_secs_f64().into();
     report_level(&args, &l, j)
 }

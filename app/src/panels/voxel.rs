@@ -55,6 +55,11 @@ const FOLLOW_HINT: &str = "Show the coarsest pyramid level whose certified two-s
     Hausdorff bound (against the input surface) is within the error threshold, as every \
     other method does. Off: the pyramid position below chooses.";
 
+const SIMPLIFY_HINT: &str = "§5: the voxel method is \"the first stage\"; a \
+    topology-preserving simplification then reduces the triangles. Each extracted level is \
+    collapsed with the certified edge collapse to half a voxel (genus and components kept); \
+    the level's bound is measured on the collapsed surface. Off: the raw marching cubes.";
+
 const ISO_HINT: &str = "The iso-density at which marching cubes extracts the surface \
     f = iso, on the normalised density scale 0 (empty) to 1 (solid). The paper uses \
     0.5; lower grows the object, higher shrinks it.";
@@ -111,6 +116,8 @@ impl VoxelSettings {
                 .text("layers error δ"),
         )
         .on_hover_text(LAYERS_HINT);
+        ui.checkbox(&mut self.simplify, "simplify each level (½ voxel)")
+            .on_hover_text(SIMPLIFY_HINT);
         ui.checkbox(&mut self.pyramid, "whole pyramid")
             .on_hover_text(PYRAMID_HINT);
         if self.pyramid {

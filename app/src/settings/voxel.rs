@@ -61,6 +61,9 @@ pub struct VoxelSettings {
     /// Multi-layered surfaces (§3): the mean density error δ of eq. 6 the
     /// layers may leave; 0.5 or more gives the single surface.
     pub layers_error: f32,
+    /// Collapse each extracted level's edges to half a voxel (§5: the
+    /// method is "the first stage"), certified; off keeps the raw extraction.
+    pub simplify: bool,
     /// Build the whole pyramid (Tables 1–3) and browse it continuously.
     pub pyramid: bool,
     /// Run time: the continuous pyramid position shown (0 = finest, §5) ...
@@ -111,6 +114,7 @@ impl Default for VoxelSettings {
             iso: DENSITY_ISO,
             threshold: None,
             layers_error: 0.5,
+            simplify: true,
             pyramid: false,
             position: 0.0,
             follow_threshold: true,
@@ -131,9 +135,18 @@ impl VoxelSettings {
             iso: clamp_or(self.iso, ISO_RANGE, d.iso),
             threshold: self.threshold.filter(|t| !t.is_nan()),
             layers_error: clamp_or(self.layers_error, LAYERS_RANGE, d.layers_error),
+            simplify: self.simplify,
             pyramid: self.pyramid,
             position: clamp_or(self.position, POSITION_RANGE, d.position),
             follow_threshold: self.follow_threshold,
+        }
+    }
+
+    /// How each extracted level is simplified further.
+    pub fn post(&self) -> lodstudio_core::voxel::PostSimplify {
+        match self.simplify {
+            true => lodstudio_core::voxel::PostSimplify::HALF_VOXEL,
+            false => lodstudio_core::voxel::PostSimplify::Off,
         }
     }
 
@@ -181,6 +194,7 @@ mod tests {
             iso: 3.0,
             threshold: Some(f32::NAN),
             layers_error: 7.0,
+            simplify: false,
             pyramid: true,
             position: f32::INFINITY,
             follow_threshold: false,

@@ -166,8 +166,9 @@ pub fn back_to_front(layers: &[Layer], origin: Vec3, spacing: Vec3, view: &View)
 
 /// One level of §2 from its filtered density, with §3's translucent layers
 /// when the layers error `delta` asks for more than one surface (else the
-/// one surface at `iso`, a layer of its own): the pipeline the CLI and the
-/// studio share.
+/// one surface at `iso`, a layer of its own, simplified further as `post`
+/// says; translucent layers stay as extracted, their back-to-front order
+/// follows the grid): the pipeline the CLI and the studio share.
 pub struct LayeredLevel {
     /// The level proper: the layer nearest the 0.5 isodensity, its topology measured.
     pub level: super::VoxelLevel,
@@ -181,14 +182,17 @@ pub fn layered_level(
     filter: Filter,
     delta: f32,
     iso: f32,
+    post: super::PostSimplify,
     progress: &Progress,
 ) -> Result<LayeredLevel, Cancelled> {
     let plan = plan(&profile(filter), delta);
     let layers = if plan.isodensities.len() > 1 {
         extract(density, &plan, progress)?
     } else {
+        let raw = marching_cubes(density, iso, progress)?;
+        let voxel = density.spacing.max_element();
         vec![Layer {
-            mesh: marching_cubes(density, iso, progress)?,
+            mesh: super::post_simplify(raw, voxel, post, progress)?,
             alpha: plan.opacities.first().copied().unwrap_or(1.0),
             isodensity: iso,
         }]
@@ -310,8 +314,17 @@ mod tests {
         let progress = Progress::new();
         let f = super::super::density(source, 32, 1, 1.5, Filter::Gaussian, &progress)
             .expect("not cancelled");
-        let built = layered_level(&f, (32, 1.5), Filter::Gaussian, 0.5, DENSITY_ISO, &progress)
-            .expect("not cancelled");
+        let post = super::super::PostSimplify::HALF_VOXEL;
+        let built = layered_level(
+            &f,
+            (32, 1.5),
+            Filter::Gaussian,
+            0.5,
+            DENSITY_ISO,
+            post,
+            &progress,
+        )
+        .expect("not cancelled");
         let mut level = Layered::new(built.layers, &f);
         let view = View::orbit(Vec3::ZERO, 4.0, 0.3, 0.2);
         let tolerance = Tolerance::Pixels(1.0);

@@ -10,11 +10,13 @@
 pub mod filter;
 pub mod layers;
 pub mod marching_cubes;
+pub mod post_simplify;
 pub mod pyramid;
 pub mod sampling;
 
 pub use filter::Filter;
 pub use marching_cubes::{DENSITY_ISO, marching_cubes};
+pub use post_simplify::{PostSimplify, post_simplify};
 pub use pyramid::{Pyramid, Source};
 
 use crate::geom::{Topology, TriMesh, Volume};

@@ -17,7 +17,7 @@
 use glam::Vec3;
 use rayon::prelude::*;
 
-use super::{DENSITY_ISO, Filter, VoxelLevel, level, marching_cubes};
+use super::{DENSITY_ISO, Filter, PostSimplify, VoxelLevel, level, marching_cubes, post_simplify};
 use crate::geom::{TriMesh, Volume};
 use crate::implicit::Implicit;
 use crate::lod::{DrawSet, Hierarchy};
@@ -66,6 +66,8 @@ pub struct Pyramid {
     pub against_input: bool,
     /// Bounding-box diagonal of the reference.
     pub diagonal: f32,
+    /// How each extracted level is simplified further (§5).
+    pub post: PostSimplify,
 }
 
 /// The coarsest grid the pyramid goes down to (Tables 1–3 end near 4–8).
@@ -112,6 +114,7 @@ impl Pyramid {
             error_bounds: Vec::new(),
             against_input: false,
             diagonal: 0.0,
+            post: PostSimplify::HALF_VOXEL,
         })
     }
 
@@ -172,6 +175,8 @@ impl Pyramid {
     pub fn level(&self, i: usize, progress: &Progress) -> Result<VoxelLevel, Cancelled> {
         let l = &self.levels[i.min(self.levels.len() - 1)];
         let mesh = marching_cubes(&l.density, DENSITY_ISO, progress)?;
+        let voxel = l.density.spacing.max_element();
+        let mesh = post_simplify(mesh, voxel, self.post, progress)?;
         Ok(level(mesh, l.resolution, l.radius_finest))
     }
 
@@ -214,6 +219,7 @@ impl Pyramid {
             data,
         };
         let mesh = marching_cubes(&grid, DENSITY_ISO, progress)?;
+        let mesh = post_simplify(mesh, spacing.max_element(), self.post, progress)?;
         Ok(level(
             mesh,
             lerp(a.resolution as f32, b.resolution as f32).round() as usize,
