@@ -19,6 +19,8 @@ pub struct CutStyle {
     pub by_type: bool,
     pub regions: bool,
     pub outlines: bool,
+    /// Triangle edges drawn over the cut.
+    pub wireframe: bool,
 }
 
 /// What "colour by region" means for each method's cuts, if anything.
@@ -91,6 +93,7 @@ impl LiveCut {
         let d = &self.draw;
         let plain = SceneStyle {
             splat_outlines: self.style.outlines,
+            wireframe: self.style.wireframe,
             ..SceneStyle::default()
         };
         if !self.style.heat && !self.style.by_type {

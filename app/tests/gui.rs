@@ -1509,3 +1509,43 @@ fn the_textured_truck_and_its_lod_look_alike() {
     assert!(textured > 0.05, "the texture is drawn: {textured}");
     assert!(mean < 12.0 && far < 0.05, "mean {mean}, far {far}");
 }
+
+/// The wireframe overlay draws every edge of what is shown once, over the
+/// original and over the cut, and changes the picture.
+#[test]
+fn the_wireframe_overlay_draws_every_edge_once() {
+    let mut harness = studio(Some("builtin:torus".into()));
+    wait_for_load(&mut harness);
+    let edges = |mesh: &lodstudio_core::TriMesh| {
+        let mut e: Vec<(u32, u32)> = mesh
+            .triangles
+            .iter()
+            .flat_map(|&[a, b, c]| [(a, b), (b, c), (c, a)])
+            .map(|(a, b)| (a.min(b), a.max(b)))
+            .collect();
+        e.sort_unstable();
+        e.dedup();
+        e.len()
+    };
+    let lines = |h: &Harness<'_, StudioApp>| h.state().viewport().scene().map(|s| s.line_count());
+    let (_, _, plain) = viewport_pixels(&mut harness, "studio_torus_plain");
+    assert_eq!(lines(&harness), Some(0));
+    harness.get_by_label("Wireframe").click();
+    harness.run();
+    let torus = match &harness.state().loaded().unwrap().model {
+        lodstudio_core::Model::Mesh(m) => m.clone(),
+        _ => panic!("the torus is a mesh"),
+    };
+    assert_eq!(lines(&harness), Some(edges(&torus)));
+    let (_, _, wired) = viewport_pixels(&mut harness, "studio_torus_wire");
+    assert_ne!(plain, wired, "the edges are drawn");
+    // Over the cut: the edges of the cut's mesh.
+    let mut methods = *harness.state().methods();
+    methods.method = Method::EdgeCollapse;
+    harness.state_mut().set_methods(methods);
+    harness.state_mut().build();
+    wait_for_build(&mut harness);
+    let cut = harness.state().result().unwrap().mesh().clone();
+    assert!(cut.triangles.len() < torus.triangles.len());
+    assert_eq!(lines(&harness), Some(edges(&cut)));
+}

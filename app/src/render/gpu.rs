@@ -490,7 +490,7 @@ impl ViewportResources {
         );
         let line_pipeline = scene_pipeline(
             "viewport lines",
-            "vs_mesh",
+            "vs_line",
             "fs_unlit",
             &mesh_buffers,
             wgpu::PrimitiveTopology::LineList,

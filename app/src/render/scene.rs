@@ -25,6 +25,9 @@ const BOX_COLOR: Vec3 = Vec3::new(0.80, 0.80, 0.80);
 /// Colour of splat outlines (linear RGB).
 const OUTLINE_COLOR: Vec3 = Vec3::new(0.05, 0.05, 0.05);
 
+/// Colour of the wireframe overlay's edges (linear RGB).
+const WIRE_COLOR: Vec3 = Vec3::new(0.06, 0.06, 0.07);
+
 /// Colour of translucent voxel layers (linear RGB; alpha from eq. 4).
 const LAYER_COLOR: Vec3 = Vec3::new(0.70, 0.62, 0.52);
 
@@ -303,6 +306,32 @@ impl Scene {
         }
     }
 
+    /// The scene with every edge of `mesh`'s triangles drawn over it (each
+    /// edge once; triangles that index outside the vertices are left out).
+    pub fn with_wireframe(mut self, mesh: &TriMesh) -> Scene {
+        let n = mesh.positions.len() as u32;
+        let mut edges: Vec<(u32, u32)> = mesh
+            .triangles
+            .iter()
+            .filter(|t| t.iter().all(|&v| v < n))
+            .flat_map(|&[a, b, c]| [(a, b), (b, c), (c, a)])
+            .map(|(a, b)| (a.min(b), a.max(b)))
+            .collect();
+        edges.sort_unstable();
+        edges.dedup();
+        let vertex = |v: u32| MeshVertex {
+            position: mesh.positions[v as usize].to_array(),
+            normal: [0.0; 3],
+            color: WIRE_COLOR.extend(1.0).to_array(),
+        };
+        let lines = edges
+            .iter()
+            .flat_map(|&(a, b)| [vertex(a), vertex(b)])
+            .collect();
+        self.parts.push(Geometry::Lines(lines));
+        self
+    }
+
     /// Bounds of the model the scene was built from (what framing fits).
     pub fn bounds(&self) -> Aabb {
         self.bounds
@@ -330,6 +359,17 @@ impl Scene {
                 | Geometry::Translucent { indices, .. }
                 | Geometry::Textured { indices, .. } => indices.len() / 3,
                 Geometry::Points(_) | Geometry::Lines(_) | Geometry::Splats { .. } => 0,
+            })
+            .sum()
+    }
+
+    /// How many line segments the scene draws (wireframe, outlines, boxes).
+    pub fn line_count(&self) -> usize {
+        self.parts
+            .iter()
+            .map(|g| match g {
+                Geometry::Lines(lines) => lines.len() / 2,
+                _ => 0,
             })
             .sum()
     }
@@ -410,7 +450,11 @@ impl Scene {
                 parts.push(Geometry::Lines(lines));
             }
         }
-        Scene { parts, bounds }
+        let scene = Scene { parts, bounds };
+        match style.wireframe {
+            true => scene.with_wireframe(&set.mesh),
+            false => scene,
+        }
     }
 }
 
@@ -423,6 +467,8 @@ pub struct SceneStyle<'a> {
     pub layer_colors: Option<&'a [Vec3]>,
     /// Each splat's border (AMG paper Fig. 12).
     pub splat_outlines: bool,
+    /// Every triangle edge of the cut's mesh drawn over it.
+    pub wireframe: bool,
 }
 
 /// The layers' triangles as one alpha-blended list in `order` (each layer's

@@ -1,11 +1,14 @@
 //! The live cut on screen: re-selecting it for the camera and the knobs,
 //! choosing the scene the view shows, side by side, and picking.
 
+use std::sync::Arc;
+
 use lodstudio_core::lod::Picked;
 
 use super::{StudioApp, View};
 use crate::build;
 use crate::live_cut::CutStyle;
+use crate::render::Scene;
 
 impl StudioApp {
     /// Re-selects a live cut for the camera and the threshold (only when the
@@ -18,6 +21,7 @@ impl StudioApp {
                 by_type: self.by_type && self.view.shows_lod(),
                 regions: self.regions && self.view.shows_lod(),
                 outlines: self.outlines,
+                wireframe: self.wireframe,
             });
             let mut view = self.viewport.core_view();
             let input_triangles = self
@@ -45,19 +49,31 @@ impl StudioApp {
 
     /// Shows the scene the view toggles ask for (uploads only on a change).
     pub(super) fn sync_view(&mut self) {
-        let Some(current) = &self.current else {
-            return;
-        };
         if let Some(preview) = &self.preview {
             // Watching the build: its intermediate state.
             self.viewport.swap_scene(preview);
             return;
         }
         let scene = match (&self.result, self.view) {
-            (Some(built), View::Simplified | View::SideBySide) => built.live.scene(),
-            _ => &current.scene,
+            (Some(built), View::Simplified | View::SideBySide) => Arc::clone(built.live.scene()),
+            _ => match self.original_scene() {
+                Some(scene) => scene,
+                None => return,
+            },
         };
-        self.viewport.swap_scene(scene);
+        self.viewport.swap_scene(&scene);
+    }
+
+    /// The model as opened, with its wireframe when that is on (made once).
+    fn original_scene(&mut self) -> Option<Arc<Scene>> {
+        let current = self.current.as_mut()?;
+        let mesh = build::mesh_of(&current.loaded.model).ok();
+        Some(match (self.wireframe, mesh) {
+            (true, Some(mesh)) => Arc::clone(current.wire_scene.get_or_insert_with(|| {
+                Arc::new(Scene::clone(&current.scene).with_wireframe(mesh))
+            })),
+            _ => Arc::clone(&current.scene),
+        })
     }
 
     /// Shows a new result, side by side with the original if that is the view.
@@ -70,10 +86,10 @@ impl StudioApp {
     /// Compares the original (left) with the result (right, the main viewport:
     /// cuts are taken and picked there) through one camera.
     pub(super) fn show_side_by_side(&mut self, ui: &mut egui::Ui) {
-        let Some(current) = &self.current else {
+        let Some(original) = self.original_scene() else {
             return;
         };
-        self.compare.swap_scene(&current.scene);
+        self.compare.swap_scene(&original);
         self.compare.follow(&self.viewport);
         let full = ui.available_rect_before_wrap();
         let (left, right) = full.split_left_right_at_fraction(0.5);

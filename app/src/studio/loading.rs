@@ -221,6 +221,7 @@ impl StudioApp {
                     loaded: Arc::new(loaded),
                     summary,
                     scene,
+                    wire_scene: None,
                     volume,
                 });
                 if let Some(reopened) = reopened {

@@ -52,6 +52,8 @@ struct Current {
     rows: Vec<(String, String)>,
     /// The model as the viewport draws it.
     scene: Arc<Scene>,
+    /// The same with its wireframe, made the first time it is asked for.
+    wire_scene: Option<Arc<Scene>>,
     /// The grid and value range of a volume model.
     volume: Option<VolumeGrid>,
 }
@@ -96,6 +98,8 @@ pub struct StudioApp {
     by_type: bool,
     regions: bool,
     outlines: bool,
+    /// Triangle edges drawn over the original and the cut.
+    wireframe: bool,
     /// A build asked for but not started yet.
     build_at: Option<BuildRequest>,
     /// Why the last build request failed, shown under the Build button.
@@ -206,6 +210,7 @@ impl StudioApp {
             by_type: false,
             regions: false,
             outlines: false,
+            wireframe: false,
             build_at: None,
             build_note: None,
             view: View::Simplified,

@@ -97,6 +97,8 @@ impl StudioApp {
                     )
                     .on_hover_text("Outline every domain primitive (AMG paper, Fig. 12).")
                     .on_disabled_hover_text("Build a hierarchy first.");
+                    ui.checkbox(&mut self.wireframe, "Wireframe")
+                        .on_hover_text("Draw every triangle edge over the surface.");
                     ui.separator();
                     ui.checkbox(&mut self.viewport.camera.fly, "Fly")
                         .on_hover_text(

@@ -13,8 +13,7 @@ struct MeshOut {
     @location(2) color: vec4<f32>,
 };
 
-@vertex
-fn vs_mesh(v: MeshIn) -> MeshOut {
+fn mesh_out(v: MeshIn) -> MeshOut {
     var out: MeshOut;
     out.clip = frame.view_proj * vec4<f32>(v.position, 1.0);
     out.world = v.position;
@@ -23,9 +22,23 @@ fn vs_mesh(v: MeshIn) -> MeshOut {
     return out;
 }
 
+@vertex
+fn vs_mesh(v: MeshIn) -> MeshOut {
+    return mesh_out(v);
+}
+
 @fragment
 fn fs_mesh(in: MeshOut) -> @location(0) vec4<f32> {
     return vec4<f32>(shade(in.color.rgb, facing(in.normal, in.world)), in.color.a);
+}
+
+// Lines (wireframes, outlines, boxes) a hair in front of the surfaces they
+// lie on, so they win the depth test against their own triangles.
+@vertex
+fn vs_line(v: MeshIn) -> MeshOut {
+    var out = mesh_out(v);
+    out.clip.z = out.clip.z - 2e-4 * out.clip.w;
+    return out;
 }
 
 @fragment
