@@ -13,6 +13,7 @@ pub mod marching_cubes;
 pub mod post_simplify;
 pub mod pyramid;
 pub mod sampling;
+pub mod scanline;
 
 pub use filter::Filter;
 pub use marching_cubes::{DENSITY_ISO, marching_cubes};
@@ -61,8 +62,21 @@ pub fn density(
     match source {
         Source::Solid(solid) => {
             let h = solid.bounds().extent().max_element() / resolution.max(1) as f32;
-            let s =
-                sampling::sample_implicit(solid, resolution, radius * h, SUPERSAMPLE, progress)?;
+            // A closed mesh's solid by rows (the same S, much faster); any
+            // other solid point by point.
+            let s = match solid.surface().filter(|m| scanline::applies(m)) {
+                Some(mesh) => scanline::sample_closed(
+                    solid,
+                    mesh,
+                    resolution,
+                    radius * h,
+                    SUPERSAMPLE,
+                    progress,
+                )?,
+                None => {
+                    sampling::sample_implicit(solid, resolution, radius * h, SUPERSAMPLE, progress)?
+                }
+            };
             filter::apply(filter, &s, radius * h, progress)
         }
         Source::Volume(volume, iso) => {

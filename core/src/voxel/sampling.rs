@@ -63,22 +63,11 @@ pub fn sample_implicit(
     progress: &Progress,
 ) -> Result<Volume, Cancelled> {
     progress.stage("sampling");
-    let bounds = solid.bounds();
-    let extent = bounds.extent();
-    let h = extent.max_element().max(f32::MIN_POSITIVE) / resolution.max(1) as f32;
-    let pad = (margin.max(0.0) / h).ceil() as usize + 1;
-    let dims = [0, 1, 2].map(|a| (extent[a] / h).ceil() as usize + 1 + 2 * pad);
-    let centre = bounds.center();
-    let span = Vec3::new(
-        (dims[0] - 1) as f32,
-        (dims[1] - 1) as f32,
-        (dims[2] - 1) as f32,
-    ) * h;
-    let origin = centre - span * 0.5;
+    let Grid { dims, origin, h } = Grid::around(solid.bounds(), resolution, margin);
     let k = supersample.max(1);
     let offsets: Vec<Vec3> = (0..k * k * k)
         .map(|i| {
-            let s = |j: usize| ((j as f32 + 0.5) / k as f32 - 0.5) * h;
+            let s = |j: usize| sub_offset(j, k, h);
             Vec3::new(s(i % k), s(i / k % k), s(i / (k * k)))
         })
         .collect();
@@ -125,6 +114,40 @@ pub fn sample_implicit(
         origin,
         data,
     })
+}
+
+/// The sampling grid of a solid: `resolution` cubic voxels of size `h` along
+/// the longest side of `bounds`, extended by `margin` plus one voxel on every
+/// side and centred on the bounds.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Grid {
+    pub dims: [usize; 3],
+    pub origin: Vec3,
+    pub h: f32,
+}
+
+impl Grid {
+    pub fn around(bounds: crate::geom::Aabb, resolution: usize, margin: f32) -> Grid {
+        let extent = bounds.extent();
+        let h = extent.max_element().max(f32::MIN_POSITIVE) / resolution.max(1) as f32;
+        let pad = (margin.max(0.0) / h).ceil() as usize + 1;
+        let dims = [0, 1, 2].map(|a| (extent[a] / h).ceil() as usize + 1 + 2 * pad);
+        let span = Vec3::new(
+            (dims[0] - 1) as f32,
+            (dims[1] - 1) as f32,
+            (dims[2] - 1) as f32,
+        ) * h;
+        Grid {
+            dims,
+            origin: bounds.center() - span * 0.5,
+            h,
+        }
+    }
+}
+
+/// Offset of sub-sample `j` of `k` from its voxel's centre, along one axis.
+pub fn sub_offset(j: usize, k: usize, h: f32) -> f32 {
+    ((j as f32 + 0.5) / k as f32 - 0.5) * h
 }
 
 /// Edge of the blocks the sampler tries to classify whole.

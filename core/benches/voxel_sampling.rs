@@ -1,0 +1,91 @@
+//! Benchmark of issue 28, item 1: sampling a closed mesh's solid by rows
+//! (`voxel::scanline`) against the point-by-point winding-number sampler it
+//! replaces, at n, 2n, 4n voxels along the longest side, with the filter and
+//! marching cubes, and meshoptimizer's `remesh` (its own voxelizer and
+//! extraction) at the same resolution in the same run.
+//!
+//! Run with `cargo bench -p lodstudio-core --bench voxel_sampling` (about
+//! five minutes here: the point sampler at 256 is the slow part). Prints a
+//! Markdown table; both samplers' volumes are compared voxel by voxel.
+
+use std::path::PathBuf;
+use std::time::Instant;
+
+use lodstudio_core::implicit::{Implicit, MeshSolid};
+use lodstudio_core::voxel::sampling::sample_implicit;
+use lodstudio_core::voxel::scanline::sample_closed;
+use lodstudio_core::voxel::{Filter, filter, marching_cubes};
+use lodstudio_core::{Model, Progress, TriMesh, io};
+
+/// The sampler's k (the voxel method's supersampling) and filter radius.
+const K: usize = 3;
+const RADIUS: f32 = 1.0;
+
+fn mesh(name: &str) -> TriMesh {
+    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../../shared/models")
+        .join(name);
+    match io::load(&path, &Default::default(), &Progress::new())
+        .unwrap_or_else(|e| panic!("{name}: {e}"))
+        .model
+    {
+        Model::Mesh(m) => m,
+        _ => panic!("{name} is a mesh"),
+    }
+}
+
+fn seconds<T>(f: impl FnOnce() -> T) -> (T, f64) {
+    let t = Instant::now();
+    let out = f();
+    (out, t.elapsed().as_secs_f64())
+}
+
+fn main() {
+    let p = Progress::new();
+    println!(
+        "| input | n | grid | points s | rows s | speed-up | voxels differing | filter s | marching cubes s | rows + filter + MC s | meshopt remesh s | ratio to remesh |"
+    );
+    println!("|---|---|---|---|---|---|---|---|---|---|---|---|");
+    for name in ["dragon_vrip.ply.gz", "horse.ply"] {
+        let m = mesh(name);
+        let solid = MeshSolid::new(&m);
+        let bytes: Vec<u8> = m
+            .positions
+            .iter()
+            .flat_map(|v| v.to_array())
+            .flat_map(|x| x.to_ne_bytes())
+            .collect();
+        let vertices = meshopt::VertexDataAdapter::new(&bytes, 12, 0).expect("vertex adapter");
+        let indices: Vec<u32> = m.triangles.iter().flatten().copied().collect();
+        for n in [64usize, 128, 256] {
+            let h = solid.bounds().extent().max_element() / n as f32;
+            let (rows, t_rows) =
+                seconds(|| sample_closed(&solid, &m, n, RADIUS * h, K, &p).unwrap());
+            let (points, t_points) =
+                seconds(|| sample_implicit(&solid, n, RADIUS * h, K, &p).unwrap());
+            let differing = rows
+                .data
+                .iter()
+                .zip(&points.data)
+                .filter(|(a, b)| a != b)
+                .count();
+            let (f, t_filter) =
+                seconds(|| filter::apply(Filter::Gaussian, &rows, RADIUS * h, &p).unwrap());
+            let (_, t_mc) = seconds(|| marching_cubes(&f, 0.5, &p).unwrap());
+            let (_, t_remesh) = seconds(|| {
+                meshopt::remesh(&indices, &vertices, n as u32, meshopt::RemeshOptions::None)
+            });
+            let ours = t_rows + t_filter + t_mc;
+            println!(
+                "| {name} ({} triangles) | {n} | {}×{}×{} | {t_points:.2} | {t_rows:.3} | {:.0}× | {differing} of {} | {t_filter:.3} | {t_mc:.3} | {ours:.3} | {t_remesh:.3} | {:.2} |",
+                m.triangles.len(),
+                rows.dims[0],
+                rows.dims[1],
+                rows.dims[2],
+                t_points / t_rows,
+                rows.data.len(),
+                ours / t_remesh,
+            );
+        }
+    }
+}
