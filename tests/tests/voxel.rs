@@ -452,16 +452,17 @@ fn post_simplified_levels_are_smaller_and_keep_their_topology() {
     }
 }
 
-/// Issue 28: a closed mesh's solid sampled by rows equals the winding-number
-/// sampler's, voxel for voxel but for round-off at a few sub-samples on the
-/// surface, and the filtered level has the same genus and components, on
-/// every closed shared mesh.
+/// Issue 28: a mesh's solid sampled by rows equals the winding-number
+/// sampler's, voxel for voxel but for a few sub-samples where the point
+/// sampler's approximate winding number is near ½ (on the surface, across
+/// the bunny's holes), and the filtered level has the same genus and
+/// components, on every shared mesh (the bunny is open: five holes capped).
 #[test]
-fn row_sampling_equals_the_winding_number_on_the_shared_closed_meshes() {
+fn row_sampling_equals_the_winding_number_on_the_shared_meshes() {
     use lodstudio_core::geom::Topology;
     use lodstudio_core::implicit::{Implicit, MeshSolid};
     use lodstudio_core::voxel::sampling::sample_implicit;
-    use lodstudio_core::voxel::scanline::{applies, sample_closed};
+    use lodstudio_core::voxel::scanline::{applies, sample_by_rows};
     use lodstudio_core::voxel::{DENSITY_ISO, Filter, filter, marching_cubes};
     let p = lodstudio_core::Progress::new();
     for name in [
@@ -471,6 +472,7 @@ fn row_sampling_equals_the_winding_number_on_the_shared_closed_meshes() {
         "knot2.off",
         "rocker-arm.obj",
         "bones.off",
+        "stanford-bunny.obj",
     ] {
         let path = shared_model(name);
         let mesh = match lodstudio_core::io::load(&path, &Default::default(), &p)
@@ -480,11 +482,11 @@ fn row_sampling_equals_the_winding_number_on_the_shared_closed_meshes() {
             lodstudio_core::Model::Mesh(m) => m,
             _ => panic!("{name} is a mesh"),
         };
-        assert!(applies(&mesh), "{name} is closed");
+        assert!(applies(&mesh), "{name}: rows apply");
         let solid = MeshSolid::new(&mesh);
         let n = 48;
         let h = solid.bounds().extent().max_element() / n as f32;
-        let rows = sample_closed(&solid, &mesh, n, 2.0 * h, 3, &p).unwrap();
+        let rows = sample_by_rows(&solid, &mesh, n, 2.0 * h, 3, &p).unwrap();
         let points = sample_implicit(&solid, n, 2.0 * h, 3, &p).unwrap();
         let differing: Vec<f32> = rows
             .data
@@ -493,9 +495,17 @@ fn row_sampling_equals_the_winding_number_on_the_shared_closed_meshes() {
             .filter(|(a, b)| a != b)
             .map(|(a, b)| (a - b).abs())
             .collect();
+        // Closed: round-off at a sub-sample or two. Open: a layer of voxels
+        // across a hole, where the winding number is ½ within the point
+        // sampler's approximation (the rows compute it exactly there).
+        let closed = Topology::of(&mesh).is_closed();
+        let (share, most) = if closed {
+            (10_000, 2.0 / 27.0 + 1e-6)
+        } else {
+            (1_000, 1.0)
+        };
         assert!(
-            differing.len() * 10_000 <= rows.data.len()
-                && differing.iter().all(|d| *d <= 2.0 / 27.0 + 1e-6),
+            differing.len() * share <= rows.data.len() && differing.iter().all(|d| *d <= most),
             "{name}: {} of {} voxels differ: {differing:?}",
             differing.len(),
             rows.data.len()

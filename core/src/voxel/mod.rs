@@ -62,10 +62,10 @@ pub fn density(
     match source {
         Source::Solid(solid) => {
             let h = solid.bounds().extent().max_element() / resolution.max(1) as f32;
-            // A closed mesh's solid by rows (the same S, much faster); any
-            // other solid point by point.
+            // A mesh's solid by rows (the same S, much faster); any other
+            // solid point by point.
             let s = match solid.surface().filter(|m| scanline::applies(m)) {
-                Some(mesh) => scanline::sample_closed(
+                Some(mesh) => scanline::sample_by_rows(
                     solid,
                     mesh,
                     resolution,
