@@ -62,9 +62,9 @@ pub fn density(
     match source {
         Source::Solid(solid) => {
             let h = solid.bounds().extent().max_element() / resolution.max(1) as f32;
-            // A mesh's solid by rows (the same S, much faster); any other
-            // solid point by point.
-            let s = match solid.surface().filter(|m| scanline::applies(m)) {
+            // A mesh's solid by rows (the same S, much faster, where its
+            // surface allows; else point by point); any other solid point by point.
+            let s = match solid.surface() {
                 Some(mesh) => scanline::sample_by_rows(
                     solid,
                     mesh,

@@ -13,6 +13,7 @@
 //! not at all: its sub-samples are classified point by point instead, by the
 //! solid itself.
 
+use std::borrow::Cow;
 use std::collections::HashMap;
 
 use glam::{DVec3, Vec3};
@@ -57,7 +58,7 @@ impl Cap {
 /// `mesh` with each boundary loop capped by a fan to the loop's centroid,
 /// oriented with the surface, and the caps; `None` when the surface is not
 /// manifold and consistently oriented or its boundary is not simple loops.
-fn capped(mesh: &TriMesh) -> Option<(TriMesh, Vec<Cap>)> {
+fn capped(mesh: &TriMesh) -> Option<(Cow<'_, TriMesh>, Vec<Cap>)> {
     if mesh.triangles.is_empty() {
         return None;
     }
@@ -65,10 +66,10 @@ fn capped(mesh: &TriMesh) -> Option<(TriMesh, Vec<Cap>)> {
     if !topo.is_manifold() || topo.inconsistent_edges > 0 {
         return None;
     }
-    let mut closed = TriMesh::new(mesh.positions.clone(), mesh.triangles.clone());
     if topo.is_closed() {
-        return Some((closed, Vec::new()));
+        return Some((Cow::Borrowed(mesh), Vec::new()));
     }
+    let mut closed = TriMesh::new(mesh.positions.clone(), mesh.triangles.clone());
     // Boundary edges: the directed edges whose reverse no triangle has.
     let mut uses: HashMap<(u32, u32), u32> = HashMap::new();
     for t in &mesh.triangles {
@@ -128,7 +129,7 @@ fn capped(mesh: &TriMesh) -> Option<(TriMesh, Vec<Cap>)> {
             reach,
         });
     }
-    Some((closed, caps))
+    Some((Cow::Owned(closed), caps))
 }
 
 /// Samples the solid of `mesh` (which `solid` is, for rows that need a
