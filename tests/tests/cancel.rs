@@ -133,6 +133,8 @@ fn voxel_stops_at_every_stage() {
         ("gaussian filter", Filter::Gaussian),
         ("hyper-cone filter", Filter::Cone),
         ("certifying the levels' bounds", Filter::Gaussian),
+        // Each level's edge collapse after its extraction (§5).
+        ("collapsing edges", Filter::Gaussian),
     ] {
         let horse = mesh("horse.ply");
         cancels_at(stage, move |p| {

@@ -144,7 +144,7 @@ pub fn sample_by_rows(
     supersample: usize,
     progress: &Progress,
 ) -> Result<Volume, Cancelled> {
-    progress.stage("sampling (scanlines)");
+    progress.stage("sampling");
     let Some((mesh, caps)) = capped(mesh) else {
         return super::sampling::sample_implicit(solid, resolution, margin, supersample, progress);
     };
