@@ -1429,6 +1429,14 @@ fn the_threshold_moves_every_method_live() {
     }
 }
 
+/// The textured milk truck of the shared models.
+fn shared_truck() -> PathBuf {
+    PathBuf::from(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../shared/models/CesiumMilkTruck.glb"
+    ))
+}
+
 /// The viewport's pixels (RGBA) inside its rect, every other row and column.
 fn viewport_image(harness: &mut Harness<'_, StudioApp>, name: &str) -> Vec<[u8; 4]> {
     let rect = harness.get_by_label("3D viewport").rect();
@@ -1443,6 +1451,25 @@ fn viewport_image(harness: &mut Harness<'_, StudioApp>, name: &str) -> Vec<[u8; 
         }
     }
     out
+}
+
+/// How far render `b` is from render `a` where either shows the model: the
+/// mean of each pixel's largest channel difference (of 255), and the share
+/// of pixels off by more than 64.
+fn difference(a: &[[u8; 4]], b: &[[u8; 4]]) -> (f32, f32) {
+    let background = a[0];
+    let (mut model, mut far, mut sum) = (0usize, 0usize, 0u64);
+    for (p, q) in a.iter().zip(b) {
+        if *p == background && *q == background {
+            continue;
+        }
+        model += 1;
+        let d = (0..3).map(|k| p[k].abs_diff(q[k]) as u64).max().unwrap();
+        sum += d;
+        far += usize::from(d > 64);
+    }
+    let n = model.max(1) as f32;
+    (sum as f32 / n, far as f32 / n)
 }
 
 /// How colourful a render is: the share of its non-background pixels whose
@@ -1461,10 +1488,7 @@ fn colourful(pixels: &[[u8; 4]]) -> f32 {
 /// differ by much, where scrambled UVs would move the logo and colours.
 #[test]
 fn the_textured_truck_and_its_lod_look_alike() {
-    let truck = PathBuf::from(concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../../shared/models/CesiumMilkTruck.glb"
-    ));
+    let truck = shared_truck();
     let mut harness = studio(Some(truck));
     wait_for_load(&mut harness);
     let mut methods = *harness.state().methods();
@@ -1488,20 +1512,7 @@ fn the_textured_truck_and_its_lod_look_alike() {
         .triangles
         .len();
     let lod = viewport_image(&mut harness, "truck-lod0");
-    let background = original[0];
-    let (mut model, mut far) = (0usize, 0usize);
-    let mut sum = 0u64;
-    for (a, b) in original.iter().zip(&lod) {
-        if *a == background && *b == background {
-            continue;
-        }
-        model += 1;
-        let d = (0..3).map(|k| a[k].abs_diff(b[k]) as u64).max().unwrap();
-        sum += d;
-        far += usize::from(d > 64);
-    }
-    let mean = sum as f32 / model.max(1) as f32;
-    let far = far as f32 / model.max(1) as f32;
+    let (mean, far) = difference(&original, &lod);
     eprintln!(
         "truck: {textured:.3} colourful, LOD0 {triangles} triangles: mean difference {mean:.2}, {:.2} % of pixels off by > 64",
         100.0 * far
@@ -1557,15 +1568,11 @@ fn the_wireframe_overlay_draws_every_edge_once() {
 /// pixels far off (LOD1 and LOD2 are both the truck's floor, 1,242 triangles).
 #[test]
 fn the_exported_truck_lods_look_like_the_original() {
-    let truck = PathBuf::from(concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../../shared/models/CesiumMilkTruck.glb"
-    ));
+    let truck = shared_truck();
     let mut harness = studio(Some(truck.clone()));
     wait_for_load(&mut harness);
     let camera = harness.state().viewport().camera;
     let original = viewport_image(&mut harness, "truck-file-original");
-    let background = original[0];
     for (l, lod) in ["0.5%", "2%", "8%"].iter().enumerate() {
         let out =
             std::env::temp_dir().join(format!("lodstudio-truck-lod{l}-{}.glb", std::process::id()));
@@ -1593,18 +1600,7 @@ fn the_exported_truck_lods_look_like_the_original() {
         harness.state_mut().viewport_mut().camera = camera;
         harness.run();
         let image = viewport_image(&mut harness, &format!("truck-file-lod{l}"));
-        let (mut model, mut far, mut sum) = (0usize, 0usize, 0u64);
-        for (a, b) in original.iter().zip(&image) {
-            if *a == background && *b == background {
-                continue;
-            }
-            model += 1;
-            let d = (0..3).map(|k| a[k].abs_diff(b[k]) as u64).max().unwrap();
-            sum += d;
-            far += usize::from(d > 64);
-        }
-        let mean = sum as f32 / model.max(1) as f32;
-        let far = far as f32 / model.max(1) as f32;
+        let (mean, far) = difference(&original, &image);
         eprintln!(
             "truck LOD{l} ({lod}) from its file: mean difference {mean:.2}, {:.2} % off by > 64",
             100.0 * far

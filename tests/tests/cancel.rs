@@ -8,22 +8,12 @@ use std::sync::Arc;
 use std::sync::mpsc;
 use std::time::{Duration, Instant};
 
-use lodstudio_core::{Model, Progress, TriMesh, io};
-use lodstudio_tests::shared_model;
+use lodstudio_core::{Progress, io};
+use lodstudio_tests::{shared_mesh, shared_model};
 
 /// How a build ended: `Some(true)` cancelled, `Some(false)` another error,
 /// `None` finished.
 type Outcome = Option<bool>;
-
-fn mesh(name: &str) -> TriMesh {
-    match io::load(&shared_model(name), &Default::default(), &Progress::new())
-        .unwrap()
-        .model
-    {
-        Model::Mesh(m) => m,
-        _ => panic!("{name} is a mesh"),
-    }
-}
 
 /// Runs `work` on a worker, cancels it as it enters `stage`, and checks it
 /// stops with a cancellation within the deadline, its progress frozen. A
@@ -84,7 +74,7 @@ fn cancels_at(stage: &str, work: impl Fn(&Progress) -> Outcome + Send + Sync + '
 fn edge_collapse_stops_at_every_stage() {
     use lodstudio_core::simplify::{self, SimplifyError, SimplifyOptions, Target};
     for stage in ["collapsing edges", "certifying the error bound"] {
-        let horse = mesh("horse.ply");
+        let horse = shared_mesh("horse.ply");
         cancels_at(stage, move |p| {
             let opts = SimplifyOptions {
                 target: Target::Ratio(0.02),
@@ -99,7 +89,7 @@ fn edge_collapse_stops_at_every_stage() {
     }
     // The studio's build: the collapses recorded with their bounds.
     for stage in ["collapsing edges", "bounding collapses"] {
-        let horse = mesh("horse.ply");
+        let horse = shared_mesh("horse.ply");
         cancels_at(stage, move |p| {
             let r = simplify::progressive::record(&horse, Default::default(), 100, p);
             r.err().map(|_| true)
@@ -114,7 +104,7 @@ fn hybrid_stops_at_every_stage() {
         "hybrid: replacing triangles by points",
         "hybrid: merging points",
     ] {
-        let bunny = mesh("stanford-bunny.obj");
+        let bunny = shared_mesh("stanford-bunny.obj");
         cancels_at(stage, move |p| {
             let opts = lodstudio_core::hybrid::HybridOptions::default();
             lodstudio_core::hybrid::build(&bunny, &opts, p)
@@ -127,7 +117,7 @@ fn hybrid_stops_at_every_stage() {
 #[test]
 fn merge_tree_stops_at_every_stage() {
     for stage in ["merge tree levels", "merge tree dependencies"] {
-        let horse = mesh("horse.ply");
+        let horse = shared_mesh("horse.ply");
         cancels_at(stage, move |p| {
             lodstudio_core::mergetree::build(&horse, &Default::default(), p)
                 .err()
@@ -147,7 +137,7 @@ fn voxel_stops_at_every_stage() {
         // Each level's edge collapse after its extraction (§5).
         ("collapsing edges", Filter::Gaussian),
     ] {
-        let horse = mesh("horse.ply");
+        let horse = shared_mesh("horse.ply");
         cancels_at(stage, move |p| {
             let solid = lodstudio_core::implicit::MeshSolid::new(&horse);
             let source = Source::Solid(&solid);

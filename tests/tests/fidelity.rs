@@ -8,9 +8,7 @@ use std::collections::BTreeMap;
 use std::path::PathBuf;
 
 use glam::Vec3;
-use lodstudio_core::io::{self, LoadOptions, Model};
-use lodstudio_core::progress::Progress;
-use lodstudio_tests::{lodstudio, lodstudio_json, shared_model};
+use lodstudio_tests::{load_mesh, lodstudio, lodstudio_json, shared_model};
 use serde_json::Value;
 
 fn temp(name: &str) -> PathBuf {
@@ -132,20 +130,10 @@ fn export(model: &str, method: &str, out: &std::path::Path, extra: &[&str]) -> V
     lodstudio_json(&args)
 }
 
-fn mesh_of(path: &std::path::Path) -> lodstudio_core::TriMesh {
-    match io::load(path, &LoadOptions::default(), &Progress::new())
-        .unwrap()
-        .model
-    {
-        Model::Mesh(m) => m,
-        other => panic!("a mesh, not {}", other.kind()),
-    }
-}
-
 #[test]
 fn truck_textures_stay_on_their_side_of_every_seam() {
     let truck = shared_model("CesiumMilkTruck.glb");
-    let original = mesh_of(&truck);
+    let original = load_mesh(&truck);
     let (src_doc, _) = read_gltf(&truck);
     let src_meshes: Vec<usize> = (0..src_doc["meshes"].as_array().unwrap().len()).collect();
     let src_attrs = attributes_by_material(&src_doc, &src_meshes);
@@ -175,7 +163,7 @@ fn truck_textures_stay_on_their_side_of_every_seam() {
         }
         // LOD0 read back through the ordinary reader (a client's view): its
         // UVs against the original's, measured afresh.
-        let back = mesh_of(&out);
+        let back = load_mesh(&out);
         let e = lodstudio_core::distance::uv_error(&original, &back).unwrap();
         assert!(e.area_over_threshold < 0.01, "{method}: {e:?}");
     }

@@ -9,75 +9,15 @@
 //! - saved, reopened and cut again, it gives the same cut;
 //! - a tighter tolerance never gives a larger bound.
 
-use std::sync::Arc;
-
 use glam::Vec3;
+use lodstudio_core::TriMesh;
 use lodstudio_core::distance::{
     MeshDistance, SamplingOptions, SphereSetDistance, hausdorff_mesh_spheres, sample_surface,
 };
 use lodstudio_core::geom::Topology;
-use lodstudio_core::lod::{BoundKind, DrawSet, Hierarchy, Method};
+use lodstudio_core::lod::{BoundKind, DrawSet, Method};
 use lodstudio_core::view::{Tolerance, View};
-use lodstudio_core::{Progress, TriMesh, io};
-use lodstudio_tests::shared_model;
-
-fn fandisk() -> TriMesh {
-    let path = shared_model("fandisk.obj");
-    match io::load(&path, &Default::default(), &Progress::new())
-        .unwrap()
-        .model
-    {
-        lodstudio_core::Model::Mesh(m) => m,
-        _ => panic!("fandisk is a mesh"),
-    }
-}
-
-/// `method` built on `mesh` with the parameters a user would start from,
-/// and the parameters it is saved with.
-fn build(method: Method, mesh: &TriMesh) -> (Box<dyn Hierarchy>, serde_json::Value) {
-    let p = Progress::new();
-    match method {
-        Method::EdgeCollapse => {
-            let floor = mesh.triangles.len() / 100;
-            let r =
-                lodstudio_core::simplify::progressive::record(mesh, Default::default(), floor, &p);
-            let cut =
-                lodstudio_core::simplify::progressive::ProgressiveCut::new(Arc::new(r.unwrap()));
-            (Box::new(cut), serde_json::json!({}))
-        }
-        Method::Hybrid => {
-            let opts = lodstudio_core::hybrid::HybridOptions::default();
-            let mrg = lodstudio_core::hybrid::build(mesh, &opts, &p).unwrap();
-            let cut = lodstudio_core::hybrid::HybridCut::new(Arc::new(mrg));
-            (Box::new(cut), serde_json::json!({}))
-        }
-        Method::MergeTree => {
-            let tree = lodstudio_core::mergetree::build(mesh, &Default::default(), &p).unwrap();
-            let view =
-                lodstudio_core::mergetree::MergeTreeView::new(Arc::new(tree), Default::default());
-            (Box::new(view), serde_json::json!({}))
-        }
-        Method::Voxel => {
-            use lodstudio_core::voxel::{Filter, Pyramid, Source, pyramid::PyramidCut};
-            let solid = lodstudio_core::implicit::MeshSolid::new(mesh);
-            let source = Source::Solid(&solid);
-            let mut pyramid = Pyramid::build(source, 48, 1.5, Filter::Gaussian, &p).unwrap();
-            pyramid.certify(source.surface(), &p).unwrap();
-            (
-                Box::new(PyramidCut::new(pyramid, None)),
-                serde_json::json!({}),
-            )
-        }
-        Method::Amg => {
-            let model = lodstudio_core::Model::Mesh(mesh.clone());
-            let points = lodstudio_core::amg::point_set(&model).unwrap();
-            let ms = lodstudio_core::amg::decompose(&points, &Default::default(), &p).unwrap();
-            let texel = ms.default_texel();
-            let h = lodstudio_core::amg::AmgHierarchy::new(ms, texel);
-            (Box::new(h), serde_json::json!({ "texel": texel }))
-        }
-    }
-}
+use lodstudio_tests::{build_hierarchy, shared_mesh};
 
 /// Everything a cut draws as surfaces (triangles, splat quads, layers).
 fn surfaces(set: &DrawSet) -> TriMesh {
@@ -173,11 +113,11 @@ fn measured_pixels(original: &TriMesh, set: &DrawSet, view: &View) -> f32 {
 
 #[test]
 fn every_method_answers_through_one_interface_with_measured_bounds() {
-    let mesh = fandisk();
+    let mesh = shared_mesh("fandisk.obj");
     let diagonal = mesh.bounds().diagonal();
     let view = View::orbit(mesh.bounds().center(), 2.0 * diagonal, 0.3, 0.2);
     for method in Method::ALL {
-        let (mut h, params) = build(method, &mesh);
+        let (mut h, params) = build_hierarchy(method, &mesh);
         assert_eq!(h.method(), method);
         assert!(
             (h.diagonal() - diagonal).abs() <= 1e-3 * diagonal,

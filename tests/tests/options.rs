@@ -4,23 +4,13 @@
 use std::collections::HashMap;
 
 use glam::Vec3;
-use lodstudio_core::{Model, Progress, TriMesh, io};
-use lodstudio_tests::{lodstudio_json, shared_model};
+use lodstudio_core::TriMesh;
+use lodstudio_tests::{load_mesh, lodstudio_json, shared_model};
 
 fn temp(name: &str) -> std::path::PathBuf {
     let dir = std::env::temp_dir().join(format!("lodstudio-options-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     dir.join(name)
-}
-
-fn mesh(path: &std::path::Path) -> TriMesh {
-    match io::load(path, &Default::default(), &Progress::new())
-        .unwrap()
-        .model
-    {
-        Model::Mesh(m) => m,
-        _ => panic!("{} is a mesh", path.display()),
-    }
 }
 
 /// Positions of the vertices on a border (an edge of one triangle only).
@@ -48,7 +38,7 @@ fn border_positions(m: &TriMesh) -> Vec<Vec3> {
 fn lock_borders_keeps_every_border_vertex() {
     let bunny = shared_model("stanford-bunny.obj");
     let b = bunny.to_str().unwrap();
-    let input = border_positions(&mesh(&bunny));
+    let input = border_positions(&load_mesh(&bunny));
     assert!(input.len() > 20, "the bunny is open");
     let kept = |extra: &[&str]| {
         let out = temp(&format!("bunny{}.ply", extra.len()));
@@ -63,7 +53,7 @@ fn lock_borders_keeps_every_border_vertex() {
         ];
         args.extend_from_slice(extra);
         lodstudio_json(&args);
-        let out_positions: Vec<[u32; 3]> = mesh(&out)
+        let out_positions: Vec<[u32; 3]> = load_mesh(&out)
             .positions
             .iter()
             .map(|p| p.to_array().map(f32::to_bits))

@@ -63,7 +63,8 @@ pub fn sample_implicit(
     progress: &Progress,
 ) -> Result<Volume, Cancelled> {
     progress.stage("sampling");
-    let Grid { dims, origin, h } = Grid::around(solid.bounds(), resolution, margin);
+    let grid = Grid::around(solid.bounds(), resolution, margin);
+    let Grid { dims, origin, h } = grid;
     let k = supersample.max(1);
     let offsets: Vec<Vec3> = (0..k * k * k)
         .map(|i| {
@@ -108,12 +109,7 @@ pub fn sample_implicit(
             progress.set_fraction(d as f32 / slabs as f32);
             Ok(())
         })?;
-    Ok(Volume {
-        dims,
-        spacing: Vec3::splat(h),
-        origin,
-        data,
-    })
+    Ok(grid.volume(data))
 }
 
 /// The sampling grid of a solid: `resolution` cubic voxels of size `h` along
@@ -141,6 +137,18 @@ impl Grid {
             dims,
             origin: bounds.center() - span * 0.5,
             h,
+        }
+    }
+}
+
+impl Grid {
+    /// `data` (one value per node, x fastest) on this grid.
+    pub fn volume(&self, data: Vec<f32>) -> Volume {
+        Volume {
+            dims: self.dims,
+            spacing: Vec3::splat(self.h),
+            origin: self.origin,
+            data,
         }
     }
 }

@@ -149,7 +149,8 @@ pub fn sample_by_rows(
         return super::sampling::sample_implicit(solid, resolution, margin, supersample, progress);
     };
     let mesh = &mesh;
-    let Grid { dims, origin, h } = Grid::around(solid.bounds(), resolution, margin);
+    let grid = Grid::around(solid.bounds(), resolution, margin);
+    let Grid { dims, origin, h } = grid;
     let k = supersample.max(1);
     let [nx, ny, nz] = dims;
     // The sub-sample coordinates along each axis, computed as the general
@@ -253,12 +254,7 @@ pub fn sample_by_rows(
             progress.set_fraction(d as f32 / nz as f32);
             Ok(())
         })?;
-    Ok(Volume {
-        dims,
-        spacing: Vec3::splat(h),
-        origin,
-        data,
-    })
+    Ok(grid.volume(data))
 }
 
 /// Where the row along x through (y, z) meets a triangle.
