@@ -25,24 +25,16 @@
 //! node set), each timed as a whole, and once more to check that the two agree
 //! frame by frame and to time the incremental cut's primitives ("draw set").
 
-use std::path::Path;
+mod common;
+
 use std::sync::Arc;
 use std::time::Instant;
 
+use lodstudio_core::Progress;
 use lodstudio_core::hybrid::{self, HybridCut, HybridOptions};
 use lodstudio_core::simplify::step_bounds::run_bounded;
 use lodstudio_core::simplify::{self, CollapseOptions, EdgeCollapser, SimplifyOptions, Target};
 use lodstudio_core::view::{Tolerance, View};
-use lodstudio_core::{Model, Progress, TriMesh, io};
-
-fn load(path: &str) -> TriMesh {
-    let loaded = io::load(Path::new(path), &Default::default(), &Progress::new())
-        .unwrap_or_else(|e| panic!("cannot load {path}: {e}"));
-    match loaded.model {
-        Model::Mesh(m) => m,
-        _ => panic!("{path} is not a triangle mesh"),
-    }
-}
 
 /// Frames of the camera's orbit (0.5° each, so most of a turn).
 const FRAMES: usize = 600;
@@ -63,7 +55,7 @@ fn main() {
         )
         .into()
     });
-    let full = load(&path);
+    let full = common::load_mesh(&path);
     let n4 = full.triangles.len();
     let progress = Progress::new();
     let reduce = |target: usize| {

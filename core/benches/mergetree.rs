@@ -15,6 +15,8 @@
 //! then the same walk). Both produce the same cut (checked). Single-threaded;
 //! medians over the frames, since a shared machine preempts some of them.
 
+mod common;
+
 use std::path::PathBuf;
 use std::sync::Arc;
 use std::time::Instant;
@@ -22,23 +24,12 @@ use std::time::Instant;
 use lodstudio_core::builtins::torus;
 use lodstudio_core::mergetree::{self, Criteria, MergeTree, MergeTreeOptions, MergeTreeView};
 use lodstudio_core::view::{Tolerance, View};
-use lodstudio_core::{Model, Progress, TriMesh, io};
+use lodstudio_core::{Progress, TriMesh};
 
 fn models_dir() -> PathBuf {
     std::env::var_os("LODSTUDIO_SHARED_MODELS")
         .map(PathBuf::from)
         .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../shared/models"))
-}
-
-fn load(file: &str) -> TriMesh {
-    let path = models_dir().join(file);
-    match io::load(&path, &Default::default(), &Progress::new())
-        .unwrap_or_else(|e| panic!("{}: {e}", path.display()))
-        .model
-    {
-        Model::Mesh(m) => m,
-        _ => panic!("{file} is not a mesh"),
-    }
 }
 
 struct Replay {
@@ -144,7 +135,7 @@ fn main() {
         if !filter.is_empty() && !filter.iter().any(|f| name.contains(f.as_str())) {
             continue;
         }
-        let mesh = load(file);
+        let mesh = common::load_mesh(models_dir().join(file));
         let (tree, secs) = build(&mesh);
         for (label, criteria) in [
             ("all", Criteria::default()),

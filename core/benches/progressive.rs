@@ -15,28 +15,20 @@
 //! at n/4, n/2 and n, reduced by meshopt as in the simplify bench); it
 //! prints Markdown tables. BENCHMARKS.md holds a recorded run.
 
-use std::path::Path;
+mod common;
+
 use std::sync::Arc;
 use std::time::Instant;
 
 use lodstudio_core::geom::{RepairOptions, repair::repair_mesh};
 use lodstudio_core::simplify::progressive::{ProgressiveCut, record};
 use lodstudio_core::simplify::{CollapseOptions, EdgeCollapser};
-use lodstudio_core::{Model, Progress, TriMesh, io};
+use lodstudio_core::{Progress, TriMesh};
 
 const DRAGON: &str = concat!(
     env!("CARGO_MANIFEST_DIR"),
     "/../../shared/models/dragon_vrip.ply.gz"
 );
-
-fn load(path: &str) -> TriMesh {
-    let loaded = io::load(Path::new(path), &Default::default(), &Progress::new())
-        .unwrap_or_else(|e| panic!("cannot load {path}: {e}"));
-    match loaded.model {
-        Model::Mesh(m) => m,
-        _ => panic!("{path} is not a triangle mesh"),
-    }
-}
 
 /// meshoptimizer's simplification of `mesh` to `target` triangles (indices).
 fn meshopt_to(mesh: &TriMesh, target: usize) -> Vec<u32> {
@@ -70,7 +62,7 @@ fn spread(v: &[f64]) -> String {
 }
 
 fn main() {
-    let dragon = load(DRAGON);
+    let dragon = common::load_mesh(DRAGON);
     let n = dragon.triangles.len();
     println!("## Progressive edge collapse: the slider in 10 % steps\n");
     println!(

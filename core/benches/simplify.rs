@@ -31,7 +31,8 @@
 //! Also: `simplify::simplify` to an error target (0.5% of the diagonal), the
 //! whole search, against one run to the count it finds (both certified).
 
-use std::path::Path;
+mod common;
+
 use std::time::Instant;
 
 use lodstudio_core::distance::{SamplingOptions, hausdorff_mesh_mesh};
@@ -40,7 +41,7 @@ use lodstudio_core::simplify::{
     self, BoundOptions, Certificate, CollapseOptions, EdgeCollapser, Simplified, SimplifyOptions,
     Target, certify,
 };
-use lodstudio_core::{Model, Progress, TriMesh, io};
+use lodstudio_core::{Progress, TriMesh};
 
 const MODELS: [(&str, &str); 3] = [
     (
@@ -71,15 +72,6 @@ fn env_usize(name: &str, default: usize) -> usize {
         .and_then(|s| s.replace([',', '_'], "").parse().ok())
         .unwrap_or(default)
         .max(1)
-}
-
-fn load(path: &str) -> TriMesh {
-    let loaded = io::load(Path::new(path), &Default::default(), &Progress::new())
-        .unwrap_or_else(|e| panic!("cannot load {path}: {e}"));
-    match loaded.model {
-        Model::Mesh(m) => m,
-        _ => panic!("{path} is not a triangle mesh"),
-    }
 }
 
 /// Runs `f` `reps` times; the fastest time (seconds) and the last result.
@@ -198,7 +190,7 @@ fn main() {
             continue;
         }
         eprintln!("loading {name}");
-        let mesh = load(path);
+        let mesh = common::load_mesh(path);
         let n = mesh.triangles.len();
         let diag = mesh.bounds().diagonal();
         for ratio in RATIOS {

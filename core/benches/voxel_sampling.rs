@@ -9,31 +9,20 @@
 //! six minutes here: the point sampler at 256 is the slow part). Prints a
 //! Markdown table; both samplers' volumes are compared voxel by voxel.
 
+mod common;
+
 use std::path::PathBuf;
 use std::time::Instant;
 
+use lodstudio_core::Progress;
 use lodstudio_core::implicit::{Implicit, MeshSolid};
 use lodstudio_core::voxel::sampling::sample_implicit;
 use lodstudio_core::voxel::scanline::sample_by_rows;
 use lodstudio_core::voxel::{Filter, filter, marching_cubes};
-use lodstudio_core::{Model, Progress, TriMesh, io};
 
 /// The sampler's k (the voxel method's supersampling) and filter radius.
 const K: usize = 3;
 const RADIUS: f32 = 1.0;
-
-fn mesh(name: &str) -> TriMesh {
-    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../../shared/models")
-        .join(name);
-    match io::load(&path, &Default::default(), &Progress::new())
-        .unwrap_or_else(|e| panic!("{name}: {e}"))
-        .model
-    {
-        Model::Mesh(m) => m,
-        _ => panic!("{name} is a mesh"),
-    }
-}
 
 fn seconds<T>(f: impl FnOnce() -> T) -> (T, f64) {
     let t = Instant::now();
@@ -48,7 +37,11 @@ fn main() {
     );
     println!("|---|---|---|---|---|---|---|---|---|---|---|---|");
     for name in ["dragon_vrip.ply.gz", "horse.ply", "stanford-bunny.obj"] {
-        let m = mesh(name);
+        let m = common::load_mesh(
+            PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+                .join("../../shared/models")
+                .join(name),
+        );
         let solid = MeshSolid::new(&m);
         let bytes: Vec<u8> = m
             .positions
