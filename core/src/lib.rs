@@ -17,6 +17,7 @@ pub mod lod;
 pub mod mergetree;
 pub mod open;
 pub mod progress;
+pub mod recipe;
 pub mod rng;
 mod simd;
 pub mod simplify;

@@ -88,29 +88,55 @@ pub fn simplify(
     opts: &SimplifyOptions,
     progress: &Progress,
 ) -> Result<Simplified, SimplifyError> {
+    let mut out = simplify_chain(
+        mesh,
+        &[opts.target],
+        opts.collapse,
+        opts.per_triangle_bounds,
+        progress,
+    )?;
+    Ok(out.pop().expect("one result per target"))
+}
+
+/// Simplifies `mesh` to every target of an LOD chain in one progressive
+/// collapse: collapses are deterministic and a collapser continues as a fresh
+/// run would, so the count targets (largest first) and the error targets
+/// (smallest first) each continue from the state the previous one reached,
+/// and one original's search structures certify them all. A chain of rows
+/// costs about one run to its coarsest row, not one run per row. Results come
+/// in the order of `targets`.
+pub fn simplify_chain(
+    mesh: &TriMesh,
+    targets: &[Target],
+    collapse_opts: CollapseOptions,
+    per_triangle_bounds: bool,
+    progress: &Progress,
+) -> Result<Vec<Simplified>, SimplifyError> {
     let n = mesh.triangles.len();
     let diag = mesh.bounds().diagonal();
     let valid_fraction = |r: f32| r.is_finite() && (0.0..=1.0).contains(&r);
     let valid_error = |e: f32| e.is_finite() && e >= 0.0;
     // A triangle count to run to (Ok), or an error bound to search for (Err).
-    let goal: Result<usize, f32> = match opts.target {
-        Target::Triangles(t) => Ok(t),
-        Target::Ratio(r) if valid_fraction(r) => Ok((r as f64 * n as f64).round() as usize),
-        Target::Error(e) if valid_error(e) => Err(e),
-        Target::RelativeError(e) if valid_error(e) => Err(e * diag),
-        Target::Ratio(r) => {
-            return Err(SimplifyError::BadTarget(format!(
+    let goal = |target: Target| -> Result<Result<usize, f32>, SimplifyError> {
+        match target {
+            Target::Triangles(t) => Ok(Ok(t)),
+            Target::Ratio(r) if valid_fraction(r) => Ok(Ok((r as f64 * n as f64).round() as usize)),
+            Target::Error(e) if valid_error(e) => Ok(Err(e)),
+            Target::RelativeError(e) if valid_error(e) => Ok(Err(e * diag)),
+            Target::Ratio(r) => Err(SimplifyError::BadTarget(format!(
                 "ratio {r} is not in 0..=1"
-            )));
-        }
-        Target::Error(e) | Target::RelativeError(e) => {
-            return Err(SimplifyError::BadTarget(format!(
+            ))),
+            Target::Error(e) | Target::RelativeError(e) => Err(SimplifyError::BadTarget(format!(
                 "error {e} is not a finite distance >= 0"
-            )));
+            ))),
         }
     };
+    let goals = targets
+        .iter()
+        .map(|t| goal(*t))
+        .collect::<Result<Vec<_>, _>>()?;
     let bound_opts = BoundOptions {
-        per_triangle: opts.per_triangle_bounds,
+        per_triangle: per_triangle_bounds,
         ..BoundOptions::for_diagonal(diag)
     };
     // Collapses `s` on down to `target` triangles (or as far as it can go).
@@ -135,6 +161,20 @@ pub fn simplify(
         });
         Ok(progress.check()?)
     };
+    // Count goals by decreasing count, error goals by increasing error.
+    let mut counts: Vec<(usize, usize)> = goals
+        .iter()
+        .enumerate()
+        .filter_map(|(i, g)| g.ok().map(|c| (i, c)))
+        .collect();
+    counts.sort_by(|a, b| b.1.cmp(&a.1).then(a.0.cmp(&b.0)));
+    let mut errors: Vec<(usize, f32)> = goals
+        .iter()
+        .enumerate()
+        .filter_map(|(i, g)| g.err().map(|e| (i, e)))
+        .collect();
+    errors.sort_by(|a, b| a.1.total_cmp(&b.1).then(a.0.cmp(&b.0)));
+    let mut results: Vec<Option<Simplified>> = vec![None; targets.len()];
     std::thread::scope(|scope| {
         // The original's search structures are built beside the first
         // collapses (which run on one thread), for every certificate.
@@ -156,28 +196,38 @@ pub fn simplify(
                 collapses: s.collapses(),
             })
         };
-        let mut start = EdgeCollapser::new(mesh, opts.collapse);
-        match goal {
-            Ok(target) => {
-                collapse(&mut start, target)?;
-                certify(&start)
-            }
-            Err(max_error) => to_error(start, max_error, collapse, certify),
+        let start = EdgeCollapser::new(mesh, collapse_opts);
+        let mut state = start.clone();
+        for (i, count) in counts {
+            collapse(&mut state, count)?;
+            results[i] = Some(certify(&state)?);
         }
-    })
+        let mut state = start;
+        for (i, max_error) in errors {
+            let (r, reached) = to_error(state, max_error, collapse, &mut certify)?;
+            results[i] = Some(r);
+            state = reached;
+        }
+        Ok::<(), SimplifyError>(())
+    })?;
+    Ok(results
+        .into_iter()
+        .map(|r| r.expect("every target simplified"))
+        .collect())
 }
 
 /// The smallest triangle count whose certified bound is within `max_error`:
 /// halve the count while the bound holds, then bisect. Collapses are
 /// deterministic and a clone of the collapser continues as it would, so each
 /// probe resumes from the last count that held instead of re-running from
-/// the input (the halving adds up to one run).
+/// the input (the halving adds up to one run). Returns the result with the
+/// collapser state that made it, where a coarser error's search may start.
 fn to_error(
     start: EdgeCollapser,
     max_error: f32,
-    mut collapse: impl FnMut(&mut EdgeCollapser, usize) -> Result<(), SimplifyError>,
+    collapse: impl Fn(&mut EdgeCollapser, usize) -> Result<(), SimplifyError>,
     mut certify: impl FnMut(&EdgeCollapser) -> Result<Simplified, SimplifyError>,
-) -> Result<Simplified, SimplifyError> {
+) -> Result<(Simplified, EdgeCollapser), SimplifyError> {
     let n = start.triangle_count();
     let (mut good, mut good_state, mut good_n) = (None, start, n);
     // Halving until a probe fails (or reaches 0), then bisecting from there.
@@ -198,7 +248,7 @@ fn to_error(
             && let Some(g) = good
         {
             // Nothing more can collapse: every smaller count gives this mesh.
-            return Ok(g);
+            return Ok((g, good_state));
         }
         let r = certify(&s)?;
         if r.error_bound() <= max_error {
@@ -214,8 +264,8 @@ fn to_error(
         }
     }
     match good {
-        Some(g) => Ok(g),
-        None => certify(&good_state),
+        Some(g) => Ok((g, good_state)),
+        None => Ok((certify(&good_state)?, good_state)),
     }
 }
 

@@ -1,0 +1,446 @@
+//! A recipe applied to a model: the LOD chain every consumer writes (the
+//! studio's chain panel, `lodstudio export`, batch runs). Rows that build the
+//! same hierarchy share it: edge-collapse rows are one progressive collapse
+//! (`simplify::simplify_chain`), the other methods' rows cuts of one
+//! hierarchy chosen in object space (`lod::chain`), so every viewer gets the
+//! same chain. LODs are ordered by certified bound and switch where the next
+//! one's bound projects to the recipe's pixel tolerance.
+
+use std::sync::Arc;
+use std::time::Instant;
+
+use super::{Recipe, Row, RowTolerance};
+use crate::geom::{Model, PointSet, TriMesh};
+use crate::io::gltf_writer::write_lod_chain;
+use crate::lod::chain::{ChainItem, choose, lod_screen_coverages};
+use crate::lod::{DrawSet, Hierarchy, Method};
+use crate::progress::{Cancelled, Progress};
+use crate::simplify::{self, CollapseOptions, SimplifyError, Target};
+use crate::view::View;
+
+/// One LOD of a built chain.
+#[derive(Debug, Clone)]
+pub struct ChainLod {
+    /// The recipe rows this LOD answers (rows met by the same cut share it).
+    pub rows: Vec<usize>,
+    /// Their labels as `--lods` writes them ("simplify:0.5%").
+    pub labels: Vec<String>,
+    pub method: Method,
+    pub set: DrawSet,
+    /// Seconds spent on the hierarchy behind it (shared by its rows).
+    pub build_seconds: f64,
+}
+
+impl ChainLod {
+    /// The LOD's error bound in object space (certified, or AMG's estimate).
+    pub fn bound(&self) -> f32 {
+        self.set.error_bound
+    }
+}
+
+/// A built LOD chain: its LODs by increasing bound, with their switch
+/// coverages (`MSFT_screencoverage`).
+#[derive(Debug, Clone)]
+pub struct Chain {
+    pub lods: Vec<ChainLod>,
+    pub coverages: Vec<f32>,
+    /// Bounding-box diagonal of the input (what relative bounds refer to).
+    pub diagonal: f32,
+    pub recipe: Recipe,
+}
+
+/// Why a chain could not be built.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum ChainError {
+    /// The recipe does not fit the model (a row no cut meets, a mesh method on
+    /// a point set): names the row.
+    #[error("{0}")]
+    BadInput(String),
+    #[error("cancelled")]
+    Cancelled,
+}
+
+impl From<Cancelled> for ChainError {
+    fn from(_: Cancelled) -> Self {
+        ChainError::Cancelled
+    }
+}
+
+impl Chain {
+    /// The chain as one GLB (MSFT_lod + MSFT_screencoverage), the one writer
+    /// the studio's export and `lodstudio export` share.
+    pub fn glb(&self) -> Vec<u8> {
+        let sets: Vec<DrawSet> = self.lods.iter().map(|l| l.set.clone()).collect();
+        write_lod_chain(&sets, &self.coverages, self.recipe.points_as)
+    }
+
+    /// The bounding sphere's radius the coverages assume.
+    pub fn radius(&self) -> f32 {
+        0.5 * self.diagonal
+    }
+
+    /// The LOD a loader shows at screen coverage `c` (the object's projected
+    /// height over the viewport's): the last whose threshold `c` reaches, or
+    /// `None` below the last threshold (the object is left out).
+    pub fn lod_at_coverage(&self, c: f32) -> Option<usize> {
+        self.coverages.iter().position(|&t| c >= t)
+    }
+
+    /// The pixels LOD `i`'s bound covers at coverage `c` on the recipe's
+    /// viewport: `e·H·c / (2r)` (`lod::chain`).
+    pub fn pixels_at(&self, i: usize, c: f32) -> f32 {
+        self.lods[i].bound() * self.recipe.viewport_height * c
+            / self.diagonal.max(f32::MIN_POSITIVE)
+    }
+}
+
+/// Builds the chain `recipe` asks of `model`.
+pub fn build_chain(
+    model: &Model,
+    recipe: &Recipe,
+    progress: &Progress,
+) -> Result<Chain, ChainError> {
+    recipe
+        .check()
+        .map_err(|e| ChainError::BadInput(e.to_string()))?;
+    let (mesh, points) = match model {
+        Model::Mesh(m) => (Some(m), None),
+        Model::Points(p) => (None, Some(p)),
+        Model::Volume(_) => {
+            return Err(ChainError::BadInput(
+                "an LOD chain needs a triangle mesh or a point set, not a volume".into(),
+            ));
+        }
+    };
+    let diagonal = match (mesh, points) {
+        (Some(m), _) => m.bounds().diagonal(),
+        (_, Some(p)) => p.bounds().diagonal(),
+        _ => unreachable!("a mesh or points"),
+    };
+    if !(diagonal.is_finite() && diagonal > 0.0) {
+        return Err(ChainError::BadInput(
+            "the model is empty or has no extent: no LOD to build".into(),
+        ));
+    }
+    // p pixels at coverage C: e = p · 2r / (H · C), r = diagonal / 2.
+    let pixels_to_error = |p: f32| p * diagonal / (recipe.viewport_height * recipe.coverage);
+    let mut lods: Vec<ChainLod> = Vec::new();
+    // Groups of rows that share one hierarchy, in recipe order.
+    let mut done = vec![false; recipe.rows.len()];
+    for first in 0..recipe.rows.len() {
+        if done[first] {
+            continue;
+        }
+        let row = &recipe.rows[first];
+        let group: Vec<usize> = (first..recipe.rows.len())
+            .filter(|&j| !done[j] && recipe.rows[j].same_hierarchy(row))
+            .collect();
+        for &j in &group {
+            done[j] = true;
+        }
+        progress.stage(&format!("row {}: {}", first + 1, row.method.name()));
+        let start = Instant::now();
+        let sets = match (row.method, mesh) {
+            (Method::EdgeCollapse, Some(mesh)) => {
+                simplify_rows(recipe, &group, mesh, pixels_to_error, progress)?
+            }
+            (Method::Amg, _) => {
+                let owned;
+                let points = match points {
+                    Some(p) => p,
+                    None => {
+                        owned = crate::amg::point_set(model).expect("a mesh has vertices");
+                        &owned
+                    }
+                };
+                let input = points.positions.len();
+                let h = amg_hierarchy(points, first, progress)?;
+                hierarchy_rows(recipe, &group, h, input, pixels_to_error)?
+            }
+            (method, Some(mesh)) => {
+                let input = mesh.triangles.len();
+                let h = mesh_hierarchy(row, first, mesh, progress)?;
+                debug_assert_eq!(h.method(), method);
+                hierarchy_rows(recipe, &group, h, input, pixels_to_error)?
+            }
+            (method, None) => {
+                return Err(ChainError::BadInput(format!(
+                    "rows[{first}] ({}) needs a triangle mesh, not a point set (only amg rows take points)",
+                    method.tag()
+                )));
+            }
+        };
+        let build_seconds = start.elapsed().as_secs_f64();
+        for (j, set) in group.into_iter().zip(sets) {
+            lods.push(ChainLod {
+                rows: vec![j],
+                labels: vec![recipe.rows[j].label()],
+                method: recipe.rows[j].method,
+                set,
+                build_seconds,
+            });
+        }
+    }
+    // Decreasing quality: increasing bound, then decreasing primitive count,
+    // then recipe order (so equal rows sort the same on every run).
+    lods.sort_by(|a, b| {
+        a.bound()
+            .total_cmp(&b.bound())
+            .then(b.set.primitive_count().cmp(&a.set.primitive_count()))
+            .then(a.rows[0].cmp(&b.rows[0]))
+    });
+    // Rows met by the same cut share it (one node, both labels).
+    lods.dedup_by(|later, kept| {
+        let same = later.method == kept.method && later.set == kept.set;
+        if same {
+            kept.rows.append(&mut later.rows);
+            kept.labels.append(&mut later.labels);
+        }
+        same
+    });
+    let bounds: Vec<f32> = lods.iter().map(ChainLod::bound).collect();
+    let coverages = lod_screen_coverages(
+        &bounds,
+        0.5 * diagonal,
+        recipe.pixels,
+        recipe.viewport_height,
+    );
+    Ok(Chain {
+        lods,
+        coverages,
+        diagonal,
+        recipe: recipe.clone(),
+    })
+}
+
+/// Edge-collapse rows: one progressive collapse to all their targets.
+fn simplify_rows(
+    recipe: &Recipe,
+    group: &[usize],
+    mesh: &TriMesh,
+    pixels_to_error: impl Fn(f32) -> f32,
+    progress: &Progress,
+) -> Result<Vec<DrawSet>, ChainError> {
+    let targets: Vec<Target> = group
+        .iter()
+        .map(|&j| match recipe.rows[j].tolerance {
+            RowTolerance::Percent(p) => Target::RelativeError(p / 100.0),
+            RowTolerance::Pixels(p) => Target::Error(pixels_to_error(p)),
+            RowTolerance::Ratio(r) => Target::Ratio(r),
+        })
+        .collect();
+    let collapse = CollapseOptions {
+        lock_borders: recipe.locks_borders(),
+        ..Default::default()
+    };
+    let results = simplify::simplify_chain(mesh, &targets, collapse, false, progress).map_err(
+        |e| match e {
+            SimplifyError::BadTarget(m) => ChainError::BadInput(format!("rows[{}]: {m}", group[0])),
+            SimplifyError::Cancelled => ChainError::Cancelled,
+        },
+    )?;
+    Ok(results
+        .into_iter()
+        .map(|r| DrawSet {
+            error_bound: r.error_bound(),
+            mesh: r.mesh,
+            ..Default::default()
+        })
+        .collect())
+}
+
+/// The hierarchy a mesh row of `row`'s method and parameters builds.
+fn mesh_hierarchy(
+    row: &Row,
+    index: usize,
+    mesh: &TriMesh,
+    progress: &Progress,
+) -> Result<Box<dyn Hierarchy>, ChainError> {
+    Ok(match row.method {
+        Method::Hybrid => {
+            let opts = crate::hybrid::HybridOptions {
+                kappa: row.kappa(),
+                tau: row.tau(),
+                ..Default::default()
+            };
+            opts.validate()
+                .map_err(|m| ChainError::BadInput(format!("rows[{index}]: {m}")))?;
+            let mrg = crate::hybrid::build(mesh, &opts, progress)?;
+            Box::new(crate::hybrid::HybridCut::new(Arc::new(mrg)))
+        }
+        Method::MergeTree => {
+            let tree = crate::mergetree::build(mesh, &Default::default(), progress)?;
+            Box::new(crate::mergetree::MergeTreeView::new(
+                Arc::new(tree),
+                Default::default(),
+            ))
+        }
+        Method::Voxel => {
+            use crate::voxel::{Filter, Pyramid, Source, pyramid::PyramidCut};
+            let solid = crate::implicit::MeshSolid::new(mesh);
+            let source = Source::Solid(&solid);
+            let mut pyramid =
+                Pyramid::build(source, row.resolution(), 1.0, Filter::Gaussian, progress)?;
+            pyramid.post = row.post();
+            // Each level certified against the input surface.
+            pyramid.certify(source.surface(), progress)?;
+            Box::new(PyramidCut::new(pyramid, None))
+        }
+        Method::EdgeCollapse | Method::Amg => unreachable!("built by their own rows"),
+    })
+}
+
+/// The AMG multiscale of the points, splats at the median radius.
+fn amg_hierarchy(
+    points: &PointSet,
+    index: usize,
+    progress: &Progress,
+) -> Result<Box<dyn Hierarchy>, ChainError> {
+    use crate::amg::{self, AmgError, AmgOptions};
+    let ms = amg::decompose(points, &AmgOptions::default(), progress).map_err(|e| match e {
+        AmgError::BadInput(m) => ChainError::BadInput(format!("rows[{index}]: {m}")),
+        AmgError::Cancelled => ChainError::Cancelled,
+    })?;
+    let texel = ms.default_texel();
+    Ok(Box::new(amg::AmgHierarchy::new(ms, texel)))
+}
+
+/// Rows of one hierarchy: an LOD per row chosen from it in object space
+/// (view-independent): the coarsest cut within an error, the finest within a
+/// share of the `input` primitives (triangles; AMG: points). An error no cut
+/// meets is refused, naming the row.
+fn hierarchy_rows(
+    recipe: &Recipe,
+    group: &[usize],
+    mut hierarchy: Box<dyn Hierarchy>,
+    input: usize,
+    pixels_to_error: impl Fn(f32) -> f32,
+) -> Result<Vec<DrawSet>, ChainError> {
+    let diag = hierarchy.diagonal().max(f32::MIN_POSITIVE);
+    let view = View::orbit(glam::Vec3::ZERO, diag, 0.0, 0.0);
+    group
+        .iter()
+        .map(|&j| {
+            let row = &recipe.rows[j];
+            let wanted = match row.tolerance {
+                RowTolerance::Percent(p) => ChainItem::Error(p / 100.0),
+                RowTolerance::Pixels(p) => ChainItem::Error(pixels_to_error(p) / diag),
+                RowTolerance::Ratio(r) => {
+                    ChainItem::Primitives((r as f64 * input as f64).ceil() as usize)
+                }
+            };
+            let set = choose(hierarchy.as_mut(), &view, wanted);
+            if let ChainItem::Error(f) = wanted
+                && set.error_bound > f * diag * (1.0 + 1e-6)
+            {
+                return Err(ChainError::BadInput(format!(
+                    "rows[{j}].tolerance: {}: no {} cut is that fine (the finest bound is {:.3}% of the diagonal{})",
+                    row.label(),
+                    row.method.tag(),
+                    100.0 * set.error_bound / diag,
+                    if row.method == Method::Voxel {
+                        "; raise the resolution"
+                    } else {
+                        ""
+                    },
+                )));
+            }
+            Ok(set)
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::recipe::parse_lods;
+
+    fn torus() -> Model {
+        Model::Mesh(crate::builtins::torus(1.0, 0.3, 48, 24))
+    }
+
+    /// A chain's edge-collapse rows equal fresh runs to the same counts, its
+    /// LODs come by increasing bound with decreasing coverages, and an AMG
+    /// impostor row joins them.
+    #[test]
+    fn mixed_chains_order_their_lods_and_share_one_collapse() {
+        let rows = parse_lods("simplify:0.25,simplify:0.5,amg:20%", None).unwrap();
+        let recipe = Recipe::new(rows);
+        let chain = build_chain(&torus(), &recipe, &Progress::new()).unwrap();
+        assert_eq!(chain.lods.len(), 3);
+        let methods: Vec<Method> = chain.lods.iter().map(|l| l.method).collect();
+        assert_eq!(
+            methods,
+            [Method::EdgeCollapse, Method::EdgeCollapse, Method::Amg]
+        );
+        assert!(chain.lods.windows(2).all(|w| w[0].bound() <= w[1].bound()));
+        assert!(chain.coverages.windows(2).all(|w| w[1] < w[0]));
+        let Model::Mesh(mesh) = torus() else {
+            unreachable!()
+        };
+        for (lod, ratio) in chain.lods[..2].iter().zip([0.5f32, 0.25]) {
+            let fresh = simplify::simplify(
+                &mesh,
+                &simplify::SimplifyOptions {
+                    target: Target::Ratio(ratio),
+                    collapse: Default::default(),
+                    per_triangle_bounds: false,
+                },
+                &Progress::new(),
+            )
+            .unwrap();
+            assert_eq!(lod.set.mesh, fresh.mesh, "ratio {ratio}");
+            assert_eq!(lod.bound(), fresh.error_bound());
+        }
+        assert!(!chain.lods[2].set.splats.is_empty());
+        // Coverage c shows the LOD whose threshold it reaches.
+        assert_eq!(chain.lod_at_coverage(1.0), Some(0));
+        assert_eq!(chain.lod_at_coverage(chain.coverages[1]), Some(1));
+        assert_eq!(chain.lod_at_coverage(0.5 * chain.coverages[2]), None);
+    }
+
+    /// Error rows continue from each other and still meet their errors; the
+    /// same recipe gives the same bytes twice.
+    #[test]
+    fn error_rows_meet_their_errors_and_builds_repeat_bytewise() {
+        let recipe = Recipe::new(parse_lods("2%,0.5%,1%", Some(Method::EdgeCollapse)).unwrap());
+        let a = build_chain(&torus(), &recipe, &Progress::new()).unwrap();
+        let wanted = [0.005, 0.01, 0.02];
+        for (lod, w) in a.lods.iter().zip(wanted) {
+            assert!(lod.bound() <= w * a.diagonal, "{} > {w}", lod.bound());
+        }
+        assert!(
+            a.lods
+                .windows(2)
+                .all(|w| w[0].set.mesh.triangles.len() > w[1].set.mesh.triangles.len())
+        );
+        let b = build_chain(&torus(), &recipe, &Progress::new()).unwrap();
+        assert_eq!(a.glb(), b.glb());
+    }
+
+    /// Rows a model cannot answer are refused by row: a mesh method on points,
+    /// an error finer than a voxel pyramid goes.
+    #[test]
+    fn rows_the_model_cannot_answer_are_named() {
+        let points = Model::Points(crate::amg::point_set(&torus()).unwrap());
+        let recipe = Recipe::new(parse_lods("amg:20%,simplify:1%", None).unwrap());
+        let e = build_chain(&points, &recipe, &Progress::new()).unwrap_err();
+        assert!(e.to_string().contains("rows[1]"), "{e}");
+        let mut row = Row::new(Method::Voxel, RowTolerance::Percent(0.001));
+        row.resolution = Some(16);
+        let e = build_chain(&torus(), &Recipe::new(vec![row]), &Progress::new()).unwrap_err();
+        assert!(e.to_string().starts_with("rows[0].tolerance"), "{e}");
+        let empty = Model::Mesh(TriMesh::default());
+        assert!(
+            build_chain(
+                &empty,
+                &Recipe::new(vec![Row::new(
+                    Method::EdgeCollapse,
+                    RowTolerance::Ratio(0.5)
+                )]),
+                &Progress::new()
+            )
+            .is_err()
+        );
+    }
+}

@@ -1,0 +1,17 @@
+//! Recipes: the settings of an LOD chain, saved by the studio and replayed
+//! by `lodstudio export --recipe` (DESIGN.md, "The LOD chain and recipes").
+//!
+//! - `file`: the versioned recipe ([`Recipe`]): rows LOD0…LODn, each a
+//!   method, its parameters and a tolerance; read with errors that name the
+//!   row and the field;
+//! - `build`: a recipe applied to a model ([`build_chain`]): one hierarchy
+//!   per method and parameters, an LOD per row, its switch coverage from the
+//!   certified bound, and the GLB every consumer writes ([`Chain::glb`]).
+
+mod build;
+mod file;
+
+pub use build::{Chain, ChainError, ChainLod, build_chain};
+pub use file::{
+    FORMAT, PostSpec, Recipe, RecipeError, Row, RowTolerance, VERSION, WeldSpec, parse_lods,
+};
