@@ -6,6 +6,7 @@
 //! cancel at once.
 
 pub mod amg;
+pub mod batch;
 pub mod builtins;
 pub mod distance;
 pub mod geom;

@@ -364,11 +364,17 @@ fn folder_batch_writes_one_file_per_model_and_reports_failures() {
     ]);
     assert_eq!(run.status.code(), Some(2));
     let j: Value = serde_json::from_slice(&run.stdout).expect("one JSON object");
-    let models = j["models"].as_array().unwrap();
-    assert_eq!(models.len(), 2);
-    assert_eq!(j["failed"].as_array().unwrap().len(), 1);
+    assert_eq!(
+        (j["models"].as_u64(), j["built"].as_u64()),
+        (Some(3), Some(2))
+    );
+    assert_eq!(
+        (j["skipped"].as_u64(), j["failed"].as_u64()),
+        (Some(0), Some(1))
+    );
+    assert_eq!(j["outputs"].as_array().unwrap().len(), 2);
     assert!(
-        j["failed"][0]["file"]
+        j["failures"][0]["file"]
             .as_str()
             .unwrap()
             .ends_with("broken.obj")
@@ -377,16 +383,29 @@ fn folder_batch_writes_one_file_per_model_and_reports_failures() {
         let back = lodstudio_json(&["info", out.join(name).to_str().unwrap()]);
         assert!(back["triangles"].as_u64().unwrap() > 0, "{name}");
     }
-    // Existing outputs are kept without --force; a glob picks the OFF file only.
+    // A rerun skips what the cache has; a glob picks the OFF file only;
+    // --force rebuilds it.
     let pattern = format!("{d}/*.off");
-    let again = lodstudio(&[
+    let again = lodstudio_json(&[
         "export", &pattern, "--method", "simplify", "--lods", "2%", "-o", o,
     ]);
-    assert_eq!(again.status.code(), Some(2), "bones.glb exists");
+    assert_eq!(
+        (again["models"].as_u64(), again["skipped"].as_u64()),
+        (Some(1), Some(1))
+    );
     let forced = lodstudio_json(&[
         "export", &pattern, "--method", "simplify", "--lods", "2%", "-o", o, "--force",
     ]);
-    assert_eq!(forced["models"].as_array().unwrap().len(), 1);
+    assert_eq!(forced["built"].as_u64(), Some(1));
+    // A file the batch did not make is kept without --force.
+    std::fs::write(out.join("fandisk.glb"), b"the user's own").unwrap();
+    std::fs::remove_dir_all(out.join(".lodstudio-cache")).unwrap();
+    let kept = lodstudio(&["export", d, "--method", "simplify", "--lods", "2%", "-o", o]);
+    assert_eq!(kept.status.code(), Some(2));
+    assert_eq!(
+        std::fs::read(out.join("fandisk.glb")).unwrap(),
+        b"the user's own"
+    );
 }
 
 /// Every hierarchy method exports a chain whose bounds meet the tolerances:
@@ -502,4 +521,97 @@ fn original_materials_and_textures_are_carried_into_every_lod() {
         assert_eq!(got.table, materials.table, "{method}");
         assert_eq!(got.table[0].base_color_texture.as_ref(), Some(&atlas));
     }
+}
+
+/// Mixed chains name each LOD's method; `--save-recipe` writes the run's
+/// recipe and `--recipe` replays it byte for byte; method options beside
+/// `--recipe` and bad recipe values are refused (exit 2) naming what is wrong.
+#[test]
+fn recipes_replay_mixed_chains_byte_for_byte() {
+    let (first, recipe, replay) = (temp("mixed-a.glb"), temp("mixed.json"), temp("mixed-b.glb"));
+    let fandisk = shared_model("fandisk.obj");
+    let f = fandisk.to_str().unwrap();
+    let report = lodstudio_json(&[
+        "export",
+        f,
+        "--lods",
+        "simplify:0.5%,simplify:2%,amg:15%",
+        "-o",
+        first.to_str().unwrap(),
+        "--save-recipe",
+        recipe.to_str().unwrap(),
+        "--pixels",
+        "2",
+    ]);
+    let methods: Vec<&str> = report["lods"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|l| l["method"].as_str().unwrap())
+        .collect();
+    assert_eq!(methods, ["simplify", "simplify", "amg"]);
+    assert_eq!(report["method"], "mixed");
+    let lods = check_chain(&first, &report);
+    assert!(lods[2]["splats"].as_u64().unwrap() > 0);
+    let saved: Value = serde_json::from_slice(&std::fs::read(&recipe).unwrap()).unwrap();
+    assert_eq!(
+        (saved["format"].as_str(), saved["pixels"].as_f64()),
+        (Some("lodstudio-recipe"), Some(2.0))
+    );
+    assert_eq!(saved["rows"].as_array().unwrap().len(), 3);
+    let again = lodstudio_json(&[
+        "export",
+        f,
+        "--recipe",
+        recipe.to_str().unwrap(),
+        "-o",
+        replay.to_str().unwrap(),
+    ]);
+    assert_eq!(again["lods"].as_array().unwrap().len(), 3);
+    assert_eq!(
+        std::fs::read(&first).unwrap(),
+        std::fs::read(&replay).unwrap()
+    );
+    // Method options beside --recipe.
+    for extra in [
+        &["--kappa", "4"][..],
+        &["--lods", "1%"],
+        &["--method", "hybrid"],
+        &["--pixels", "3"],
+    ] {
+        let mut args = vec![
+            "export",
+            f,
+            "--recipe",
+            recipe.to_str().unwrap(),
+            "-o",
+            replay.to_str().unwrap(),
+            "--force",
+        ];
+        args.extend_from_slice(extra);
+        let r = lodstudio(&args);
+        assert_eq!(r.status.code(), Some(2), "{extra:?}");
+    }
+    // A bad value names the row and the field.
+    let bad = temp("bad.json");
+    let mut text = String::from_utf8(std::fs::read(&recipe).unwrap()).unwrap();
+    text = text.replacen("\"amg\"", "\"hybrid\",\n      \"kappa\": 500", 1);
+    std::fs::write(&bad, text).unwrap();
+    let r = lodstudio(&[
+        "export",
+        f,
+        "--recipe",
+        bad.to_str().unwrap(),
+        "-o",
+        replay.to_str().unwrap(),
+        "--force",
+    ]);
+    assert_eq!(r.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&r.stderr);
+    assert!(err.contains("rows[2].kappa"), "{err}");
+    assert_eq!(
+        std::fs::read(&first).unwrap(),
+        std::fs::read(&replay).unwrap(),
+        "nothing lost"
+    );
 }

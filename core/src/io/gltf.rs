@@ -7,7 +7,7 @@
 //! Accessor ranges are checked against the buffers before any read (the crate's
 //! readers assume valid data), so hostile files give an error instead of a panic.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use glam::{Mat3, Mat4, Vec2, Vec3};
 
@@ -470,6 +470,43 @@ pub fn split_glb(glb: &[u8], bin_name: &str) -> Option<(Vec<u8>, Vec<u8>)> {
         buffer["uri"] = serde_json::json!(bin_name);
     }
     Some((serde_json::to_vec_pretty(&doc).ok()?, bin))
+}
+
+/// The files beside a glTF that it names (external buffers and images, in
+/// document order, each once): what a glTF's content is made of besides its
+/// own bytes (batch caches hash them). Unreadable documents name none.
+pub fn referenced_files(path: &Path, bytes: &[u8]) -> Vec<PathBuf> {
+    let Ok(gltf) = gltf::Gltf::from_slice_without_validation(bytes) else {
+        return Vec::new();
+    };
+    let base = path.parent().unwrap_or(Path::new("."));
+    let buffers = gltf.document.buffers().filter_map(|b| match b.source() {
+        gltf::buffer::Source::Uri(uri) => Some(uri),
+        gltf::buffer::Source::Bin => None,
+    });
+    let images = gltf.document.images().filter_map(|i| match i.source() {
+        gltf::image::Source::Uri { uri, .. } => Some(uri),
+        gltf::image::Source::View { .. } => None,
+    });
+    let mut out: Vec<PathBuf> = Vec::new();
+    for uri in buffers.chain(images) {
+        let relative = uri
+            .strip_prefix("file://")
+            .or_else(|| uri.strip_prefix("file:"))
+            .map(str::to_owned)
+            .or_else(|| {
+                (!uri.contains(':'))
+                    .then(|| urlencoding::decode(uri).ok().map(|d| d.into_owned()))
+                    .flatten()
+            });
+        if let Some(r) = relative {
+            let p = base.join(r);
+            if !out.contains(&p) {
+                out.push(p);
+            }
+        }
+    }
+    out
 }
 
 #[cfg(test)]
