@@ -23,9 +23,8 @@ pub struct BatchArgs {
     /// Kubernetes Indexed Job) or the variable --shard-index-env names.
     #[arg(long, value_name = "N")]
     shards: Option<usize>,
-    /// Batch: the variable holding the shard index with --shards (a Slurm
-    /// array: SLURM_ARRAY_TASK_ID; GNU parallel: PARALLEL_SEQ minus one is
-    /// not 0-based, pass --shard instead).
+    /// Batch: the variable holding the 0-based shard index with --shards
+    /// (a Slurm array: SLURM_ARRAY_TASK_ID; a CI matrix: its index variable).
     #[arg(long, value_name = "VAR", default_value = shard::INDEX_ENV, requires = "shards")]
     shard_index_env: String,
     /// Batch: models built at once [default: the machine's cores].
@@ -466,11 +465,13 @@ fn model_line(job: &Job, outcome: &Outcome, seconds: f64) -> serde_json::Value {
             "input": input, "status": "built", "cache_hit": false, "output": r["output"],
             "reason": r["reason"], "lods": r["lods"], "seconds": seconds,
             "peak_memory_bytes": r["peak_memory_bytes"], "bytes": r["bytes"],
+            "input_triangles": r["input_triangles"],
         }),
         Outcome::Skipped(r) => serde_json::json!({
             "input": input, "status": "skipped", "cache_hit": true, "output": r["output"],
             "reason": "cached: the same input, recipe and lodstudio built it",
             "lods": r["lods"], "seconds": seconds, "bytes": r["bytes"],
+            "input_triangles": r["input_triangles"],
         }),
         Outcome::Failed { error, .. } => serde_json::json!({
             "input": input, "status": "failed", "cache_hit": false, "error": error,
