@@ -56,6 +56,47 @@ pub fn choose_and_write_hierarchy(bytes: &[u8], file_name: &str) -> Saved {
     }
 }
 
+/// Asks where to save an LOD chain's GLB (suggesting `file_name`), then
+/// writes it as [`write_chain`] does.
+pub fn choose_and_write_chain(glb: &[u8], file_name: &str) -> Saved {
+    let chosen = rfd::FileDialog::new()
+        .set_title("Export the LOD chain")
+        .set_file_name(file_name)
+        .add_filter("glTF binary (glb)", &["glb"])
+        .add_filter("glTF with its buffer beside (gltf)", &["gltf"])
+        .save_file();
+    match chosen {
+        Some(path) => write_chain(glb, &path),
+        None => Saved::NoFile,
+    }
+}
+
+/// Writes a chain's GLB through the writer `lodstudio export` uses (`.gltf`
+/// names get the buffer in a `.bin` beside), atomically.
+pub fn write_chain(glb: &[u8], path: &Path) -> Saved {
+    match lodstudio_core::io::gltf_writer::write_file(path, glb) {
+        Ok(bytes) => Saved::Written {
+            path: path.to_path_buf(),
+            bytes,
+            beside: Vec::new(),
+        },
+        Err(e) => Saved::Failed(e),
+    }
+}
+
+/// Asks where to save a recipe (suggesting `file_name`), then writes it.
+pub fn choose_and_write_recipe(bytes: &[u8], file_name: &str) -> Saved {
+    let chosen = rfd::FileDialog::new()
+        .set_title("Save the chain's recipe")
+        .set_file_name(file_name)
+        .add_filter("Recipes (json)", &["json"])
+        .save_file();
+    match chosen {
+        Some(path) => write_bytes(bytes, &path),
+        None => Saved::NoFile,
+    }
+}
+
 /// Writes the cut `set` at `path` through the one cut writer (GLB holds it
 /// all; OBJ and PLY get the points beside them, and refuse splats),
 /// atomically: a failed write leaves any existing file as it was.

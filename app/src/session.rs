@@ -13,6 +13,7 @@ use std::time::{Duration, Instant};
 use serde::{Deserialize, Serialize};
 
 use crate::settings::MethodSettings;
+use crate::settings::chain::ChainSettings;
 
 /// At most this much tuning is lost when the studio dies.
 pub const INTERVAL: Duration = Duration::from_secs(2);
@@ -29,6 +30,10 @@ pub struct Session {
     /// Recently opened files, newest first.
     pub recent: Vec<PathBuf>,
     pub methods: MethodSettings,
+    /// The LOD chain on the chain panel (saved or not).
+    pub chain: ChainSettings,
+    /// Recently opened or saved recipes, newest first.
+    pub recent_recipes: Vec<PathBuf>,
     /// The voxel threshold and the volume it was chosen for: it is in that
     /// volume's value units, so it only applies when the same volume reopens.
     pub volume_threshold: Option<(PathBuf, f32)>,
@@ -39,6 +44,7 @@ impl Session {
     pub fn from_json(json: &str) -> Option<Session> {
         let mut session: Session = serde_json::from_str(json).ok()?;
         session.methods = session.methods.sanitized();
+        session.chain = session.chain.sanitized();
         session.volume_threshold = session.volume_threshold.filter(|(_, t)| t.is_finite());
         Some(session)
     }

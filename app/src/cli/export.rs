@@ -219,7 +219,7 @@ fn export_one(
         ChainError::BadInput(m) => CliError::BadInput(format!("{}: {m}", file.display())),
         ChainError::Cancelled => CliError::Failure("cancelled".into()),
     })?;
-    let bytes = write_gltf(output, chain.glb())?;
+    let bytes = io::gltf_writer::write_file(output, &chain.glb()).map_err(CliError::BadInput)?;
     let seconds = start.elapsed().as_secs_f64();
     let mesh = match &loaded.model {
         Model::Mesh(m) => Some(m),
@@ -299,30 +299,6 @@ fn output_format(path: &Path) -> Option<Format> {
         "gltf" => Some(Format::Gltf),
         _ => None,
     }
-}
-
-/// Writes a GLB as is, or as .gltf + .bin by its extension (atomically);
-/// returns the bytes written.
-fn write_gltf(output: &Path, glb: Vec<u8>) -> Result<usize, CliError> {
-    let fail = |p: &Path, e: std::io::Error| {
-        CliError::BadInput(format!("{}: cannot write: {e}", p.display()))
-    };
-    if output_format(output) == Some(Format::Gltf) {
-        let bin_path = output.with_extension("bin");
-        let bin_name = bin_path
-            .file_name()
-            .unwrap_or_default()
-            .to_string_lossy()
-            .into_owned();
-        let (json, bin) = io::gltf::split_glb(&glb, &bin_name).ok_or_else(|| {
-            CliError::Failure("internal: the GLB writer made no container".into())
-        })?;
-        io::write_atomic(&bin_path, &bin).map_err(|e| fail(&bin_path, e))?;
-        io::write_atomic(output, &json).map_err(|e| fail(output, e))?;
-        return Ok(json.len() + bin.len());
-    }
-    io::write_atomic(output, &glb).map_err(|e| fail(output, e))?;
-    Ok(glb.len())
 }
 
 /// The human summary of one export report.

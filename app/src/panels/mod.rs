@@ -3,6 +3,7 @@
 //! controls set lives in `settings`, which builds use without any UI.
 
 pub mod amg;
+pub mod chain;
 pub mod hybrid;
 pub mod mergetree;
 pub mod simplify;

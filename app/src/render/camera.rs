@@ -6,6 +6,18 @@ use glam::{Mat4, Vec2, Vec3};
 
 /// Vertical field of view.
 pub const FOV_Y: f32 = std::f32::consts::FRAC_PI_4;
+/// The screen coverage (the bounding sphere's projected height over the
+/// viewport's) seen from `distance` bounding radii: `r / (d tan(θ/2))`, what
+/// `MSFT_screencoverage` thresholds compare with.
+pub fn coverage_at_distance(distance: f32) -> f32 {
+    1.0 / (distance * (0.5 * FOV_Y).tan())
+}
+
+/// The distance (in bounding radii) at which the coverage is `coverage`.
+pub fn distance_at_coverage(coverage: f32) -> f32 {
+    1.0 / (coverage * (0.5 * FOV_Y).tan())
+}
+
 /// Pitch stays short of the poles so the view's up vector is never parallel to it.
 const MAX_PITCH: f32 = 1.55;
 /// The direction a newly opened model is seen from.

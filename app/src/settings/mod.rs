@@ -6,6 +6,7 @@
 //! [`voxel::VoxelSettings::threshold`]).
 
 pub mod amg;
+pub mod chain;
 pub mod hybrid;
 pub mod mergetree;
 pub mod simplify;

@@ -54,6 +54,13 @@ impl StudioApp {
             self.viewport.swap_scene(preview);
             return;
         }
+        // A chain row or the switch preview, when one is asked for.
+        if self.view.shows_lod()
+            && let Some(scene) = self.chain_scene()
+        {
+            self.viewport.swap_scene(&scene);
+            return;
+        }
         let scene = match (&self.result, self.view) {
             (Some(built), View::Simplified | View::SideBySide) => Arc::clone(built.live.scene()),
             _ => match self.original_scene() {

@@ -93,6 +93,7 @@ impl StudioApp {
                     heatmap::legend(ui, &build::length(live.stats.error_bound));
                 }
             }
+            self.chain_inspector(ui);
         });
     }
 }

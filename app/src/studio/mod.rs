@@ -8,6 +8,7 @@
 //! keeps the previous model and result.
 
 mod building;
+mod chain;
 mod cut;
 mod inspector;
 mod left_panel;
@@ -26,6 +27,7 @@ use lodstudio_core::io::Loaded;
 use lodstudio_core::stats::ModelSummary;
 
 use self::building::BuildRequest;
+pub use self::chain::BuiltChain;
 use self::loading::{LoadJob, MAX_RECENT, absolute, default_model, display_name, is_builtin};
 use self::status::{LogLine, drop_hint};
 pub use self::view_bar::View;
@@ -108,6 +110,8 @@ pub struct StudioApp {
     /// Colour the simplified mesh by each triangle's certified bound.
     heat: bool,
     export: Option<Job<Saved>>,
+    /// The LOD chain: its rows, their build, the switch preview.
+    chain: chain::ChainView,
     autosave: Autosave,
 }
 
@@ -129,6 +133,8 @@ impl StudioApp {
             Ok(Some(session)) => {
                 self.recent = session.recent.into_iter().take(MAX_RECENT).collect();
                 self.methods = session.methods;
+                self.chain.settings = session.chain;
+                self.chain.recent_recipes = session.recent_recipes;
                 if let Some((volume, threshold)) = session.volume_threshold {
                     self.methods.voxel.threshold = Some(threshold);
                     self.threshold_volume = Some(volume);
@@ -160,6 +166,8 @@ impl StudioApp {
             model: self.current.as_ref().map(|c| absolute(&c.path)),
             recent: self.recent.clone(),
             methods: self.methods,
+            chain: self.chain.settings.clone(),
+            recent_recipes: self.chain.recent_recipes.clone(),
             volume_threshold: self
                 .threshold_volume
                 .as_deref()
@@ -216,6 +224,7 @@ impl StudioApp {
             view: View::Simplified,
             heat: false,
             export: None,
+            chain: chain::ChainView::default(),
             autosave: Autosave::off(),
         }
     }
@@ -314,6 +323,7 @@ impl StudioApp {
         self.poll_build();
         self.poll_preview();
         self.poll_export();
+        self.poll_chain(&ctx);
         self.start_build_when_due(&ctx);
         self.autosave(&ctx);
 
@@ -322,6 +332,12 @@ impl StudioApp {
             .resizable(true)
             .default_size(110.0)
             .show(ui, |ui| self.status_panel(ui));
+        egui::Panel::bottom("chain")
+            .resizable(true)
+            .default_size(240.0)
+            .show(ui, |ui| {
+                egui::ScrollArea::vertical().show(ui, |ui| self.chain_panel(ui));
+            });
         egui::Panel::left("model")
             .default_size(250.0)
             .show(ui, |ui| {
@@ -357,6 +373,7 @@ impl StudioApp {
             || self.picker.is_some()
             || self.build.is_some()
             || self.export.is_some()
+            || self.is_building_chain()
         {
             ctx.request_repaint_after(POLL_INTERVAL);
         }

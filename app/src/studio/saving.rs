@@ -94,7 +94,11 @@ impl StudioApp {
     }
 
     /// Runs a save (dialog and writing) on a worker, reported like exports.
-    fn spawn_save(&mut self, ctx: &egui::Context, save: impl FnOnce() -> Saved + Send + 'static) {
+    pub(super) fn spawn_save(
+        &mut self,
+        ctx: &egui::Context,
+        save: impl FnOnce() -> Saved + Send + 'static,
+    ) {
         if self.export.is_some() {
             return;
         }

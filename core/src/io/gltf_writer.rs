@@ -580,6 +580,33 @@ fn glb_container(mut json: Vec<u8>, bin: Vec<u8>) -> Vec<u8> {
     out
 }
 
+/// Writes a GLB to `output` as is, or as `.gltf` + `.bin` beside it when
+/// the name ends in `.gltf`, each atomically (the one file writer of LOD
+/// chains: `lodstudio export` and the studio's chain export); returns the
+/// bytes written.
+pub fn write_file(output: &std::path::Path, glb: &[u8]) -> Result<usize, String> {
+    let fail =
+        |p: &std::path::Path, e: std::io::Error| format!("{}: cannot write: {e}", p.display());
+    let gltf = output
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("gltf"));
+    if gltf {
+        let bin_path = output.with_extension("bin");
+        let bin_name = bin_path
+            .file_name()
+            .unwrap_or_default()
+            .to_string_lossy()
+            .into_owned();
+        let (json, bin) = super::gltf::split_glb(glb, &bin_name)
+            .ok_or_else(|| "internal: the GLB writer made no container".to_string())?;
+        super::write_atomic(&bin_path, &bin).map_err(|e| fail(&bin_path, e))?;
+        super::write_atomic(output, &json).map_err(|e| fail(output, e))?;
+        return Ok(json.len() + bin.len());
+    }
+    super::write_atomic(output, glb).map_err(|e| fail(output, e))?;
+    Ok(glb.len())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -1,0 +1,329 @@
+//! Controls of the LOD chain: a table of rows LOD0…LODn (method, tolerance,
+//! parameters; add, remove, reorder, duplicate) beside what each built, and
+//! "Auto chain". What the controls set is `settings::chain`.
+
+use lodstudio_core::hybrid::{KAPPA_RANGE, TAU_RANGE};
+use lodstudio_core::recipe::{Row, RowTolerance};
+use lodstudio_core::voxel::RESOLUTION_RANGE;
+
+use crate::settings::Method;
+use crate::settings::chain::{AUTO_ROWS_RANGE, AutoRule, ChainSettings};
+
+/// Rows a chain may have (the table stays usable, the GLB small).
+pub const MAX_ROWS: usize = 12;
+
+const TOLERANCE_HINT: &str = "% of the bounding-box diagonal, pixels on the recipe's viewport \
+    height, or a ratio of the input's primitives. The row's LOD is the coarsest cut within an \
+    error, the finest within a ratio; LODs are ordered by certified bound.";
+
+/// What a built row shows in the table, formatted once when the chain is built.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RowFigures {
+    /// The LOD the row became (rows met by one cut share it).
+    pub lod: usize,
+    /// Triangles, points, splats, bound, pixels at the switch in, switch
+    /// (coverage and distance), build seconds.
+    pub cells: [String; 7],
+    /// The bound is AMG's plane error, not a certified bound.
+    pub estimate: bool,
+}
+
+/// The table's column heads after the editable ones.
+pub const FIGURE_HEADS: [(&str, &str); 7] = [
+    ("triangles", "Triangles of the row's LOD."),
+    ("points", "Hybrid points of the row's LOD."),
+    ("splats", "AMG splats of the row's LOD."),
+    (
+        "bound",
+        "Error bound in % of the diagonal: certified, or ~ for AMG's plane error.",
+    ),
+    (
+        "px in",
+        "Pixels the bound covers where this LOD takes over (the popping a viewer may see).",
+    ),
+    (
+        "switch out",
+        "Screen coverage (object height / viewport) below which the next LOD takes over, and the camera distance in bounding radii.",
+    ),
+    (
+        "build",
+        "Seconds spent on the hierarchy behind the row (rows of one method and parameters share one).",
+    ),
+];
+
+/// What the table asks of the studio besides editing the recipe.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct RowsResponse {
+    /// The rows changed (the built chain is stale).
+    pub changed: bool,
+    /// A row's LOD label was clicked: show it.
+    pub clicked: Option<usize>,
+}
+
+impl ChainSettings {
+    /// The rows table; `figures[i]` is what row i built (when built with the
+    /// rows as they are), `selected` the row shown.
+    pub fn rows_ui(
+        &mut self,
+        ui: &mut egui::Ui,
+        figures: Option<&[RowFigures]>,
+        selected: Option<usize>,
+    ) -> RowsResponse {
+        let mut response = RowsResponse::default();
+        let before = self.recipe.rows.clone();
+        let mut action: Option<(usize, RowAction)> = None;
+        egui::Grid::new("chain rows")
+            .num_columns(5 + FIGURE_HEADS.len())
+            .striped(true)
+            .show(ui, |ui| {
+                for head in ["row", "method", "tolerance", "parameters"] {
+                    ui.strong(head);
+                }
+                for (head, hint) in FIGURE_HEADS {
+                    ui.strong(head).on_hover_text(hint);
+                }
+                ui.label("");
+                ui.end_row();
+                let rows = self.recipe.rows.len();
+                for (i, row) in self.recipe.rows.iter_mut().enumerate() {
+                    let fig = figures.and_then(|f| f.get(i));
+                    let name = match fig {
+                        Some(f) => format!("row {i}: LOD{}", f.lod),
+                        None => format!("row {i}"),
+                    };
+                    if ui
+                        .selectable_label(selected == Some(i), name)
+                        .on_hover_text("Show this row's LOD")
+                        .clicked()
+                    {
+                        response.clicked = Some(i);
+                    }
+                    method_menu(ui, row);
+                    tolerance_ui(ui, row);
+                    parameters_ui(ui, row);
+                    match fig {
+                        Some(f) => {
+                            for (c, cell) in f.cells.iter().enumerate() {
+                                if c == 3 && f.estimate {
+                                    ui.label(format!("~{cell}")).on_hover_text(
+                                        "AMG's plane error: an estimate, not a certified bound",
+                                    );
+                                } else {
+                                    ui.label(cell);
+                                }
+                            }
+                        }
+                        None => {
+                            for _ in FIGURE_HEADS {
+                                ui.weak("–");
+                            }
+                        }
+                    }
+                    ui.horizontal(|ui| {
+                        let small = |ui: &mut egui::Ui, text: &str, enabled: bool, hint: &str| {
+                            ui.add_enabled(enabled, egui::Button::new(text).small())
+                                .on_hover_text(hint)
+                                .clicked()
+                        };
+                        if small(ui, "Up", i > 0, "Move up") {
+                            action = Some((i, RowAction::Up));
+                        }
+                        if small(ui, "Down", i + 1 < rows, "Move down") {
+                            action = Some((i, RowAction::Down));
+                        }
+                        if small(ui, "Duplicate", rows < MAX_ROWS, "Duplicate this row") {
+                            action = Some((i, RowAction::Duplicate));
+                        }
+                        if small(ui, "Remove", rows > 1, "Remove this row") {
+                            action = Some((i, RowAction::Remove));
+                        }
+                    });
+                    ui.end_row();
+                }
+            });
+        let rows = &mut self.recipe.rows;
+        match action {
+            Some((i, RowAction::Up)) => rows.swap(i - 1, i),
+            Some((i, RowAction::Down)) => rows.swap(i, i + 1),
+            Some((i, RowAction::Duplicate)) => rows.insert(i + 1, rows[i].clone()),
+            Some((i, RowAction::Remove)) => {
+                rows.remove(i);
+            }
+            None => {}
+        }
+        let add = ui
+            .add_enabled(rows.len() < MAX_ROWS, egui::Button::new("Add row"))
+            .on_hover_text("A row coarser than the last: its tolerance doubled.");
+        if add.clicked() {
+            let next = rows
+                .last()
+                .map(coarser)
+                .unwrap_or_else(|| Row::new(Method::EdgeCollapse, RowTolerance::Percent(1.0)));
+            rows.push(next);
+        }
+        response.changed = self.recipe.rows != before;
+        response
+    }
+
+    /// "Auto chain": its rule and the button that replaces the rows; true
+    /// when the rows were replaced.
+    pub fn auto_ui(&mut self, ui: &mut egui::Ui) -> bool {
+        let a = &mut self.auto;
+        ui.horizontal_wrapped(|ui| {
+            choose(
+                ui,
+                &mut a.rule,
+                [AutoRule::HalveTriangles, AutoRule::DoublePixels],
+                rule_name,
+            );
+            choose(ui, &mut a.method, Method::ALL, Method::tag);
+            let first = match a.rule {
+                AutoRule::HalveTriangles => "LOD0 ratio",
+                AutoRule::DoublePixels => "LOD0 px",
+            };
+            let range = a.first_range();
+            ui.add(
+                egui::DragValue::new(&mut a.first)
+                    .range(range)
+                    .speed(0.01)
+                    .prefix(format!("{first} ")),
+            );
+            ui.add(
+                egui::DragValue::new(&mut a.rows)
+                    .range(AUTO_ROWS_RANGE)
+                    .prefix("rows "),
+            );
+            ui.checkbox(&mut a.impostor, "AMG impostor last")
+                .on_hover_text("Close the chain with an AMG splat impostor (15% of the diagonal).");
+        });
+        *a = a.sanitized();
+        let clicked = ui
+            .button("Auto chain")
+            .on_hover_text("Replace the rows by the rule: halve the triangles, or double the pixel error, row after row.")
+            .clicked();
+        if clicked {
+            self.recipe.rows = self.auto.make();
+        }
+        clicked
+    }
+}
+
+#[derive(Debug, Clone, Copy)]
+enum RowAction {
+    Up,
+    Down,
+    Duplicate,
+    Remove,
+}
+
+fn rule_name(rule: AutoRule) -> &'static str {
+    match rule {
+        AutoRule::HalveTriangles => "halve the triangles",
+        AutoRule::DoublePixels => "double the pixel error",
+    }
+}
+
+/// A menu of `options` under a button named by the value (the button's
+/// text is its accessible name, unlike a combo box's).
+fn choose<T: PartialEq + Copy>(
+    ui: &mut egui::Ui,
+    value: &mut T,
+    options: impl IntoIterator<Item = T>,
+    name: impl Fn(T) -> &'static str,
+) {
+    ui.menu_button(name(*value), |ui| {
+        for option in options {
+            ui.selectable_value(value, option, name(option));
+        }
+    });
+}
+
+/// The row after `row`: the same method, its tolerance doubled (a ratio halved).
+fn coarser(row: &Row) -> Row {
+    let tolerance = match row.tolerance {
+        RowTolerance::Percent(p) => RowTolerance::Percent((2.0 * p).min(100.0)),
+        RowTolerance::Pixels(p) => RowTolerance::Pixels(2.0 * p),
+        RowTolerance::Ratio(r) => RowTolerance::Ratio((0.5 * r).max(1e-4)),
+    };
+    Row {
+        tolerance,
+        ..row.clone()
+    }
+}
+
+/// The method of a row; a new method takes its own default parameters.
+fn method_menu(ui: &mut egui::Ui, row: &mut Row) {
+    let mut method = row.method;
+    choose(ui, &mut method, Method::ALL, Method::tag);
+    if method != row.method {
+        *row = Row::new(method, row.tolerance);
+    }
+}
+
+/// The tolerance's number and unit.
+fn tolerance_ui(ui: &mut egui::Ui, row: &mut Row) {
+    ui.horizontal(|ui| {
+        let (mut value, unit) = match row.tolerance {
+            RowTolerance::Percent(v) => (v, 0),
+            RowTolerance::Pixels(v) => (v, 1),
+            RowTolerance::Ratio(v) => (v, 2),
+        };
+        let range = match unit {
+            0 => 0.0..=100.0,
+            1 => 0.0..=10_000.0,
+            _ => 1e-4..=1.0,
+        };
+        ui.add(
+            egui::DragValue::new(&mut value)
+                .range(range)
+                .speed(0.01)
+                .max_decimals(4),
+        )
+        .on_hover_text(TOLERANCE_HINT);
+        let mut new_unit = unit;
+        choose(ui, &mut new_unit, 0..3, |u| ["%", "px", "ratio"][u]);
+        row.tolerance = match (new_unit, new_unit == unit) {
+            (0, true) => RowTolerance::Percent(value),
+            (1, true) => RowTolerance::Pixels(value),
+            (_, true) => RowTolerance::Ratio(value),
+            // Another unit starts from a sensible value of its own.
+            (0, false) => RowTolerance::Percent(1.0),
+            (1, false) => RowTolerance::Pixels(1.0),
+            (_, false) => RowTolerance::Ratio(0.5),
+        };
+    });
+}
+
+/// The parameters of the row's method: κ, τ (hybrid), resolution (voxel).
+fn parameters_ui(ui: &mut egui::Ui, row: &mut Row) {
+    ui.horizontal(|ui| match row.method {
+        Method::Hybrid => {
+            let (mut kappa, mut tau) = (row.kappa(), row.tau());
+            ui.add(
+                egui::DragValue::new(&mut kappa)
+                    .range(KAPPA_RANGE)
+                    .speed(0.05)
+                    .prefix("κ "),
+            );
+            ui.add(
+                egui::DragValue::new(&mut tau)
+                    .range(TAU_RANGE)
+                    .speed(0.05)
+                    .prefix("τ "),
+            );
+            (row.kappa, row.tau) = (Some(kappa), Some(tau));
+        }
+        Method::Voxel => {
+            let mut resolution = row.resolution();
+            ui.add(
+                egui::DragValue::new(&mut resolution)
+                    .range(RESOLUTION_RANGE)
+                    .prefix("resolution "),
+            );
+            row.resolution = Some(resolution);
+        }
+        _ => {
+            ui.weak("defaults");
+        }
+    });
+}

@@ -1,0 +1,298 @@
+//! The LOD chain in the studio (issue 26), driven headlessly through
+//! egui_kittest: a mixed chain built from its panel matches the core API row
+//! for row, the switch preview names and draws the LOD for its distance, the
+//! chain exports as the CLI writes it (byte for byte from the same recipe),
+//! recipes round-trip, and the chain survives a restart.
+
+use std::path::{Path, PathBuf};
+use std::time::{Duration, Instant};
+
+mod common;
+
+use common::{save_ppm, studio, wait_while};
+use egui_kittest::Harness;
+use egui_kittest::kittest::Queryable as _;
+use lodstudio::render::camera::distance_at_coverage;
+use lodstudio::session::{Autosave, Session};
+use lodstudio::studio::StudioApp;
+use lodstudio_core::lod::Method;
+use lodstudio_core::recipe::{Recipe, build_chain, parse_lods};
+
+fn shared(name: &str) -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../../shared/models")
+        .join(name)
+}
+
+fn temp(name: &str) -> PathBuf {
+    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("chain");
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join(name);
+    let _ = std::fs::remove_file(&path);
+    path
+}
+
+/// The JSON chunk of a GLB.
+fn glb_json(glb: &[u8]) -> serde_json::Value {
+    assert_eq!(&glb[0..4], b"glTF");
+    let len = u32::from_le_bytes(glb[12..16].try_into().unwrap()) as usize;
+    serde_json::from_slice(&glb[20..20 + len]).expect("glTF JSON chunk")
+}
+
+fn built_chain(harness: &mut Harness<'_, StudioApp>) {
+    harness.get_by_label("Build chain").click();
+    harness.step();
+    assert!(harness.state().is_building_chain());
+    wait_while(harness, "building the chain", StudioApp::is_building_chain);
+}
+
+/// Two edge-collapse LODs and an AMG impostor on the bones: the panel's
+/// chain equals `build_chain` on the same model, the preview moves through
+/// the LODs with the distance, and the export is the CLI's, byte for byte.
+#[test]
+fn a_mixed_chain_builds_previews_and_exports_as_the_cli_does() {
+    let bones = shared("bones.off");
+    let mut harness = studio(Some(bones.clone()));
+    wait_while(&mut harness, "loading", StudioApp::is_loading);
+    let recipe = Recipe::new(parse_lods("simplify:0.5%,simplify:2%,amg:15%", None).unwrap());
+    harness.state_mut().set_chain_recipe(recipe.clone());
+    built_chain(&mut harness);
+
+    // Row for row what the core API builds.
+    let loaded =
+        lodstudio_core::io::load(&bones, &Default::default(), &Default::default()).unwrap();
+    let expected = build_chain(&loaded.model, &recipe, &Default::default()).unwrap();
+    let chain = harness
+        .state()
+        .built_chain()
+        .expect("a chain")
+        .chain
+        .clone();
+    assert_eq!(chain.lods.len(), 3);
+    let methods: Vec<Method> = chain.lods.iter().map(|l| l.method).collect();
+    assert_eq!(
+        methods,
+        [Method::EdgeCollapse, Method::EdgeCollapse, Method::Amg]
+    );
+    for (got, want) in chain.lods.iter().zip(&expected.lods) {
+        assert_eq!(got.set.mesh.triangles.len(), want.set.mesh.triangles.len());
+        assert_eq!(got.set.splats.len(), want.set.splats.len());
+        assert_eq!(got.bound(), want.bound());
+    }
+    assert_eq!(chain.coverages, expected.coverages);
+    assert!(chain.lods[0].bound() <= 0.005 * chain.diagonal);
+    assert!(chain.lods[1].bound() <= 0.02 * chain.diagonal);
+    assert!(!chain.lods[2].set.splats.is_empty());
+    // The table names each row's LOD.
+    harness.run();
+    for label in ["row 0: LOD0", "row 1: LOD1", "row 2: LOD2"] {
+        assert!(harness.query_by_label(label).is_some(), "{label}");
+    }
+
+    // The switch preview: the LOD for each distance, drawn and named.
+    let c = &chain.coverages;
+    let at = |harness: &mut Harness<'_, StudioApp>, d: f32| {
+        harness.state_mut().set_switch_distance(Some(d));
+        harness.run();
+        let (k, name) = harness.state().switch_lod().expect("a preview");
+        let scene = harness.state().viewport().scene().expect("a scene");
+        (
+            k,
+            name,
+            scene.triangle_count(),
+            scene.point_and_splat_counts().1,
+        )
+    };
+    let near = at(&mut harness, distance_at_coverage(1.0));
+    assert_eq!(
+        (near.0, near.2),
+        (0, chain.lods[0].set.mesh.triangles.len())
+    );
+    assert!(near.1.contains("simplify:0.5%"), "{}", near.1);
+    let middle = at(&mut harness, distance_at_coverage((c[0] * c[1]).sqrt()));
+    assert_eq!(
+        (middle.0, middle.2),
+        (1, chain.lods[1].set.mesh.triangles.len())
+    );
+    let far = at(&mut harness, distance_at_coverage(0.5 * (c[1] + c[2])));
+    assert_eq!(far.0, 2);
+    assert!(far.1.contains("amg:15%") && far.3 > 0, "{far:?}");
+    assert!(
+        harness.query_by_label("bound at switch").is_some(),
+        "the inspector's row"
+    );
+    // For a human: the studio with the impostor previewed (target/tmp).
+    let image = harness.render().expect("render the studio");
+    save_ppm(
+        image.width(),
+        image.height(),
+        image.as_raw(),
+        "chain-impostor",
+    );
+    // The dolly runs from near to far by itself.
+    harness.get_by_label("Dolly").click();
+    harness.step();
+    let first = harness.state().switch_lod().unwrap().0;
+    let start = Instant::now();
+    while start.elapsed() < Duration::from_secs(20) && harness.state().switch_lod().unwrap().0 < 2 {
+        harness.step();
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    assert_eq!((first, harness.state().switch_lod().unwrap().0), (0, 2));
+    harness.state_mut().set_switch_distance(None);
+
+    // Export, read back: three nodes, MSFT_lod ids, the LODs' primitives.
+    let out = temp("bones-chain.glb");
+    let ctx = harness.ctx.clone();
+    harness.state_mut().export_chain_to(&out, &ctx);
+    wait_while(&mut harness, "exporting", StudioApp::is_exporting);
+    let glb = std::fs::read(&out).expect("the chain was written");
+    let doc = glb_json(&glb);
+    assert_eq!(doc["nodes"].as_array().unwrap().len(), 3);
+    assert_eq!(
+        doc["nodes"][0]["extensions"]["MSFT_lod"]["ids"],
+        serde_json::json!([1, 2])
+    );
+    let coverage = &doc["nodes"][0]["extras"]["MSFT_screencoverage"];
+    assert_eq!(coverage.as_array().unwrap().len(), 3);
+    let lod0 = lodstudio_core::io::load(&out, &Default::default(), &Default::default()).unwrap();
+    let lodstudio_core::Model::Mesh(mesh0) = lod0.model else {
+        panic!("LOD0 is a mesh")
+    };
+    assert_eq!(
+        mesh0.triangles.len(),
+        chain.lods[0].set.mesh.triangles.len()
+    );
+
+    // The recipe saved from the studio replays in the CLI byte for byte.
+    let recipe_file = temp("bones-recipe.json");
+    harness.state_mut().save_recipe_to(&recipe_file, &ctx);
+    wait_while(&mut harness, "saving", StudioApp::is_exporting);
+    let cli_out = temp("bones-cli.glb");
+    let cli = std::process::Command::new(env!("CARGO_BIN_EXE_lodstudio"))
+        .args(["export"])
+        .arg(&bones)
+        .arg("--recipe")
+        .arg(&recipe_file)
+        .arg("-o")
+        .arg(&cli_out)
+        .output()
+        .unwrap();
+    assert!(
+        cli.status.success(),
+        "{}",
+        String::from_utf8_lossy(&cli.stderr)
+    );
+    assert!(
+        std::fs::read(&cli_out).unwrap() == glb,
+        "studio and CLI write the same bytes"
+    );
+    // ... and opens again as the same chain.
+    harness
+        .state_mut()
+        .set_chain_recipe(Recipe::new(parse_lods("hybrid:1%", None).unwrap()));
+    harness.state_mut().open_recipe(&recipe_file);
+    assert_eq!(harness.state().chain_settings().recipe, recipe);
+}
+
+/// Rows are added, duplicated and removed from the panel; Auto chain fills
+/// it by its rule; a bad recipe file is refused naming the row and the field.
+#[test]
+fn the_panel_edits_rows_and_refuses_bad_recipes() {
+    let mut harness = studio(Some("builtin:torus".into()));
+    wait_while(&mut harness, "loading", StudioApp::is_loading);
+    let rows = |h: &Harness<'_, StudioApp>| h.state().chain_settings().recipe.rows.len();
+    let before = rows(&harness);
+    harness.get_by_label("Add row").click();
+    harness.run();
+    assert_eq!(rows(&harness), before + 1);
+    harness
+        .get_all_by_label("Duplicate")
+        .next()
+        .unwrap()
+        .click();
+    harness.run();
+    assert_eq!(rows(&harness), before + 2);
+    harness.get_all_by_label("Remove").next().unwrap().click();
+    harness.run();
+    assert_eq!(rows(&harness), before + 1);
+    harness.get_by_label("Auto chain").click();
+    harness.run();
+    let labels: Vec<String> = harness
+        .state()
+        .chain_settings()
+        .recipe
+        .rows
+        .iter()
+        .map(|r| r.label())
+        .collect();
+    assert_eq!(
+        labels,
+        [
+            "simplify:0.5",
+            "simplify:0.25",
+            "simplify:0.125",
+            "simplify:0.0625"
+        ]
+    );
+    built_chain(&mut harness);
+    let chain = &harness.state().built_chain().unwrap().chain;
+    let triangles: Vec<usize> = chain
+        .lods
+        .iter()
+        .map(|l| l.set.mesh.triangles.len())
+        .collect();
+    assert!(triangles.windows(2).all(|w| w[1] < w[0]), "{triangles:?}");
+
+    let bad = temp("bad-recipe.json");
+    std::fs::write(
+        &bad,
+        r#"{"format":"lodstudio-recipe","version":1,"rows":[{"method":"simplify","tolerance":"1%"},{"method":"voxel","tolerance":"2%","resolution":2}]}"#,
+    )
+    .unwrap();
+    let kept = harness.state().chain_settings().recipe.clone();
+    harness.state_mut().open_recipe(&bad);
+    assert_eq!(
+        harness.state().chain_settings().recipe,
+        kept,
+        "nothing lost"
+    );
+    assert!(
+        harness
+            .state()
+            .log_lines()
+            .any(|l| l.contains("rows[1].resolution"))
+    );
+}
+
+/// The chain on the panel (saved or not) and the recent recipes survive a
+/// restart through the autosave.
+#[test]
+fn an_unsaved_chain_survives_a_restart() {
+    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("autosave-chain");
+    let _ = std::fs::remove_dir_all(&dir);
+    let interval = Duration::from_millis(100);
+    let mut first = studio(Some("builtin:torus".into()));
+    let autosave = Autosave::in_dir(&dir).with_interval(interval);
+    let file = autosave.file().unwrap().to_path_buf();
+    first.state_mut().resume(autosave, false);
+    wait_while(&mut first, "loading", StudioApp::is_loading);
+    let recipe = Recipe::new(parse_lods("hybrid:1%,voxel:5%,amg:20%", None).unwrap());
+    first.state_mut().set_chain_recipe(recipe.clone());
+    let saved = |file: &Path| {
+        std::fs::read_to_string(file)
+            .ok()
+            .and_then(|j| Session::from_json(&j))
+            .is_some_and(|s| s.chain.recipe == recipe)
+    };
+    let start = Instant::now();
+    while !saved(&file) {
+        assert!(start.elapsed() < Duration::from_secs(10), "never autosaved");
+        std::thread::sleep(interval / 4);
+        first.step();
+    }
+    std::mem::forget(first);
+    let mut second = studio(None);
+    second.state_mut().resume(Autosave::in_dir(&dir), true);
+    assert_eq!(second.state().chain_settings().recipe, recipe);
+}
