@@ -8,6 +8,11 @@
 //!   dragged across its range, and while the camera orbits (view-dependent
 //!   cuts re-select every frame) — the cut must follow within one frame.
 //!
+//! - issue 26: the same while an LOD chain builds (edge-collapse rows and an
+//!   AMG impostor), and while the switch preview moves the camera from near
+//!   to far one step a frame (goal: the studio's own CPU time, the UI step,
+//!   at most 5 ms).
+//!
 //! Run with `cargo bench -p lodstudio --bench studio` (horse, engine, dragon)
 //! or name models: `cargo bench -p lodstudio --bench studio -- horse.ply`.
 //! Prints a Markdown table.
@@ -121,6 +126,51 @@ fn method_row(h: &mut Harness<'_, StudioApp>, model: &str, method: Method) {
     );
 }
 
+/// Builds an LOD chain on the loaded model and runs the switch preview
+/// through it; prints the chain table's row.
+fn chain_row(h: &mut Harness<'_, StudioApp>, model: &str) {
+    let rows =
+        lodstudio_core::recipe::parse_lods("simplify:0.5%,simplify:2%,simplify:8%,amg:15%", None)
+            .expect("rows");
+    h.state_mut()
+        .set_chain_recipe(lodstudio_core::recipe::Recipe::new(rows));
+    h.step();
+    let ctx = h.ctx.clone();
+    let start = Instant::now();
+    h.state_mut().build_chain(&ctx);
+    let (mut steps, mut frames) = (Vec::new(), Vec::new());
+    while h.state().is_building_chain() {
+        let (s, f) = frame(h);
+        steps.push(s);
+        frames.push(f);
+    }
+    let build_s = start.elapsed().as_secs_f64();
+    h.run();
+    let lods = h.state().built_chain().map_or(0, |b| b.chain.lods.len());
+    // Near to far in 48 steps, one a frame, as the dolly moves.
+    let (mut preview_steps, mut preview_frames) = (Vec::new(), Vec::new());
+    let near = lodstudio::render::camera::distance_at_coverage(1.0);
+    let mut seen = std::collections::BTreeSet::new();
+    for i in 0..48 {
+        let d = near * 1000f32.powf(i as f32 / 47.0);
+        h.state_mut().set_switch_distance(Some(d));
+        let (s, f) = frame(h);
+        preview_steps.push(s);
+        preview_frames.push(f);
+        seen.extend(h.state().switch_lod().map(|l| l.0));
+    }
+    h.state_mut().set_switch_distance(None);
+    println!(
+        "| {model} | {lods} | {build_s:.1} | {} | {} | {} | {} | {} |",
+        steps.len(),
+        spread(&steps),
+        spread(&frames),
+        seen.len(),
+        spread(&preview_steps),
+        spread(&preview_frames),
+    );
+}
+
 fn main() {
     let shared = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../shared/models");
     let args: Vec<String> = std::env::args()
@@ -138,6 +188,7 @@ fn main() {
         "| model | method | build s | frames during build | UI step ms (median / max) | frame ms | threshold drag: cut ms | frame ms | orbit: cut ms | frame ms |"
     );
     println!("|---|---|---|---|---|---|---|---|---|---|");
+    let mut chains = Vec::new();
     for model in models {
         let mut h = studio(Some(shared.join(&model)));
         wait_while(&mut h, "loading", StudioApp::is_loading);
@@ -157,5 +208,15 @@ fn main() {
         for &method in methods {
             method_row(&mut h, &model, method);
         }
+        chains.push(model);
+    }
+    println!(
+        "\n| model | chain LODs | build s | frames during build | UI step ms (median / max) | frame ms | switch preview: LODs shown | UI step ms | frame ms |"
+    );
+    println!("|---|---|---|---|---|---|---|---|---|");
+    for model in chains {
+        let mut h = studio(Some(shared.join(&model)));
+        wait_while(&mut h, "loading", StudioApp::is_loading);
+        chain_row(&mut h, &model);
     }
 }

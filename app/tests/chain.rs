@@ -296,3 +296,82 @@ fn an_unsaved_chain_survives_a_restart() {
     second.state_mut().resume(Autosave::in_dir(&dir), true);
     assert_eq!(second.state().chain_settings().recipe, recipe);
 }
+
+/// The viewport's pixels (RGBA) inside its rect, every other row and column.
+fn viewport_image(harness: &mut Harness<'_, StudioApp>, name: &str) -> Vec<[u8; 4]> {
+    let rect = harness.get_by_label("3D viewport").rect();
+    let image = harness.render().expect("render the studio");
+    save_ppm(image.width(), image.height(), image.as_raw(), name);
+    let (x0, y0) = (rect.min.x.ceil() as u32 + 2, rect.min.y.ceil() as u32 + 2);
+    let (x1, y1) = (rect.max.x.floor() as u32 - 2, rect.max.y.floor() as u32 - 2);
+    (y0..y1)
+        .step_by(2)
+        .flat_map(|y| (x0..x1).step_by(2).map(move |x| (x, y)))
+        .map(|(x, y)| image.get_pixel(x, y).0)
+        .collect()
+}
+
+/// The share of the model's pixels (those unlike the corner) that are
+/// strongly coloured: the truck's texture, drawn.
+fn colourful(pixels: &[[u8; 4]]) -> f32 {
+    let background = pixels[0];
+    let model: Vec<&[u8; 4]> = pixels.iter().filter(|p| **p != background).collect();
+    let spread = |p: &[u8; 4]| p[..3].iter().max().unwrap() - p[..3].iter().min().unwrap();
+    model.iter().filter(|p| spread(p) > 60).count() as f32 / model.len().max(1) as f32
+}
+
+/// A chain of the textured milk truck: each edge-collapse row is drawn with
+/// its base-colour texture when clicked, and the exported chain carries the
+/// materials into its LODs.
+#[test]
+fn the_truck_chain_is_drawn_textured_row_by_row() {
+    let truck = shared("CesiumMilkTruck.glb");
+    let mut harness = studio(Some(truck));
+    wait_while(&mut harness, "loading", StudioApp::is_loading);
+    harness.run();
+    let original = colourful(&viewport_image(&mut harness, "truck-chain-original"));
+    let recipe = Recipe::new(parse_lods("simplify:0.5%,simplify:2%,amg:15%", None).unwrap());
+    harness.state_mut().set_chain_recipe(recipe);
+    built_chain(&mut harness);
+    for row in [0, 1] {
+        harness
+            .get_by_label(&format!("row {row}: LOD{row}"))
+            .click();
+        harness.run();
+        let lod = harness.state().built_chain().unwrap().chain.lods[row]
+            .set
+            .mesh
+            .triangles
+            .len();
+        assert_eq!(
+            harness
+                .state()
+                .viewport()
+                .scene()
+                .map(|s| s.triangle_count()),
+            Some(lod),
+            "row {row} is drawn"
+        );
+        let textured = colourful(&viewport_image(
+            &mut harness,
+            &format!("truck-chain-lod{row}"),
+        ));
+        eprintln!(
+            "truck: original {original:.3} colourful, LOD{row} ({lod} triangles) {textured:.3}"
+        );
+        assert!(
+            textured > 0.5 * original && textured > 0.05,
+            "LOD{row}: {textured} vs {original}"
+        );
+    }
+    let out = temp("truck-chain.glb");
+    let ctx = harness.ctx.clone();
+    harness.state_mut().export_chain_to(&out, &ctx);
+    wait_while(&mut harness, "exporting", StudioApp::is_exporting);
+    let doc = glb_json(&std::fs::read(&out).unwrap());
+    assert!(
+        doc["images"].as_array().is_some_and(|i| !i.is_empty()),
+        "the texture travels"
+    );
+    assert!(doc["materials"].as_array().is_some_and(|m| m.len() >= 2));
+}
