@@ -352,7 +352,7 @@ impl StudioApp {
             self.view_bar(ui);
             self.update_cut();
             self.sync_view();
-            if self.view == View::SideBySide && self.result.is_some() && self.preview.is_none() {
+            if self.view == View::SideBySide && self.has_lod() && self.preview.is_none() {
                 self.show_side_by_side(ui);
             } else {
                 self.viewport.show(ui);
@@ -377,6 +377,11 @@ impl StudioApp {
         {
             ctx.request_repaint_after(POLL_INTERVAL);
         }
+    }
+
+    /// Whether there is a LOD to show: a build's result or a built chain.
+    fn has_lod(&self) -> bool {
+        self.result.is_some() || self.built_chain().is_some()
     }
 
     /// Dropped files and the Ctrl+O shortcut.

@@ -23,7 +23,7 @@ impl View {
 impl StudioApp {
     /// Original / simplified toggle and the heat-map switch above the viewport.
     pub(super) fn view_bar(&mut self, ui: &mut egui::Ui) {
-        let has_result = self.result.is_some();
+        let has_result = self.has_lod();
         let has_heat = self.result.as_ref().is_some_and(|r| r.live.has_errors());
         // Without a result the original is what is shown, whatever was chosen.
         let mut shown = if has_result {
@@ -40,7 +40,7 @@ impl StudioApp {
                         ui.selectable_value(&mut shown, View::Original, "Original")
                             .on_hover_text("Show the model as opened.");
                         ui.selectable_value(&mut shown, View::Simplified, "Simplified")
-                            .on_hover_text("Show the last build's result.")
+                            .on_hover_text("Show the last build's result, or the chain's row or switch preview.")
                             .on_disabled_hover_text("Build a LOD first.");
                         ui.selectable_value(&mut shown, View::SideBySide, "Side by side")
                             .on_hover_text(
