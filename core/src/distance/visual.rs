@@ -132,7 +132,13 @@ mod tests {
         let coverage: Vec<bool> = (0..w * h).map(|i| (x0..x1).contains(&(i % w))).collect();
         let rgba = coverage
             .iter()
-            .map(|&c| if c { [200, 180, 160, 255] } else { [10, 12, 15, 255] })
+            .map(|&c| {
+                if c {
+                    [200, 180, 160, 255]
+                } else {
+                    [10, 12, 15, 255]
+                }
+            })
             .collect();
         Render {
             image: Texture {
