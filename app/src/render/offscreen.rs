@@ -49,18 +49,24 @@ impl Offscreen {
     }
 
     /// On a device of its own (`WGPU_BACKEND` and `WGPU_POWER_PREF` choose as
-    /// they do for the studio).
+    /// they do for the studio, which prefers a high-performance GPU too).
     ///
     /// # Errors
     /// When no adapter or device is available, saying so.
     pub fn headless() -> Result<Self, String> {
         let instance =
             wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
-        let adapter = pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions {
-            power_preference: wgpu::PowerPreference::from_env().unwrap_or_default(),
-            ..Default::default()
-        }))
-        .map_err(|e| format!("no GPU adapter to render with ({e}); WGPU_BACKEND chooses one"))?;
+        let adapter =
+            pollster::block_on(
+                instance.request_adapter(&wgpu::RequestAdapterOptions {
+                    power_preference: wgpu::PowerPreference::from_env()
+                        .unwrap_or(wgpu::PowerPreference::HighPerformance),
+                    ..Default::default()
+                }),
+            )
+            .map_err(|e| {
+                format!("no GPU adapter to render with ({e}); WGPU_BACKEND chooses one")
+            })?;
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
             label: Some("lodstudio offscreen"),
             required_limits: adapter.limits(),
