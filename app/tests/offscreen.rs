@@ -11,6 +11,9 @@ fn sphere() -> Scene {
     Scene::from_model(&lodstudio_core::builtins::build("sphere", &Progress::new()).unwrap())
 }
 
+/// The studio renders on a worker thread.
+const _: fn(Offscreen) -> Box<dyn Send> = |o| Box::new(o);
+
 #[test]
 fn a_render_state_and_a_headless_device_render_alike() {
     let scene = sphere();

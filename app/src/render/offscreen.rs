@@ -1,5 +1,5 @@
 //! Renders of a scene read back to the CPU, through the viewport's own
-//! pipelines and shaders ([`ViewportResources`]), so that what is measured is
+//! pipelines and shaders (`gpu`'s `ViewportResources`), so that what is measured is
 //! what the studio shows: on the studio's device (eframe's render state), or
 //! on a device of its own for the command line. Two scenes rendered from the
 //! same cameras are compared pixel for pixel ([`Offscreen::compare`]).
@@ -88,7 +88,7 @@ impl Offscreen {
 
     /// `scene` seen by each of `cameras` in images of `size` pixels, with the
     /// near and far planes around `clip` (give two scenes that are compared
-    /// the same one).
+    /// the same one). Waits for the GPU: the studio calls it from a worker.
     ///
     /// # Errors
     /// When the scene does not fit the device's buffers, or a read-back fails.
