@@ -1,7 +1,8 @@
 //! Opening what a user names, in one place above the readers, the
 //! built-in models and the methods: a model file (`io`), a `builtin:` name
-//! (`builtins`), or a saved hierarchy (decoded through its [`Method`]; as a
-//! model it opens as its finest cut).
+//! (`builtins`), one level of an exported LOD chain (`FILE.glb#lodN`), or a
+//! saved hierarchy (decoded through its [`Method`]; as a model it opens as
+//! its finest cut).
 
 use std::path::Path;
 use std::sync::Arc;
@@ -12,15 +13,33 @@ use crate::lod::{Hierarchy, Method};
 use crate::progress::Progress;
 use crate::view::{Tolerance, View};
 
-/// Opens a model file, a `builtin:NAME` or a saved hierarchy (its finest
-/// cut), detecting the format and repairing meshes as `io::load` does.
+/// Opens a model file, a `builtin:NAME`, LOD N of a glTF's `MSFT_lod` chain
+/// (`FILE#lodN`, see [`crate::io::gltf::read_lod`]) or a saved hierarchy
+/// (its finest cut), detecting the format and repairing meshes as `io::load` does.
 pub fn open(path: &Path, opts: &LoadOptions, progress: &Progress) -> Result<Loaded, LoadError> {
     if let Some(name) = path.to_str().and_then(|s| s.strip_prefix("builtin:")) {
         let model = crate::builtins::build(name, progress)?;
         return crate::io::prepared(path, model, Format::Builtin, opts);
     }
+    if let Some((file, lod)) = lod_of(path) {
+        let bytes = crate::io::read_file(file, progress)?;
+        let mesh = crate::io::gltf::read_lod(&bytes, file.parent(), lod)
+            .map_err(|e| LoadError::malformed(path, e))?;
+        let format = match bytes.starts_with(b"glTF") {
+            true => Format::Glb,
+            false => Format::Gltf,
+        };
+        return crate::io::prepared(path, crate::io::Model::Mesh(mesh), format, opts);
+    }
     let bytes = crate::io::read_file(path, progress)?;
     open_bytes(path, &bytes, opts, progress)
+}
+
+/// `FILE#lodN` as the file and N.
+fn lod_of(path: &Path) -> Option<(&Path, usize)> {
+    let (file, lod) = path.to_str()?.rsplit_once("#lod")?;
+    let digits = !lod.is_empty() && lod.bytes().all(|b| b.is_ascii_digit());
+    Some((Path::new(file), lod.parse().ok().filter(|_| digits)?))
 }
 
 /// [`open`] for bytes already in memory (`path` names them in errors).
@@ -128,4 +147,25 @@ pub fn reopen(bytes: &[u8]) -> Result<(Header, Box<dyn Hierarchy>), HierarchyFil
         }
     };
     Ok((header, hierarchy))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_lod_suffix_names_a_file_and_a_level() {
+        let lod = |s: &str| lod_of(Path::new(s)).map(|(f, n)| (f.to_str().unwrap().to_owned(), n));
+        assert_eq!(lod("out/x.glb#lod12"), Some(("out/x.glb".into(), 12)));
+        assert_eq!(lod("x.glb#lod0"), Some(("x.glb".into(), 0)));
+        for plain in [
+            "x.glb",
+            "x.glb#lod",
+            "x.glb#lod+1",
+            "x.glb#lod1a",
+            "builtin:torus",
+        ] {
+            assert_eq!(lod(plain), None, "{plain}");
+        }
+    }
 }

@@ -11,6 +11,7 @@ use lodstudio_core::stats::ModelSummary;
 use lodstudio_core::{Progress, builtins};
 
 mod amg;
+mod compare;
 mod cut;
 mod export;
 mod flythrough;
@@ -73,6 +74,9 @@ enum Command {
     Simplify(simplify::SimplifyArgs),
     /// Measure the two-sided Hausdorff distance between two meshes by dense sampling.
     Measure(measure::MeasureArgs),
+    /// How different two models look: rendered from the same views around A,
+    /// the share of pixels only one covers and the PSNR of the images.
+    Compare(compare::CompareArgs),
     /// Voxel simplification: low-pass filter the solid's volume and extract its
     /// iso-surface; lower genus as the filter widens (voxel paper §2).
     Voxel(voxel::VoxelArgs),
@@ -265,6 +269,7 @@ pub fn run() -> Result<(), CliError> {
         Some(Command::Info(args)) => info::run(args),
         Some(Command::Simplify(args)) => simplify::run(args),
         Some(Command::Measure(args)) => measure::run(args),
+        Some(Command::Compare(args)) => compare::run(args),
         Some(Command::Voxel(args)) => voxel::run(args),
         Some(Command::Export(args)) => export::run(args),
         Some(Command::Cut(args)) => cut::run(args),

@@ -23,6 +23,8 @@ const MAX_PITCH: f32 = 1.55;
 /// The direction a newly opened model is seen from.
 const DEFAULT_YAW: f32 = 0.6;
 const DEFAULT_PITCH: f32 = 0.4;
+/// Elevation of [`Camera::views_around`]: alternately this far above and below.
+const AROUND_PITCH: f32 = 0.35;
 
 /// A sphere around what is shown: the near and far planes hug it, framing
 /// fits it, and zoom limits and walking speeds scale with it.
@@ -38,6 +40,24 @@ impl Sphere {
         center: Vec3::ZERO,
         radius: 1.0,
     };
+
+    /// The smallest sphere holding both (so one set of clip planes fits two models).
+    pub fn enclosing(self, other: Sphere) -> Sphere {
+        let (big, small) = match self.radius >= other.radius {
+            true => (self, other),
+            false => (other, self),
+        };
+        let d = big.center.distance(small.center);
+        if d + small.radius <= big.radius {
+            return big;
+        }
+        let radius = (d + big.radius + small.radius) * 0.5;
+        let towards = (small.center - big.center) / d;
+        Sphere {
+            center: big.center + towards * (radius - big.radius),
+            radius,
+        }
+    }
 }
 
 /// An eye orbiting a target at a distance, by yaw and pitch.
@@ -128,6 +148,28 @@ impl Camera {
         self.yaw = DEFAULT_YAW;
         self.pitch = DEFAULT_PITCH;
         self.frame(scene, aspect);
+    }
+
+    /// `n` cameras evenly spaced in azimuth around `scene` (from the default
+    /// direction on), alternately above and below it, each framing it for
+    /// an image of `aspect`: fixed views, so that two models rendered from
+    /// them compare pixel for pixel.
+    pub fn views_around(scene: Sphere, n: usize, aspect: f32) -> Vec<Camera> {
+        (0..n)
+            .map(|i| {
+                let mut camera = Camera {
+                    yaw: DEFAULT_YAW + std::f32::consts::TAU * i as f32 / n as f32,
+                    pitch: if i % 2 == 0 {
+                        AROUND_PITCH
+                    } else {
+                        -AROUND_PITCH
+                    },
+                    ..Camera::default()
+                };
+                camera.frame(scene, aspect);
+                camera
+            })
+            .collect()
     }
 
     /// Centres `scene` and moves back until it fits the narrower field of view.
@@ -225,6 +267,41 @@ mod tests {
                 assert!((0.0..=1.0).contains(&p.z), "inside the depth range: {p}");
             }
         }
+    }
+
+    #[test]
+    fn views_around_circle_the_sphere_and_frame_it() {
+        let views = Camera::views_around(SCENE, 8, 1.0);
+        assert_eq!(views.len(), 8);
+        assert_eq!(views, Camera::views_around(SCENE, 8, 1.0), "deterministic");
+        let mut framed = Camera::default();
+        framed.frame(SCENE, 1.0);
+        for (i, v) in views.iter().enumerate() {
+            assert_eq!((v.target, v.distance), (framed.target, framed.distance));
+            assert_eq!(v.pitch > 0.0, i % 2 == 0, "alternately above and below");
+        }
+        // Opposite views look from opposite sides.
+        let (a, b) = (views[0].eye() - SCENE.center, views[4].eye() - SCENE.center);
+        assert!((a.x + b.x).abs() < 1e-4 && (a.z + b.z).abs() < 1e-4);
+    }
+
+    #[test]
+    fn the_enclosing_sphere_holds_both() {
+        let other = Sphere {
+            center: Vec3::new(3.0, 2.0, 3.0),
+            radius: 1.0,
+        };
+        let s = SCENE.enclosing(other);
+        for (c, r) in [(SCENE.center, SCENE.radius), (other.center, other.radius)] {
+            assert!(s.center.distance(c) + r <= s.radius + 1e-5);
+        }
+        assert!((s.radius - 1.75).abs() < 1e-5, "{}", s.radius);
+        let inside = Sphere {
+            radius: 0.1,
+            ..SCENE
+        };
+        assert_eq!(SCENE.enclosing(inside), SCENE);
+        assert_eq!(inside.enclosing(SCENE), SCENE);
     }
 
     #[test]

@@ -1,6 +1,6 @@
 //! The GPU side of the viewport: pipelines and buffers per viewport slot,
 //! uploads when the scene's version changes, and the render into an offscreen
-//! target that egui's pass then shows.
+//! target that egui's pass then shows (and that [`super::offscreen`] reads back).
 //!
 //! egui's render pass has no depth buffer, so [`CallbackTrait::prepare`] renders
 //! the scene into an offscreen colour + depth target of our own (sized to the
@@ -23,7 +23,7 @@ use super::scene::{
 use super::viewport::SLOTS;
 
 /// Background of the viewport (linear RGB).
-const BACKGROUND: wgpu::Color = wgpu::Color {
+pub(super) const BACKGROUND: wgpu::Color = wgpu::Color {
     r: 0.045,
     g: 0.050,
     b: 0.060,
@@ -33,7 +33,7 @@ const BACKGROUND: wgpu::Color = wgpu::Color {
 /// On-screen radius of points that carry no radius of their own.
 const POINT_RADIUS_PX: f32 = 2.5;
 
-const COLOR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrgb;
+pub(super) const COLOR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrgb;
 
 const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
 
@@ -78,7 +78,13 @@ struct Slots(Vec<ViewportResources>);
 pub fn init(render_state: &egui_wgpu::RenderState) {
     let slots = Slots(
         (0..SLOTS)
-            .map(|_| ViewportResources::new(render_state))
+            .map(|_| {
+                ViewportResources::new(
+                    &render_state.device,
+                    &render_state.adapter,
+                    render_state.target_format,
+                )
+            })
             .collect(),
     );
     render_state
@@ -127,7 +133,7 @@ impl CallbackTrait for ViewportCallback {
             });
             if !unchanged {
                 queue.write_buffer(&res.uniform_buffer, 0, bytemuck::bytes_of(&self.uniforms));
-                res.render(egui_encoder);
+                res.render(egui_encoder, BACKGROUND);
                 res.rendered = Some(frame);
             }
         }
@@ -235,17 +241,20 @@ impl PartGpu {
 }
 
 /// The offscreen image the scene is rendered into, at the viewport's pixel size.
-struct Target {
-    size: [u32; 2],
-    /// Resolved (or single-sample) colour, read by the blit.
-    color: wgpu::TextureView,
+pub(super) struct Target {
+    pub(super) size: [u32; 2],
+    /// Resolved (or single-sample) colour, read by the blit (and copied out
+    /// by [`super::offscreen`]).
+    pub(super) color: wgpu::TextureView,
     /// Multisampled colour, when MSAA is on.
     msaa: Option<wgpu::TextureView>,
     depth: wgpu::TextureView,
     blit_bind_group: wgpu::BindGroup,
 }
 
-struct ViewportResources {
+/// Pipelines, buffers and target of one view; the viewport's slots and the
+/// off-screen renders each own a set.
+pub(super) struct ViewportResources {
     mesh_pipeline: wgpu::RenderPipeline,
     line_pipeline: wgpu::RenderPipeline,
     point_pipeline: wgpu::RenderPipeline,
@@ -264,28 +273,33 @@ struct ViewportResources {
     repeat_sampler: wgpu::Sampler,
     blit_pipeline: wgpu::RenderPipeline,
     blit_layout: wgpu::BindGroupLayout,
-    uniform_buffer: wgpu::Buffer,
+    pub(super) uniform_buffer: wgpu::Buffer,
     frame_bind_group: wgpu::BindGroup,
     parts: Vec<PartGpu>,
     uploaded_version: Option<u64>,
     /// What the target holds: the uniforms, scene version and size it was drawn with.
     rendered: Option<(FrameUniforms, u64, [u32; 2])>,
     sample_count: u32,
-    target: Option<Target>,
+    pub(super) target: Option<Target>,
 }
 
 impl ViewportResources {
-    fn new(rs: &egui_wgpu::RenderState) -> Self {
-        let device = &rs.device;
+    /// The pipelines on `device`, the blit writing `target_format` (egui's pass).
+    pub(super) fn new(
+        device: &wgpu::Device,
+        adapter: &wgpu::Adapter,
+        target_format: wgpu::TextureFormat,
+    ) -> Self {
         // 4× MSAA where the GPU has it; a software renderer (lavapipe,
         // llvmpipe) would spend most of a frame on it, so it draws single-sampled.
-        let software = rs.adapter.get_info().device_type == wgpu::DeviceType::Cpu;
-        let sample_count =
-            if !software && supports_4x(rs, COLOR_FORMAT) && supports_4x(rs, DEPTH_FORMAT) {
-                4
-            } else {
-                1
-            };
+        let software = adapter.get_info().device_type == wgpu::DeviceType::Cpu;
+        let multisampled = |format| supports_4x(device, adapter, format);
+        let sample_count = if !software && multisampled(COLOR_FORMAT) && multisampled(DEPTH_FORMAT)
+        {
+            4
+        } else {
+            1
+        };
         let scene_module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("viewport scene"),
             source: wgpu::ShaderSource::Wgsl(SCENE_SHADER.into()),
@@ -577,13 +591,13 @@ impl ViewportResources {
             multisample: wgpu::MultisampleState::default(),
             fragment: Some(wgpu::FragmentState {
                 module: &blit_module,
-                entry_point: Some(if rs.target_format.is_srgb() {
+                entry_point: Some(if target_format.is_srgb() {
                     "fs_blit_linear"
                 } else {
                     "fs_blit_gamma"
                 }),
                 compilation_options: wgpu::PipelineCompilationOptions::default(),
-                targets: &[Some(rs.target_format.into())],
+                targets: &[Some(target_format.into())],
             }),
             multiview_mask: None,
             cache: None,
@@ -613,7 +627,7 @@ impl ViewportResources {
     }
 
     /// (Re)creates the offscreen target when the viewport's pixel size changed.
-    fn ensure_target(&mut self, device: &wgpu::Device, size: [u32; 2]) {
+    pub(super) fn ensure_target(&mut self, device: &wgpu::Device, size: [u32; 2]) {
         let max = device.limits().max_texture_dimension_2d.max(1);
         let size = size.map(|s| s.clamp(1, max));
         if self.target.as_ref().is_some_and(|t| t.size == size) {
@@ -642,7 +656,7 @@ impl ViewportResources {
             "viewport colour",
             COLOR_FORMAT,
             1,
-            attach | wgpu::TextureUsages::TEXTURE_BINDING,
+            attach | wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_SRC,
         );
         let msaa = (self.sample_count > 1).then(|| {
             texture(
@@ -672,7 +686,7 @@ impl ViewportResources {
 
     /// Uploads the scene's geometry; false (and that part not drawn) when a
     /// part does not fit.
-    fn upload(
+    pub(super) fn upload(
         &mut self,
         device: &wgpu::Device,
         queue: &wgpu::Queue,
@@ -750,8 +764,8 @@ impl ViewportResources {
         fits
     }
 
-    /// Clears the offscreen target and draws the uploaded geometry into it.
-    fn render(&self, encoder: &mut wgpu::CommandEncoder) {
+    /// Clears the offscreen target to `clear` and draws the uploaded geometry into it.
+    pub(super) fn render(&self, encoder: &mut wgpu::CommandEncoder, clear: wgpu::Color) {
         let Some(target) = &self.target else {
             return;
         };
@@ -766,7 +780,7 @@ impl ViewportResources {
                 resolve_target,
                 depth_slice: None,
                 ops: wgpu::Operations {
-                    load: wgpu::LoadOp::Clear(BACKGROUND),
+                    load: wgpu::LoadOp::Clear(clear),
                     store,
                 },
             })],
@@ -888,10 +902,14 @@ fn upload_atlas(
 }
 
 /// Whether `format` can be rendered with 4x MSAA on this device.
-fn supports_4x(rs: &egui_wgpu::RenderState, format: wgpu::TextureFormat) -> bool {
-    let features = rs.device.features();
+fn supports_4x(
+    device: &wgpu::Device,
+    adapter: &wgpu::Adapter,
+    format: wgpu::TextureFormat,
+) -> bool {
+    let features = device.features();
     let flags = if features.contains(wgpu::Features::TEXTURE_ADAPTER_SPECIFIC_FORMAT_FEATURES) {
-        rs.adapter.get_texture_format_features(format).flags
+        adapter.get_texture_format_features(format).flags
     } else {
         format.guaranteed_format_features(features).flags
     };

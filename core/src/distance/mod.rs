@@ -1,12 +1,14 @@
 //! Distance measurement: a BVH over triangles or spheres, exact point-to-triangle
 //! distance, and the sampled two-sided Hausdorff distance that every method's
-//! guaranteed error bound is checked against; the UV error of a LOD.
+//! guaranteed error bound is checked against; the UV error of a LOD; how
+//! different two renders look ([`visual`]).
 
 pub mod bvh;
 pub mod facets;
 pub mod hausdorff;
 pub mod triangle;
 pub mod uv;
+pub mod visual;
 pub mod winding;
 
 pub use bvh::{Bvh, MeshDistance, SphereSetDistance};

@@ -82,20 +82,81 @@ fn parse(data: &[u8]) -> ParseResult<gltf::Gltf> {
     Ok(gltf::Gltf { document, blob })
 }
 
+/// Every mesh instance of the default scene (else the first scene, else of
+/// every node) as one mesh.
 pub fn read(data: &[u8], base: Option<&Path>) -> ParseResult<TriMesh> {
     let g = parse(data)?;
+    let roots = scene_roots(&g.document);
+    read_nodes(&g, base, roots)
+}
+
+/// Level `lod` of the `MSFT_lod` chain that `export` writes: LOD 0 is the
+/// scene's first root (node 0), whose `extensions.MSFT_lod.ids` name the
+/// nodes of LOD 1, 2, … (which no scene lists, so [`read`] never sees them).
+/// Only that node and its children are read.
+///
+/// # Errors
+/// As [`read`], and when the chain has no LOD `lod`.
+pub fn read_lod(data: &[u8], base: Option<&Path>, lod: usize) -> ParseResult<TriMesh> {
+    let g = parse(data)?;
+    let Some(head) = scene_roots(&g.document).into_iter().next() else {
+        return Err(ParseError::file("expected a node to hold LOD 0"));
+    };
+    let ids = lod_ids(data, head.index())?;
+    let index = match lod {
+        0 => head.index(),
+        k => *ids.get(k - 1).ok_or_else(|| {
+            ParseError::file(format!(
+                "expected an LOD {k}, but the MSFT_lod chain has LODs 0 to {}",
+                ids.len()
+            ))
+        })?,
+    };
+    let node = g.document.nodes().nth(index).ok_or_else(|| {
+        ParseError::item(
+            format!("node {}", head.index()),
+            format!("expected MSFT_lod ids among the nodes, found {index}"),
+        )
+    })?;
+    read_nodes(&g, base, vec![node])
+}
+
+fn scene_roots(document: &gltf::Document) -> Vec<gltf::Node<'_>> {
+    match document
+        .default_scene()
+        .or_else(|| document.scenes().next())
+    {
+        Some(scene) => scene.nodes().collect(),
+        None => document.nodes().collect(),
+    }
+}
+
+/// The `MSFT_lod` ids of node `node` (none without the extension), read from
+/// the JSON itself: the gltf crate, as configured, drops unknown extensions.
+fn lod_ids(data: &[u8], node: usize) -> ParseResult<Vec<usize>> {
+    let json = match gltf::binary::Glb::from_slice(data) {
+        Ok(glb) => glb.json.into_owned(),
+        Err(_) => data.to_vec(),
+    };
+    let root: serde_json::Value = serde_json::from_slice(&json)
+        .map_err(|e| ParseError::file(format!("expected glTF JSON ({e})")))?;
+    let Some(ids) = root["nodes"][node]["extensions"]["MSFT_lod"].get("ids") else {
+        return Ok(Vec::new());
+    };
+    serde_json::from_value(ids.clone()).map_err(|_| {
+        ParseError::item(
+            format!("node {node}"),
+            "expected MSFT_lod ids to be node indices",
+        )
+    })
+}
+
+/// The meshes of `roots` and their descendants, node transforms applied.
+fn read_nodes(g: &gltf::Gltf, base: Option<&Path>, roots: Vec<gltf::Node>) -> ParseResult<TriMesh> {
     check_buffer_files(&g.document, base)?;
     let buffers = gltf::import_buffers(&g.document, base, g.blob.clone())
         .map_err(|e| ParseError::file(format!("expected readable glTF buffers ({e})")))?;
     let mut mesh = TriMesh::default();
-    let roots: Vec<gltf::Node> = match g
-        .document
-        .default_scene()
-        .or_else(|| g.document.scenes().next())
-    {
-        Some(scene) => scene.nodes().collect(),
-        None => g.document.nodes().collect(),
-    };
     let mut stack: Vec<(gltf::Node, Mat4, usize)> =
         roots.into_iter().map(|n| (n, Mat4::IDENTITY, 0)).collect();
     while let Some((node, parent, depth)) = stack.pop() {
@@ -512,6 +573,43 @@ pub fn referenced_files(path: &Path, bytes: &[u8]) -> Vec<PathBuf> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn an_lod_chain_reads_level_by_level() {
+        use crate::io::gltf_writer::{PointsAs, write_glb, write_lod_chain};
+        use crate::lod::DrawSet;
+        let triangle = |n: usize| {
+            let mesh = TriMesh::new(
+                vec![Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::Z],
+                [[0, 1, 2], [0, 1, 3], [0, 2, 3]][..n].to_vec(),
+            );
+            DrawSet {
+                mesh,
+                ..Default::default()
+            }
+        };
+        let chain = write_lod_chain(
+            &[triangle(3), triangle(2), triangle(1)],
+            &[1.0, 0.5, 0.1],
+            PointsAs::default(),
+        );
+        assert_eq!(read(&chain, None).unwrap().triangles.len(), 3, "LOD0 alone");
+        for (lod, triangles) in [(0, 3), (1, 2), (2, 1)] {
+            assert_eq!(
+                read_lod(&chain, None, lod).unwrap().triangles.len(),
+                triangles
+            );
+        }
+        let missing = read_lod(&chain, None, 3).unwrap_err().expected;
+        assert!(
+            missing.contains("LOD 3") && missing.contains("0 to 2"),
+            "{missing}"
+        );
+        // A plain file is a chain of one.
+        let single = write_glb(&triangle(2).mesh);
+        assert_eq!(read_lod(&single, None, 0).unwrap().triangles.len(), 2);
+        assert!(read_lod(&single, None, 1).is_err());
+    }
 
     #[test]
     fn image_uris_are_data_or_files_beside_the_gltf() {
