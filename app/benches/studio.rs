@@ -161,7 +161,7 @@ fn chain_row(h: &mut Harness<'_, StudioApp>, model: &str) {
     }
     h.state_mut().set_switch_distance(None);
     println!(
-        "| {model} | {lods} | {build_s:.1} | {} | {} | {} | {} | {} |",
+        "| {model} | {lods} | {build_s:.1} | {} | {} | {} | {} | {} | {} |",
         steps.len(),
         spread(&steps),
         spread(&frames),

@@ -89,6 +89,29 @@ fn a_mixed_chain_builds_previews_and_exports_as_the_cli_does() {
         assert!(harness.query_by_label(label).is_some(), "{label}");
     }
 
+    // The visual difference of every LOD against the original: LOD0 nearly
+    // none, the impostor most (off-screen, by the viewport's renderer).
+    harness.get_by_label("Visual difference").click();
+    harness.step();
+    wait_while(
+        &mut harness,
+        "measuring",
+        StudioApp::is_measuring_difference,
+    );
+    let d = harness
+        .state()
+        .chain_differences()
+        .expect("measured")
+        .to_vec();
+    assert_eq!(d.len(), 3);
+    for l in &d {
+        assert!(l.here.silhouette >= 0.0 && l.here.psnr > 0.0 && l.here.psnr <= 100.0);
+        assert_eq!(l.image.rgba.len(), 256 * 256);
+    }
+    assert!(d[0].around.silhouette < d[2].around.silhouette, "{d:?}");
+    assert!(d[0].around.psnr > d[2].around.psnr, "{d:?}");
+    assert!(harness.query_by_label("silhouette, 8 views").is_some());
+
     // The switch preview: the LOD for each distance, drawn and named.
     let c = &chain.coverages;
     let at = |harness: &mut Harness<'_, StudioApp>, d: f32| {

@@ -44,3 +44,31 @@ fn a_render_state_and_a_headless_device_render_alike() {
         assert!(a.image.rgba.iter().all(|p| p[3] == 255), "opaque");
     }
 }
+
+/// AMG splats (alpha-blended, Ψ-weighted) count as covering where their
+/// domains' cores lock the depth (Ψ ≥ ½, front-facing), as the viewport
+/// draws them: an impostor of the octahedron's points covers part of every
+/// view.
+#[test]
+fn splat_impostors_cover_their_domains() {
+    let points = lodstudio_core::builtins::octahedron_points(4000, 7);
+    let ms =
+        lodstudio_core::amg::decompose(&points, &Default::default(), &Progress::new()).unwrap();
+    let texel = ms.default_texel();
+    let mut h = lodstudio_core::amg::AmgHierarchy::new(ms, texel);
+    use lodstudio_core::lod::Hierarchy as _;
+    let d = h.diagonal();
+    let view = lodstudio_core::view::View::orbit(glam::Vec3::ZERO, d, 0.0, 0.0);
+    let set = h.select(&view, lodstudio_core::view::Tolerance::Relative(0.2));
+    assert!(!set.splats.is_empty());
+    let splats = Scene::from_draw_set(&set, &Default::default());
+    let cameras = Camera::views_around(splats.sphere(), 4, 1.0);
+    let renders = Offscreen::headless()
+        .unwrap()
+        .render(&splats, &cameras, splats.sphere(), [96, 96])
+        .unwrap();
+    for r in &renders {
+        let covered = r.coverage.iter().filter(|&&c| c).count() as f64 / r.coverage.len() as f64;
+        assert!(covered > 0.02, "{covered}");
+    }
+}

@@ -9,7 +9,9 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::sync::mpsc::{self, Receiver, TryRecvError};
 
+use lodstudio_core::distance::visual::Difference;
 use lodstudio_core::io::LoadOptions;
+use lodstudio_core::lod::Texture;
 use lodstudio_core::progress::Cancelled;
 use lodstudio_core::recipe::{Chain, ChainError, Recipe, build_chain};
 
@@ -19,11 +21,27 @@ use crate::export;
 use crate::job::{Job, Poll};
 use crate::panels::chain::RowFigures;
 use crate::render::camera::{coverage_at_distance, distance_at_coverage};
-use crate::render::{Scene, SceneStyle};
+use crate::render::{Camera, Offscreen, Scene, SceneStyle};
 use crate::settings::chain::ChainSettings;
 
 /// Seconds the dolly takes from near to far.
 const DOLLY_SECONDS: f64 = 6.0;
+/// The visual difference's fixed views around the model, and their size.
+const DIFFERENCE_VIEWS: usize = 8;
+const DIFFERENCE_SIZE: [u32; 2] = [256, 256];
+
+/// One LOD against the original, rendered by the viewport's renderer from
+/// the camera and from [`DIFFERENCE_VIEWS`] views around the model.
+#[derive(Debug, Clone)]
+pub struct LodDifference {
+    /// From the viewport's camera.
+    pub here: Difference,
+    /// The means over the fixed views.
+    pub around: Difference,
+    /// Where they differ from the viewport's camera (red: only the original
+    /// covers, green: only the LOD, else the shading's difference × 4).
+    pub image: Texture,
+}
 
 /// A chain built for the model on screen, with what the viewport and the
 /// table show of it.
@@ -114,6 +132,11 @@ pub(super) struct ChainView {
     pub(super) recent_recipes: Vec<PathBuf>,
     /// Why the last chain build failed.
     note: Option<String>,
+    /// The visual difference of every LOD, measuring or measured.
+    measuring: Option<Job<Result<Vec<LodDifference>, String>>>,
+    differences: Option<Vec<LodDifference>>,
+    /// The shown LOD's difference image, uploaded once.
+    difference_image: Option<(usize, egui::TextureHandle)>,
 }
 
 impl StudioApp {
@@ -173,6 +196,64 @@ impl StudioApp {
     /// The last chain built for the model on screen.
     pub fn built_chain(&self) -> Option<&BuiltChain> {
         self.chain.built.as_ref()
+    }
+
+    /// Renders every LOD of the built chain and the original off-screen,
+    /// from the viewport's camera and from 8 views around, on a worker.
+    pub fn measure_difference(&mut self, ctx: &egui::Context) {
+        let (Some(rs), Some(built), Some(current)) =
+            (&self.render_state, &self.chain.built, &self.current)
+        else {
+            self.error("Visual difference: build the chain (with a GPU renderer) first".into());
+            return;
+        };
+        let mut offscreen = Offscreen::new(rs);
+        let original = Arc::clone(&current.scene);
+        let lods = built.scenes.clone();
+        let mut cameras = vec![self.viewport.camera];
+        cameras.extend(Camera::views_around(
+            original.sphere(),
+            DIFFERENCE_VIEWS,
+            1.0,
+        ));
+        let work = move |progress: &lodstudio_core::Progress| {
+            progress.stage("visual difference");
+            let mut out = Vec::with_capacity(lods.len());
+            for (k, lod) in lods.iter().enumerate() {
+                progress.check()?;
+                progress.set_fraction(k as f32 / lods.len() as f32);
+                let views = match offscreen.compare(&original, lod, &cameras, DIFFERENCE_SIZE) {
+                    Ok(v) => v,
+                    Err(e) => return Ok(Err(e)),
+                };
+                let around = &views[1..];
+                let mean = |f: fn(&Difference) -> f64| {
+                    around.iter().map(|v| f(&v.difference)).sum::<f64>() / around.len() as f64
+                };
+                out.push(LodDifference {
+                    here: views[0].difference,
+                    around: Difference {
+                        silhouette: mean(|d| d.silhouette),
+                        psnr: mean(|d| d.psnr),
+                    },
+                    image: views[0].image.clone(),
+                });
+            }
+            Ok(Ok(out))
+        };
+        match Job::spawn("difference", "Visual difference".into(), ctx, work) {
+            Ok(job) => self.chain.measuring = Some(job),
+            Err(e) => self.error(format!("cannot start the visual difference: {e}")),
+        }
+    }
+
+    pub fn is_measuring_difference(&self) -> bool {
+        self.chain.measuring.is_some()
+    }
+
+    /// The last visual difference of the built chain's LODs.
+    pub fn chain_differences(&self) -> Option<&[LodDifference]> {
+        self.chain.differences.as_deref()
     }
 
     /// Turns the switch preview on at `distance` bounding radii from the
@@ -262,6 +343,9 @@ impl StudioApp {
     pub(super) fn forget_chain(&mut self) {
         self.chain.job = None;
         self.chain.built = None;
+        self.chain.measuring = None;
+        self.chain.differences = None;
+        self.chain.difference_image = None;
         self.chain.selected = None;
         self.chain.preview = SwitchPreview::default();
     }
@@ -281,6 +365,8 @@ impl StudioApp {
                 self.chain.job = None;
                 match outcome {
                     Ok(built) => {
+                        self.chain.differences = None;
+                        self.chain.difference_image = None;
                         self.info(format!(
                             "Built a chain of {} LODs in {seconds:.2} s",
                             built.chain.lods.len()
@@ -294,7 +380,27 @@ impl StudioApp {
                 }
             }
         }
+        self.poll_difference();
         self.run_dolly(ctx);
+    }
+
+    fn poll_difference(&mut self) {
+        let Some(job) = &self.chain.measuring else {
+            return;
+        };
+        let outcome = match job.poll() {
+            Poll::Running => return,
+            Poll::Done(r) => r,
+            Poll::Lost => Err("the visual difference stopped unexpectedly (internal error)".into()),
+        };
+        self.chain.measuring = None;
+        match outcome {
+            Ok(d) => {
+                self.chain.differences = Some(d);
+                self.chain.difference_image = None;
+            }
+            Err(e) => self.error(format!("Visual difference failed: {e}")),
+        }
     }
 
     /// Moves the camera along the dolly, near to far, while it runs.
@@ -368,6 +474,15 @@ impl StudioApp {
                 let name = format!("{}-recipe.json", self.model_stem());
                 self.spawn_save(&ctx, move || export::choose_and_write_recipe(&bytes, &name));
             }
+            let can_measure = fresh && self.render_state.is_some() && self.chain.measuring.is_none();
+            if ui
+                .add_enabled(can_measure, egui::Button::new("Visual difference"))
+                .on_hover_text("Render the original and every LOD off-screen (the viewport's renderer) from this camera and 8 views around: silhouette difference (% of pixels covered by one only) and PSNR.")
+                .on_disabled_hover_text("Build the chain first (needs the GPU renderer).")
+                .clicked()
+            {
+                self.measure_difference(&ctx);
+            }
             if ui.button("Open recipe…").clicked() {
                 self.recipe_dialog(&ctx);
             }
@@ -402,6 +517,11 @@ impl StudioApp {
             self.chain.job = None;
             self.info("Stopped building the chain".into());
         }
+        if let Some(job) = &self.chain.measuring
+            && job.progress_row(ui)
+        {
+            self.chain.measuring = None;
+        }
         ui.horizontal(|ui| {
             if self.chain.settings.auto_ui(ui) {
                 self.chain.selected = None;
@@ -430,6 +550,81 @@ impl StudioApp {
                 self.chain.selected = None;
             }
         });
+    }
+
+    /// The visual difference's window (open once measured, until closed).
+    pub(super) fn difference_window(&mut self, ctx: &egui::Context) {
+        if self.chain.differences.is_none() {
+            return;
+        }
+        let mut open = true;
+        egui::Window::new("Visual difference")
+            .open(&mut open)
+            .default_pos(egui::pos2(300.0, 100.0))
+            .show(ctx, |ui| self.difference_ui(ui));
+        if !open {
+            self.chain.differences = None;
+            self.chain.difference_image = None;
+        }
+    }
+
+    /// The visual difference per LOD, and the shown LOD's difference image.
+    fn difference_ui(&mut self, ui: &mut egui::Ui) {
+        let Some(differences) = &self.chain.differences else {
+            return;
+        };
+        let shown = self
+            .switch_lod()
+            .map(|(k, _)| k)
+            .or_else(|| {
+                let built = self.chain.built.as_ref()?;
+                Some(built.figures.get(self.chain.selected?)?.lod)
+            })
+            .unwrap_or(0);
+        ui.label("Visual difference against the original (silhouette: pixels covered by one only)");
+        egui::Grid::new("chain differences")
+            .striped(true)
+            .show(ui, |ui| {
+                for head in [
+                    "LOD",
+                    "silhouette here",
+                    "PSNR here",
+                    "silhouette, 8 views",
+                    "PSNR, 8 views",
+                ] {
+                    ui.strong(head);
+                }
+                ui.end_row();
+                for (k, d) in differences.iter().enumerate() {
+                    ui.label(format!("LOD{k}"));
+                    ui.label(format!("{:.3}%", 100.0 * d.here.silhouette));
+                    ui.label(format!("{:.1} dB", d.here.psnr));
+                    ui.label(format!("{:.3}%", 100.0 * d.around.silhouette));
+                    ui.label(format!("{:.1} dB", d.around.psnr));
+                    ui.end_row();
+                }
+            });
+        let Some(d) = differences.get(shown) else {
+            return;
+        };
+        let texture = match &self.chain.difference_image {
+            Some((k, t)) if *k == shown => t.clone(),
+            _ => {
+                let image = egui::ColorImage::from_rgba_unmultiplied(
+                    [d.image.width as usize, d.image.height as usize],
+                    bytemuck::cast_slice(&d.image.rgba),
+                );
+                let t = ui
+                    .ctx()
+                    .load_texture("chain difference", image, Default::default());
+                self.chain.difference_image = Some((shown, t.clone()));
+                t
+            }
+        };
+        ui.label(format!(
+            "LOD{shown} from the camera (red: original only, green: LOD only)"
+        ));
+        ui.add(egui::Image::new(&texture).max_size(egui::vec2(192.0, 192.0)));
     }
 
     /// The switch preview's toggle, distance slider, dolly and strip.

@@ -27,7 +27,7 @@ use lodstudio_core::io::Loaded;
 use lodstudio_core::stats::ModelSummary;
 
 use self::building::BuildRequest;
-pub use self::chain::BuiltChain;
+pub use self::chain::{BuiltChain, LodDifference};
 use self::loading::{LoadJob, MAX_RECENT, absolute, default_model, display_name, is_builtin};
 use self::status::{LogLine, drop_hint};
 pub use self::view_bar::View;
@@ -112,6 +112,8 @@ pub struct StudioApp {
     export: Option<Job<Saved>>,
     /// The LOD chain: its rows, their build, the switch preview.
     chain: chain::ChainView,
+    /// The GPU device the viewports draw with, for off-screen renders.
+    render_state: Option<egui_wgpu::RenderState>,
     autosave: Autosave,
 }
 
@@ -225,6 +227,7 @@ impl StudioApp {
             heat: false,
             export: None,
             chain: chain::ChainView::default(),
+            render_state: render_state.cloned(),
             autosave: Autosave::off(),
         }
     }
@@ -368,12 +371,14 @@ impl StudioApp {
         );
 
         self.error_window(&ctx);
+        self.difference_window(&ctx);
         drop_hint(&ctx);
         if self.job.is_some()
             || self.picker.is_some()
             || self.build.is_some()
             || self.export.is_some()
             || self.is_building_chain()
+            || self.is_measuring_difference()
         {
             ctx.request_repaint_after(POLL_INTERVAL);
         }
