@@ -9,41 +9,30 @@
 //! - the five rows as five fresh runs one after another (the export before);
 //! - the peer: meshoptimizer's `simplify` to the five counts the chain made.
 //!
-//! Run with `cargo bench -p lodstudio-core --bench chain`; it prints a
-//! Markdown table. BENCHMARKS.md holds a recorded run.
+//! A second table says where a chain's time goes (n/4): the collapses and
+//! each row's certificate (an O(input) pass over the original), which is
+//! why a chain of k rows costs more than one row.
+//!
+//! Run with `cargo bench -p lodstudio-core --bench chain`; it prints
+//! Markdown tables. BENCHMARKS.md holds a recorded run.
 
 mod common;
+#[path = "common/meshopt_peer.rs"]
+mod meshopt_peer;
 
 use std::time::Instant;
 
-use lodstudio_core::geom::{RepairOptions, repair::repair_mesh};
 use lodstudio_core::recipe::{Recipe, build_chain, parse_lods};
+use lodstudio_core::simplify::{
+    BoundOptions, CollapseOptions, EdgeCollapser, Original, certify_against,
+};
 use lodstudio_core::{Model, Progress, TriMesh};
+use meshopt_peer::{meshopt_to, quarters_of};
 
 const DRAGON: &str = concat!(
     env!("CARGO_MANIFEST_DIR"),
     "/../../shared/models/dragon_vrip.ply.gz"
 );
-
-/// meshoptimizer's simplification of `mesh` to `target` triangles (indices).
-fn meshopt_to(mesh: &TriMesh, target: usize) -> Vec<u32> {
-    let bytes: Vec<u8> = mesh
-        .positions
-        .iter()
-        .flat_map(|p| p.to_array())
-        .flat_map(f32::to_ne_bytes)
-        .collect();
-    let vertices = meshopt::VertexDataAdapter::new(&bytes, 12, 0).expect("vertex adapter");
-    let indices: Vec<u32> = mesh.triangles.iter().flatten().copied().collect();
-    meshopt::simplify(
-        &indices,
-        &vertices,
-        3 * target,
-        1.0,
-        meshopt::SimplifyOptions::None,
-        None,
-    )
-}
 
 fn seconds(f: impl FnOnce()) -> f64 {
     let t = Instant::now();
@@ -51,9 +40,41 @@ fn seconds(f: impl FnOnce()) -> f64 {
     t.elapsed().as_secs_f64()
 }
 
+/// Where the time of a chain of ratio rows goes: one collapser run on
+/// from row to row, each row certified against the original.
+fn profile(input: &TriMesh) {
+    let m = input.triangles.len();
+    println!("\n### Where a chain's time goes ({m} triangles, ratio rows)\n");
+    println!("| stage | seconds | certified bound |");
+    println!("|---|---|---|");
+    let mut collapser = None;
+    let new = seconds(|| collapser = Some(EdgeCollapser::new(input, CollapseOptions::default())));
+    let mut collapser = collapser.unwrap();
+    let mut original = None;
+    let search = seconds(|| original = Some(Original::new(input)));
+    let original = original.unwrap();
+    println!("| collapser set-up (quadrics, queue) | {new:.2} | |");
+    println!("| original's search structures | {search:.2} | |");
+    let opts = BoundOptions {
+        per_triangle: false,
+        ..BoundOptions::for_diagonal(input.bounds().diagonal())
+    };
+    for f in [2, 4, 8, 16, 32] {
+        let run = seconds(|| collapser.run(m / f, |_, _| true));
+        let (out, _) = collapser.mesh();
+        let mut bound = 0.0;
+        let certify = seconds(|| {
+            bound = certify_against(&original, &out, &opts, &Progress::new())
+                .unwrap()
+                .error_bound()
+        });
+        println!("| collapse on to m/{f} | {run:.2} | |");
+        println!("| certify m/{f} against the original | {certify:.2} | {bound:.3e} |");
+    }
+}
+
 fn main() {
     let dragon = common::load_mesh(DRAGON);
-    let n = dragon.triangles.len();
     println!("## LOD chains: five edge-collapse rows in one progressive collapse\n");
     println!(
         "| input tris | rows | chain s | finest row alone s | chain / finest | \
@@ -61,17 +82,7 @@ fn main() {
     );
     println!("|---|---|---|---|---|---|---|---|");
     for quarter in [1usize, 2, 4] {
-        let input = if quarter == 4 {
-            dragon.clone()
-        } else {
-            let reduced = meshopt_to(&dragon, n * quarter / 4);
-            let mut mesh = TriMesh::new(dragon.positions.clone(), Vec::new());
-            mesh.triangles = reduced
-                .chunks_exact(3)
-                .map(|t| [t[0], t[1], t[2]])
-                .collect();
-            repair_mesh(mesh, &RepairOptions::default()).0
-        };
+        let input = quarters_of(&dragon, quarter);
         let m = input.triangles.len();
         let model = Model::Mesh(input.clone());
         for rows in ["0.1%,0.2%,0.4%,0.8%,1.6%", "0.5,0.25,0.125,0.0625,0.03125"] {
@@ -116,4 +127,5 @@ fn main() {
             );
         }
     }
+    profile(&quarters_of(&dragon, 1));
 }

@@ -16,39 +16,21 @@
 //! prints Markdown tables. BENCHMARKS.md holds a recorded run.
 
 mod common;
+#[path = "common/meshopt_peer.rs"]
+mod meshopt_peer;
 
 use std::sync::Arc;
 use std::time::Instant;
 
-use lodstudio_core::geom::{RepairOptions, repair::repair_mesh};
+use lodstudio_core::Progress;
 use lodstudio_core::simplify::progressive::{ProgressiveCut, record};
 use lodstudio_core::simplify::{CollapseOptions, EdgeCollapser};
-use lodstudio_core::{Progress, TriMesh};
+use meshopt_peer::{meshopt_to, quarters_of};
 
 const DRAGON: &str = concat!(
     env!("CARGO_MANIFEST_DIR"),
     "/../../shared/models/dragon_vrip.ply.gz"
 );
-
-/// meshoptimizer's simplification of `mesh` to `target` triangles (indices).
-fn meshopt_to(mesh: &TriMesh, target: usize) -> Vec<u32> {
-    let bytes: Vec<u8> = mesh
-        .positions
-        .iter()
-        .flat_map(|p| p.to_array())
-        .flat_map(f32::to_ne_bytes)
-        .collect();
-    let vertices = meshopt::VertexDataAdapter::new(&bytes, 12, 0).expect("vertex adapter");
-    let indices: Vec<u32> = mesh.triangles.iter().flatten().copied().collect();
-    meshopt::simplify(
-        &indices,
-        &vertices,
-        3 * target,
-        1.0,
-        meshopt::SimplifyOptions::None,
-        None,
-    )
-}
 
 fn ms(t: Instant) -> f64 {
     t.elapsed().as_secs_f64() * 1e3
@@ -63,7 +45,6 @@ fn spread(v: &[f64]) -> String {
 
 fn main() {
     let dragon = common::load_mesh(DRAGON);
-    let n = dragon.triangles.len();
     println!("## Progressive edge collapse: the slider in 10 % steps\n");
     println!(
         "| input tris | record to 0.1 % (s) | steps | incremental move ms (median / max) | \
@@ -72,17 +53,7 @@ fn main() {
     );
     println!("|---|---|---|---|---|---|---|---|---|");
     for quarter in [1usize, 2, 4] {
-        let input = if quarter == 4 {
-            dragon.clone()
-        } else {
-            let reduced = meshopt_to(&dragon, n * quarter / 4);
-            let mut mesh = TriMesh::new(dragon.positions.clone(), Vec::new());
-            mesh.triangles = reduced
-                .chunks_exact(3)
-                .map(|t| [t[0], t[1], t[2]])
-                .collect();
-            repair_mesh(mesh, &RepairOptions::default()).0
-        };
+        let input = quarters_of(&dragon, quarter);
         let m = input.triangles.len();
         eprintln!("recording {m} triangles");
         let start = Instant::now();
