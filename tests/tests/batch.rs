@@ -16,22 +16,31 @@ fn temp(name: &str) -> PathBuf {
     dir
 }
 
+/// A new folder `name` holding copies of the shared models `models`.
+fn copies(name: &str, models: &[&str]) -> PathBuf {
+    let dir = temp(name);
+    for m in models {
+        std::fs::copy(shared_model(m), dir.join(m)).unwrap();
+    }
+    dir
+}
+
 /// 30 models: seven shared ones (the engine with its .bin), 19 built-ins
 /// written as OBJ, PLY and GLB, and four malformed files.
 fn thirty_models() -> (PathBuf, usize) {
-    let dir = temp("thirty");
-    for name in [
-        "bones.off",
-        "couplingdown.off",
-        "fandisk.obj",
-        "knot2.off",
-        "rocker-arm.obj",
-        "CesiumMilkTruck.glb",
-        "2CylinderEngine.gltf",
-        "2CylinderEngine0.bin",
-    ] {
-        std::fs::copy(shared_model(name), dir.join(name)).unwrap();
-    }
+    let dir = copies(
+        "thirty",
+        &[
+            "bones.off",
+            "couplingdown.off",
+            "fandisk.obj",
+            "knot2.off",
+            "rocker-arm.obj",
+            "CesiumMilkTruck.glb",
+            "2CylinderEngine.gltf",
+            "2CylinderEngine0.bin",
+        ],
+    );
     for i in 0..19u32 {
         let mesh = if i % 2 == 0 {
             lodstudio_core::builtins::torus(1.0, 0.2 + 0.02 * i as f32, 12 + 2 * i, 8 + i)
@@ -180,17 +189,17 @@ fn three_concurrent_shards_write_what_one_run_writes() {
 #[test]
 fn a_killed_run_leaves_whole_files_and_the_next_completes_it() {
     use std::os::unix::process::CommandExt;
-    let models = temp("kill-in");
-    for name in [
-        "horse.ply",
-        "stanford-bunny.obj",
-        "rocker-arm.obj",
-        "fandisk.obj",
-        "knot2.off",
-        "bones.off",
-    ] {
-        std::fs::copy(shared_model(name), models.join(name)).unwrap();
-    }
+    let models = copies(
+        "kill-in",
+        &[
+            "horse.ply",
+            "stanford-bunny.obj",
+            "rocker-arm.obj",
+            "fandisk.obj",
+            "knot2.off",
+            "bones.off",
+        ],
+    );
     let reference = temp("kill-ref");
     assert_eq!(export(&models, &reference, &[]).0, Some(0));
     let out = temp("kill-out");
@@ -247,16 +256,16 @@ fn reference_bytes(dir: &Path, name: &str) -> Vec<u8> {
 /// recipe everything.
 #[test]
 fn the_cache_skips_what_has_not_changed() {
-    let models = temp("cache-in");
-    for name in [
-        "fandisk.obj",
-        "bones.off",
-        "CesiumMilkTruck.glb",
-        "2CylinderEngine.gltf",
-        "2CylinderEngine0.bin",
-    ] {
-        std::fs::copy(shared_model(name), models.join(name)).unwrap();
-    }
+    let models = copies(
+        "cache-in",
+        &[
+            "fandisk.obj",
+            "bones.off",
+            "CesiumMilkTruck.glb",
+            "2CylinderEngine.gltf",
+            "2CylinderEngine0.bin",
+        ],
+    );
     let out = temp("cache-out");
     let (code, first) = export(&models, &out, &[]);
     assert_eq!((code, first["built"].as_u64()), (Some(0), Some(4)));

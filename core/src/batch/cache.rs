@@ -97,6 +97,8 @@ pub enum Lookup {
 #[derive(Debug, Clone)]
 pub struct Cache {
     dir: PathBuf,
+    /// The outputs some record names, read once when opened.
+    made: std::collections::HashSet<String>,
 }
 
 impl Cache {
@@ -104,7 +106,14 @@ impl Cache {
     pub fn open(out_dir: &Path) -> std::io::Result<Cache> {
         let dir = out_dir.join(DIR_NAME);
         std::fs::create_dir_all(dir.join("tmp"))?;
-        Ok(Cache { dir })
+        let made = std::fs::read_dir(&dir)?
+            .filter_map(Result::ok)
+            .filter(|e| e.path().extension().is_some_and(|x| x == "json"))
+            .filter_map(|e| std::fs::read(e.path()).ok())
+            .filter_map(|b| serde_json::from_slice::<Record>(&b).ok())
+            .map(|r| r.output)
+            .collect();
+        Ok(Cache { dir, made })
     }
 
     fn record_path(&self, key: &str) -> PathBuf {
@@ -133,19 +142,11 @@ impl Cache {
         }
     }
 
-    /// Whether some record names `output` (so an existing file there is the
-    /// batch's own, not the user's).
+    /// Whether a record named `output` when the cache was opened (so an
+    /// existing file there is a batch's own, not the user's; each output
+    /// belongs to one shard, so no other shard makes it meanwhile).
     pub fn made(&self, output: &str) -> bool {
-        let Ok(entries) = std::fs::read_dir(&self.dir) else {
-            return false;
-        };
-        entries.filter_map(Result::ok).any(|e| {
-            e.path().extension().is_some_and(|x| x == "json")
-                && std::fs::read(e.path())
-                    .ok()
-                    .and_then(|b| serde_json::from_slice::<Record>(&b).ok())
-                    .is_some_and(|r| r.output == output)
-        })
+        self.made.contains(output)
     }
 
     /// Records `record` (atomically; after its output is in place).
@@ -228,7 +229,7 @@ mod tests {
             report: serde_json::json!({}),
         };
         cache.store(&record).unwrap();
-        assert!(cache.made("a.glb"));
+        assert!(Cache::open(&dir).unwrap().made("a.glb"), "read when opened");
         assert_eq!(
             cache.lookup(&k, &dir, "a.glb"),
             Lookup::Hit(Box::new(record))
