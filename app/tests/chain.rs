@@ -39,8 +39,20 @@ fn glb_json(glb: &[u8]) -> serde_json::Value {
     serde_json::from_slice(&glb[20..20 + len]).expect("glTF JSON chunk")
 }
 
+/// Clicks the first widget labelled `label`, scrolled into view first (the
+/// chain panel scrolls under the viewport).
+fn click(harness: &mut Harness<'_, StudioApp>, label: &str) {
+    harness
+        .get_all_by_label(label)
+        .next()
+        .expect(label)
+        .scroll_to_me();
+    harness.run();
+    harness.get_all_by_label(label).next().expect(label).click();
+}
+
 fn built_chain(harness: &mut Harness<'_, StudioApp>) {
-    harness.get_by_label("Build chain").click();
+    click(harness, "Build chain");
     harness.step();
     assert!(harness.state().is_building_chain());
     wait_while(harness, "building the chain", StudioApp::is_building_chain);
@@ -91,7 +103,7 @@ fn a_mixed_chain_builds_previews_and_exports_as_the_cli_does() {
 
     // The visual difference of every LOD against the original: LOD0 nearly
     // none, the impostor most (off-screen, by the viewport's renderer).
-    harness.get_by_label("Visual difference").click();
+    click(&mut harness, "Visual difference");
     harness.step();
     wait_while(
         &mut harness,
@@ -153,7 +165,7 @@ fn a_mixed_chain_builds_previews_and_exports_as_the_cli_does() {
         "chain-impostor",
     );
     // The dolly runs from near to far by itself.
-    harness.get_by_label("Dolly").click();
+    click(&mut harness, "Dolly");
     harness.step();
     let first = harness.state().switch_lod().unwrap().0;
     let start = Instant::now();
@@ -226,7 +238,7 @@ fn the_panel_edits_rows_and_refuses_bad_recipes() {
     wait_while(&mut harness, "loading", StudioApp::is_loading);
     let rows = |h: &Harness<'_, StudioApp>| h.state().chain_settings().recipe.rows.len();
     let before = rows(&harness);
-    harness.get_by_label("Add row").click();
+    click(&mut harness, "Add row");
     harness.run();
     assert_eq!(rows(&harness), before + 1);
     harness
@@ -236,10 +248,10 @@ fn the_panel_edits_rows_and_refuses_bad_recipes() {
         .click();
     harness.run();
     assert_eq!(rows(&harness), before + 2);
-    harness.get_all_by_label("Remove").next().unwrap().click();
+    click(&mut harness, "Remove");
     harness.run();
     assert_eq!(rows(&harness), before + 1);
-    harness.get_by_label("Auto chain").click();
+    click(&mut harness, "Auto chain");
     harness.run();
     let labels: Vec<String> = harness
         .state()

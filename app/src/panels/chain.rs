@@ -76,13 +76,12 @@ impl ChainSettings {
             .num_columns(5 + FIGURE_HEADS.len())
             .striped(true)
             .show(ui, |ui| {
-                for head in ["row", "method", "tolerance", "parameters"] {
+                for head in ["row", "method", "tolerance", "parameters", ""] {
                     ui.strong(head);
                 }
                 for (head, hint) in FIGURE_HEADS {
                     ui.strong(head).on_hover_text(hint);
                 }
-                ui.label("");
                 ui.end_row();
                 let rows = self.recipe.rows.len();
                 for (i, row) in self.recipe.rows.iter_mut().enumerate() {
@@ -101,24 +100,6 @@ impl ChainSettings {
                     method_menu(ui, row);
                     tolerance_ui(ui, row);
                     parameters_ui(ui, row);
-                    match fig {
-                        Some(f) => {
-                            for (c, cell) in f.cells.iter().enumerate() {
-                                if c == 3 && f.estimate {
-                                    ui.label(format!("~{cell}")).on_hover_text(
-                                        "AMG's plane error: an estimate, not a certified bound",
-                                    );
-                                } else {
-                                    ui.label(cell);
-                                }
-                            }
-                        }
-                        None => {
-                            for _ in FIGURE_HEADS {
-                                ui.weak("–");
-                            }
-                        }
-                    }
                     ui.horizontal(|ui| {
                         let small = |ui: &mut egui::Ui, text: &str, enabled: bool, hint: &str| {
                             ui.add_enabled(enabled, egui::Button::new(text).small())
@@ -138,6 +119,24 @@ impl ChainSettings {
                             action = Some((i, RowAction::Remove));
                         }
                     });
+                    match fig {
+                        Some(f) => {
+                            for (c, cell) in f.cells.iter().enumerate() {
+                                if c == 3 && f.estimate {
+                                    ui.label(format!("~{cell}")).on_hover_text(
+                                        "AMG's plane error: an estimate, not a certified bound",
+                                    );
+                                } else {
+                                    ui.label(cell);
+                                }
+                            }
+                        }
+                        None => {
+                            for _ in FIGURE_HEADS {
+                                ui.weak("–");
+                            }
+                        }
+                    }
                     ui.end_row();
                 }
             });
@@ -151,6 +150,13 @@ impl ChainSettings {
             }
             None => {}
         }
+        response.changed = self.recipe.rows != before;
+        response
+    }
+
+    /// "Add row": a row coarser than the last; true when one was added.
+    pub fn add_row_ui(&mut self, ui: &mut egui::Ui) -> bool {
+        let rows = &mut self.recipe.rows;
         let add = ui
             .add_enabled(rows.len() < MAX_ROWS, egui::Button::new("Add row"))
             .on_hover_text("A row coarser than the last: its tolerance doubled.");
@@ -161,8 +167,7 @@ impl ChainSettings {
                 .unwrap_or_else(|| Row::new(Method::EdgeCollapse, RowTolerance::Percent(1.0)));
             rows.push(next);
         }
-        response.changed = self.recipe.rows != before;
-        response
+        add.clicked()
     }
 
     /// "Auto chain": its rule and the button that replaces the rows; true

@@ -538,6 +538,8 @@ impl StudioApp {
             .as_ref()
             .filter(|b| b.recipe() == &self.chain.settings.recipe)
             .map(|b| b.figures.as_slice());
+        // Solid scroll bars: floating ones would lie over the last row.
+        ui.style_mut().spacing.scroll = egui::style::ScrollStyle::solid();
         egui::ScrollArea::horizontal().show(ui, |ui| {
             let response = self
                 .chain
@@ -554,6 +556,9 @@ impl StudioApp {
                 self.chain.selected = None;
             }
         });
+        if self.chain.settings.add_row_ui(ui) {
+            self.chain.selected = None;
+        }
     }
 
     /// The visual difference's window (open once measured, until closed).

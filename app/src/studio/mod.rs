@@ -335,12 +335,6 @@ impl StudioApp {
             .resizable(true)
             .default_size(110.0)
             .show(ui, |ui| self.status_panel(ui));
-        egui::Panel::bottom("chain")
-            .resizable(true)
-            .default_size(240.0)
-            .show(ui, |ui| {
-                egui::ScrollArea::vertical().show(ui, |ui| self.chain_panel(ui));
-            });
         egui::Panel::left("model")
             .default_size(250.0)
             .show(ui, |ui| {
@@ -352,6 +346,13 @@ impl StudioApp {
                 egui::ScrollArea::vertical().show(ui, |ui| self.inspector(ui));
             });
         egui::CentralPanel::no_frame().show(ui, |ui| {
+            // The chain under the viewport; the side panels keep their height.
+            egui::Panel::bottom("chain")
+                .resizable(true)
+                .default_size(240.0)
+                .show(ui, |ui| {
+                    egui::ScrollArea::vertical().show(ui, |ui| self.chain_panel(ui));
+                });
             self.view_bar(ui);
             self.update_cut();
             self.sync_view();
