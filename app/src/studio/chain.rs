@@ -59,11 +59,6 @@ impl BuiltChain {
         &self.chain.recipe
     }
 
-    /// Row i's figures (its LOD, counts, bound, switch).
-    pub fn figures(&self) -> &[RowFigures] {
-        &self.figures
-    }
-
     fn new(chain: Chain) -> BuiltChain {
         let scenes = chain
             .lods
