@@ -27,48 +27,47 @@ pub enum Saved {
 /// Asks where to save (suggesting `file_name`); the dialog itself asks before
 /// replacing a file. Then writes as [`write`] does.
 pub fn choose_and_write(set: &DrawSet, file_name: &str) -> Saved {
-    let chosen = rfd::FileDialog::new()
-        .set_title("Export the LOD")
-        .set_file_name(file_name)
-        .add_filter("glTF binary: everything (glb)", &MESH_EXTENSIONS[..1])
-        .add_filter(
+    let filters: [(&str, &[&str]); 2] = [
+        ("glTF binary: everything (glb)", &MESH_EXTENSIONS[..1]),
+        (
             "Meshes: triangles, points beside (obj, ply)",
             &MESH_EXTENSIONS[1..],
+        ),
+    ];
+    save_dialog("Export the LOD", file_name, &filters).map_or(Saved::NoFile, |p| write(set, &p))
+}
+
+/// A save dialog (which asks before replacing a file); `None` when it was
+/// closed without a choice or there is no dialog service.
+fn save_dialog(title: &str, file_name: &str, filters: &[(&str, &[&str])]) -> Option<PathBuf> {
+    filters
+        .iter()
+        .fold(
+            rfd::FileDialog::new()
+                .set_title(title)
+                .set_file_name(file_name),
+            |dialog, (name, extensions)| dialog.add_filter(*name, extensions),
         )
-        .save_file();
-    match chosen {
-        Some(path) => write(set, &path),
-        None => Saved::NoFile,
-    }
+        .save_file()
 }
 
 /// Asks where to save a built hierarchy (suggesting `file_name`), then
 /// writes its encoded `bytes`.
 pub fn choose_and_write_hierarchy(bytes: &[u8], file_name: &str) -> Saved {
-    let chosen = rfd::FileDialog::new()
-        .set_title("Save hierarchy")
-        .set_file_name(file_name)
-        .add_filter("Saved hierarchies (lodh)", &["lodh"])
-        .save_file();
-    match chosen {
-        Some(path) => write_bytes(bytes, &path),
-        None => Saved::NoFile,
-    }
+    let filters: [(&str, &[&str]); 1] = [("Saved hierarchies (lodh)", &["lodh"])];
+    save_dialog("Save hierarchy", file_name, &filters)
+        .map_or(Saved::NoFile, |p| write_bytes(bytes, &p))
 }
 
 /// Asks where to save an LOD chain's GLB (suggesting `file_name`), then
 /// writes it as [`write_chain`] does.
 pub fn choose_and_write_chain(glb: &[u8], file_name: &str) -> Saved {
-    let chosen = rfd::FileDialog::new()
-        .set_title("Export the LOD chain")
-        .set_file_name(file_name)
-        .add_filter("glTF binary (glb)", &["glb"])
-        .add_filter("glTF with its buffer beside (gltf)", &["gltf"])
-        .save_file();
-    match chosen {
-        Some(path) => write_chain(glb, &path),
-        None => Saved::NoFile,
-    }
+    let filters: [(&str, &[&str]); 2] = [
+        ("glTF binary (glb)", &["glb"]),
+        ("glTF with its buffer beside (gltf)", &["gltf"]),
+    ];
+    save_dialog("Export the LOD chain", file_name, &filters)
+        .map_or(Saved::NoFile, |p| write_chain(glb, &p))
 }
 
 /// Writes a chain's GLB through the writer `lodstudio export` uses (`.gltf`
@@ -86,15 +85,9 @@ pub fn write_chain(glb: &[u8], path: &Path) -> Saved {
 
 /// Asks where to save a recipe (suggesting `file_name`), then writes it.
 pub fn choose_and_write_recipe(bytes: &[u8], file_name: &str) -> Saved {
-    let chosen = rfd::FileDialog::new()
-        .set_title("Save the chain's recipe")
-        .set_file_name(file_name)
-        .add_filter("Recipes (json)", &["json"])
-        .save_file();
-    match chosen {
-        Some(path) => write_bytes(bytes, &path),
-        None => Saved::NoFile,
-    }
+    let filters: [(&str, &[&str]); 1] = [("Recipes (json)", &["json"])];
+    save_dialog("Save the chain's recipe", file_name, &filters)
+        .map_or(Saved::NoFile, |p| write_bytes(bytes, &p))
 }
 
 /// Writes the cut `set` at `path` through the one cut writer (GLB holds it

@@ -266,13 +266,15 @@ fn the_cache_skips_what_has_not_changed() {
             "2CylinderEngine0.bin",
         ],
     );
+    // A copy under another name: the same key, its own output and record.
+    std::fs::copy(models.join("bones.off"), models.join("bones-copy.off")).unwrap();
     let out = temp("cache-out");
     let (code, first) = export(&models, &out, &[]);
-    assert_eq!((code, first["built"].as_u64()), (Some(0), Some(4)));
+    assert_eq!((code, first["built"].as_u64()), (Some(0), Some(5)));
     let (_, again) = export(&models, &out, &[]);
     assert_eq!(
         (again["built"].as_u64(), again["skipped"].as_u64()),
-        (Some(0), Some(4))
+        (Some(0), Some(5))
     );
     // Touching changes no content.
     let fandisk = models.join("fandisk.obj");
@@ -291,7 +293,7 @@ fn the_cache_skips_what_has_not_changed() {
     let (_, edited) = export(&models, &out, &[]);
     assert_eq!(
         (edited["built"].as_u64(), edited["skipped"].as_u64()),
-        (Some(1), Some(3))
+        (Some(1), Some(4))
     );
     let built: Vec<&Value> = edited["reports"]
         .as_array()
@@ -309,10 +311,10 @@ fn the_cache_skips_what_has_not_changed() {
     // Another recipe is another key; --force rebuilds what is cached.
     let mut args_other = vec!["--pixels", "2"];
     let (_, other) = export(&models, &out, &args_other);
-    assert_eq!(other["built"].as_u64(), Some(4));
+    assert_eq!(other["built"].as_u64(), Some(5));
     args_other.push("--force");
     let (_, forced) = export(&models, &out, &args_other);
-    assert_eq!(forced["built"].as_u64(), Some(4));
+    assert_eq!(forced["built"].as_u64(), Some(5));
 }
 
 /// A manifest lists inputs with per-asset overrides; two inputs that would
@@ -348,16 +350,13 @@ fn manifests_take_overrides_and_bad_plans_are_refused() {
     )
     .unwrap();
     let out = dir.join("out");
-    let run = lodstudio(&[
-        "export",
-        "--manifest",
-        manifest.to_str().unwrap(),
-        "--lods",
-        "simplify:2%",
-        "-o",
-        out.to_str().unwrap(),
-        "--json",
-    ]);
+    let (m, o) = (manifest.to_str().unwrap(), out.to_str().unwrap());
+    let run_manifest = |extra: &[&str]| {
+        let mut args = vec!["export", "--manifest", m, "--lods", "simplify:2%", "-o", o];
+        args.extend_from_slice(extra);
+        lodstudio(&args)
+    };
+    let run = run_manifest(&["--json"]);
     assert!(
         run.status.success(),
         "{}",
@@ -395,27 +394,11 @@ fn manifests_take_overrides_and_bad_plans_are_refused() {
         ),
     )
     .unwrap();
-    let clash = lodstudio(&[
-        "export",
-        "--manifest",
-        manifest.to_str().unwrap(),
-        "--lods",
-        "simplify:2%",
-        "-o",
-        out.to_str().unwrap(),
-    ]);
+    let clash = run_manifest(&[]);
     assert_eq!(clash.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&clash.stderr).contains("bones.glb"));
     std::fs::write(&manifest, "a.obj colour=red\n").unwrap();
-    let unknown = lodstudio(&[
-        "export",
-        "--manifest",
-        manifest.to_str().unwrap(),
-        "--lods",
-        "simplify:2%",
-        "-o",
-        out.to_str().unwrap(),
-    ]);
+    let unknown = run_manifest(&[]);
     assert_eq!(unknown.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&unknown.stderr).contains("m.txt:1"));
     let d = dir.to_str().unwrap();

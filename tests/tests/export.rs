@@ -592,6 +592,20 @@ fn recipes_replay_mixed_chains_byte_for_byte() {
         let r = lodstudio(&args);
         assert_eq!(r.status.code(), Some(2), "{extra:?}");
     }
+    // A refused run saves no recipe.
+    let unsaved = temp("unsaved.json");
+    let refused = lodstudio(&[
+        "export",
+        f,
+        "--lods",
+        "simplify:1%",
+        "-o",
+        "/tmp/not-gltf.png",
+        "--save-recipe",
+        unsaved.to_str().unwrap(),
+    ]);
+    assert_eq!(refused.status.code(), Some(2));
+    assert!(!unsaved.exists(), "no recipe for a run that did not happen");
     // A bad value names the row and the field.
     let bad = temp("bad.json");
     let mut text = String::from_utf8(std::fs::read(&recipe).unwrap()).unwrap();

@@ -110,9 +110,16 @@ pub fn run(args: ExportArgs) -> Result<(), CliError> {
     };
     if let Some(path) = &args.save_recipe {
         check_output(path, args.report.force)?;
-        io::write_atomic(path, &recipe.to_json())
-            .map_err(|e| CliError::BadInput(format!("{}: cannot write: {e}", path.display())))?;
     }
+    // The recipe is saved once the run has happened (a batch whose models
+    // partly failed ran it too); a refused run leaves no file behind.
+    let save = || -> Result<(), CliError> {
+        match &args.save_recipe {
+            Some(path) => io::write_atomic(path, &recipe.to_json())
+                .map_err(|e| CliError::BadInput(format!("{}: cannot write: {e}", path.display()))),
+            None => Ok(()),
+        }
+    };
     let entries = match (&args.manifest, &args.file) {
         (Some(m), _) => Some(lodstudio_core::batch::read_manifest(m).map_err(CliError::BadInput)?),
         (None, Some(file)) => lodstudio_core::batch::manifest::folder_or_glob(file)
@@ -126,7 +133,9 @@ pub fn run(args: ExportArgs) -> Result<(), CliError> {
         (None, None) => None,
     };
     if let Some(entries) = entries {
-        return batch::run(&args, &recipe, entries);
+        let outcome = batch::run(&args, &recipe, entries)?;
+        save()?;
+        return outcome;
     }
     let file = args.file.as_deref().expect("a file when no manifest");
     let format = output_format(&args.output).ok_or_else(|| {
@@ -140,6 +149,7 @@ pub fn run(args: ExportArgs) -> Result<(), CliError> {
         check_output(&args.output.with_extension("bin"), args.report.force)?;
     }
     let j = export_one(&args.input, &recipe, file, &args.output)?;
+    save()?;
     if args.report.json {
         println!("{j}");
     } else {
@@ -192,13 +202,20 @@ fn recipe_of(args: &ExportArgs) -> Result<Recipe, CliError> {
     };
     // Options are named as the CLI names them, not as the recipe's fields.
     recipe.check().map_err(|e| {
-        let option = e
-            .field
-            .rsplit('.')
-            .next()
-            .unwrap_or(&e.field)
-            .replace('_', "-");
-        CliError::BadInput(format!("--{option}: {}", e.message))
+        let field = e.field.rsplit('.').next().unwrap_or(&e.field);
+        let option = match field {
+            "tolerance" if e.field.starts_with("weld") => "--weld-tolerance",
+            "tolerance" => "--lods",
+            "post" => "--post-error / --post-triangles",
+            "kappa" => "--kappa",
+            "tau" => "--tau",
+            "resolution" => "--resolution",
+            "pixels" => "--pixels",
+            "viewport_height" => "--viewport-height",
+            "coverage" => "--coverage",
+            _ => "--lods",
+        };
+        CliError::BadInput(format!("{option}: {}", e.message))
     })?;
     Ok(recipe)
 }

@@ -273,16 +273,19 @@ fn tolerance_ui(ui: &mut egui::Ui, row: &mut Row) {
             RowTolerance::Pixels(v) => (v, 1),
             RowTolerance::Ratio(v) => (v, 2),
         };
+        // Dragging stays in these ranges; a value from a recipe outside them
+        // (any the recipe accepts) is shown as it is, not clamped.
         let range = match unit {
             0 => 0.0..=100.0,
             1 => 0.0..=10_000.0,
-            _ => 1e-4..=1.0,
+            _ => 1e-6..=1.0,
         };
         ui.add(
             egui::DragValue::new(&mut value)
                 .range(range)
+                .clamp_existing_to_range(false)
                 .speed(0.01)
-                .max_decimals(4),
+                .max_decimals(6),
         )
         .on_hover_text(TOLERANCE_HINT);
         let mut new_unit = unit;

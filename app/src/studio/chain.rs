@@ -7,7 +7,7 @@
 
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
-use std::sync::mpsc::{self, Receiver, TryRecvError};
+use std::sync::mpsc::{Receiver, TryRecvError};
 
 use lodstudio_core::distance::visual::Difference;
 use lodstudio_core::io::LoadOptions;
@@ -16,7 +16,7 @@ use lodstudio_core::progress::Cancelled;
 use lodstudio_core::recipe::{Chain, ChainError, Recipe, build_chain};
 
 use super::StudioApp;
-use super::loading::{MAX_RECENT, absolute};
+use super::loading::{MAX_RECENT, absolute, pick_file};
 use crate::export;
 use crate::job::{Job, Poll};
 use crate::panels::chain::RowFigures;
@@ -79,8 +79,7 @@ fn figures(chain: &Chain) -> Vec<RowFigures> {
     let mut out: Vec<Option<RowFigures>> = vec![None; chain.recipe.rows.len()];
     for (k, lod) in chain.lods.iter().enumerate() {
         let c_out = chain.coverages[k];
-        // LOD k takes over where LOD k-1 switches out (LOD0: filling the screen).
-        let c_in = if k == 0 { 1.0 } else { chain.coverages[k - 1] };
+        let c_in = chain.coverage_in(k);
         let set = &lod.set;
         let cells = [
             set.mesh.triangles.len().to_string(),
@@ -153,6 +152,8 @@ impl StudioApp {
     /// Builds the chain on the model on screen, replacing any chain build.
     pub fn build_chain(&mut self, ctx: &egui::Context) {
         self.chain.note = None;
+        // A measurement of the chain being replaced would land on the new one.
+        self.chain.measuring = None;
         let Some(current) = &self.current else {
             self.chain.note = Some("Open a model first".into());
             return;
@@ -364,6 +365,7 @@ impl StudioApp {
                 self.chain.job = None;
                 match outcome {
                     Ok(built) => {
+                        self.chain.measuring = None;
                         self.chain.differences = None;
                         self.chain.difference_image = None;
                         self.info(format!(
@@ -679,7 +681,7 @@ impl StudioApp {
         if let Some((k, name)) = self.switch_lod() {
             let c = coverage_at_distance(distance);
             let here = chain.pixels_at(k, c);
-            let c_in = if k == 0 { 1.0 } else { chain.coverages[k - 1] };
+            let c_in = chain.coverage_in(k);
             let beyond = chain.lod_at_coverage(c).is_none();
             ui.label(format!(
                 "{name}: bound {here:.2} px here, {:.2} px at its switch in (tolerance {} px){}",
@@ -720,7 +722,7 @@ impl StudioApp {
                 );
                 if let Some((k, name)) = self.switch_lod() {
                     let c = coverage_at_distance(self.viewport.camera.distance / r);
-                    let c_in = if k == 0 { 1.0 } else { chain.coverages[k - 1] };
+                    let c_in = chain.coverage_in(k);
                     row("preview LOD", name, "The LOD the chain uses at the camera's distance.");
                     row("coverage", format!("{c:.4}"), "The bounding sphere's height over the viewport's at this distance.");
                     row("bound here", format!("{:.2} px", chain.pixels_at(k, c)), "The LOD's bound projected at this distance.");
@@ -747,20 +749,10 @@ impl StudioApp {
         if self.chain.picker.is_some() {
             return;
         }
-        let (tx, rx) = mpsc::channel();
-        let ctx = ctx.clone();
-        let spawned = std::thread::Builder::new()
-            .name("recipe dialog".into())
-            .spawn(move || {
-                let picked = rfd::FileDialog::new()
-                    .set_title("Open a recipe")
-                    .add_filter("Recipes (json)", &["json"])
-                    .pick_file();
-                let _ = tx.send(picked);
-                ctx.request_repaint();
-            });
+        const FILTERS: &[(&str, &[&str])] = &[("Recipes (json)", &["json"])];
+        let spawned = pick_file("Open a recipe", FILTERS, ctx);
         match spawned {
-            Ok(_) => self.chain.picker = Some(rx),
+            Ok(rx) => self.chain.picker = Some(rx),
             Err(e) => self.error(format!("cannot open the file dialog: {e}")),
         }
     }

@@ -3,7 +3,7 @@
 
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
-use std::sync::mpsc::{self, TryRecvError};
+use std::sync::mpsc::{self, Receiver, TryRecvError};
 
 use lodstudio_core::io::{LoadError, LoadOptions, Loaded};
 use lodstudio_core::open::open;
@@ -67,6 +67,28 @@ pub(super) struct Finished {
     reopened: Option<build::Reopened>,
 }
 
+/// An open-file dialog on a worker thread, so the UI keeps drawing; the
+/// choice (or `None`) arrives on the receiver and wakes the UI.
+pub(super) fn pick_file(
+    title: &'static str,
+    filters: &'static [(&'static str, &'static [&'static str])],
+    ctx: &egui::Context,
+) -> std::io::Result<Receiver<Option<PathBuf>>> {
+    let (tx, rx) = mpsc::channel();
+    let ctx = ctx.clone();
+    std::thread::Builder::new()
+        .name("file dialog".into())
+        .spawn(move || {
+            let dialog = filters.iter().fold(
+                rfd::FileDialog::new().set_title(title),
+                |dialog, (name, extensions)| dialog.add_filter(*name, extensions),
+            );
+            let _ = tx.send(dialog.pick_file());
+            ctx.request_repaint();
+        })?;
+    Ok(rx)
+}
+
 pub(super) struct LoadJob {
     pub(super) path: PathBuf,
     pub(super) job: Job<Result<Box<Finished>, LoadError>>,
@@ -78,21 +100,9 @@ impl StudioApp {
         if self.picker.is_some() {
             return;
         }
-        let (tx, rx) = mpsc::channel();
-        let ctx = ctx.clone();
-        let spawned = std::thread::Builder::new()
-            .name("file dialog".into())
-            .spawn(move || {
-                let picked = rfd::FileDialog::new()
-                    .set_title("Open model")
-                    .add_filter("Models", MODEL_EXTENSIONS)
-                    .add_filter("All files", &["*"])
-                    .pick_file();
-                let _ = tx.send(picked);
-                ctx.request_repaint();
-            });
-        match spawned {
-            Ok(_) => self.picker = Some(rx),
+        const FILTERS: &[(&str, &[&str])] = &[("Models", MODEL_EXTENSIONS), ("All files", &["*"])];
+        match pick_file("Open model", FILTERS, ctx) {
+            Ok(rx) => self.picker = Some(rx),
             Err(e) => self.error(format!("cannot open the file dialog: {e}")),
         }
     }

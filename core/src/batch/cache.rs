@@ -43,6 +43,20 @@ pub fn input_files(input: &Path) -> std::io::Result<Vec<(PathBuf, Vec<u8>)>> {
     Ok(files)
 }
 
+/// An input's size for sharding, from file metadata (no reads): itself and,
+/// for a `.gltf`, the files its JSON names. 0 for a file that cannot be
+/// listed (it fails when built, on whichever shard has it).
+pub fn input_size(input: &Path) -> u64 {
+    let len = |p: &Path| std::fs::metadata(p).map_or(0, |m| m.len());
+    let named = match crate::io::extension(input).as_str() {
+        "gltf" => std::fs::read(input)
+            .map(|bytes| crate::io::gltf::referenced_files(input, &bytes))
+            .unwrap_or_default(),
+        _ => Vec::new(),
+    };
+    len(input) + named.iter().map(|p| len(p)).sum::<u64>()
+}
+
 /// The key of an output: the input files' names (relative to the input's
 /// folder) and bytes, the recipe's bytes and the tool's identity.
 pub fn key(files: &[(PathBuf, Vec<u8>)], recipe: &[u8], tool: &str) -> String {
@@ -116,14 +130,17 @@ impl Cache {
         Ok(Cache { dir, made })
     }
 
-    fn record_path(&self, key: &str) -> PathBuf {
-        self.dir.join(format!("{key}.json"))
+    /// A record per key and output: two inputs with the same bytes (copies
+    /// under two names) make two outputs, each with its record.
+    fn record_path(&self, key: &str, output: &str) -> PathBuf {
+        let name = sha256_hex(format!("{key}\0{output}").as_bytes());
+        self.dir.join(format!("{name}.json"))
     }
 
     /// Whether `output` (in `out_dir`) is already what `key` makes.
     pub fn lookup(&self, key: &str, out_dir: &Path, output: &str) -> Lookup {
         let out = out_dir.join(output);
-        let record: Option<Record> = std::fs::read(self.record_path(key))
+        let record: Option<Record> = std::fs::read(self.record_path(key, output))
             .ok()
             .and_then(|b| serde_json::from_slice(&b).ok());
         let Ok(bytes) = std::fs::read(&out) else {
@@ -152,16 +169,19 @@ impl Cache {
     /// Records `record` (atomically; after its output is in place).
     pub fn store(&self, record: &Record) -> std::io::Result<()> {
         let bytes = serde_json::to_vec_pretty(record).expect("a record serializes");
-        crate::io::write_atomic(&self.record_path(&record.key), &bytes)
+        crate::io::write_atomic(&self.record_path(&record.key, &record.output), &bytes)
     }
 
-    /// A private place for a build of `key` to write to before its output
-    /// is renamed into the folder (same file system, so the rename is atomic
-    /// and the folder only ever holds whole outputs).
-    pub fn scratch(&self, key: &str) -> PathBuf {
-        self.dir
-            .join("tmp")
-            .join(format!("{key}.{}.glb", std::process::id()))
+    /// A private place for a build of `output` to write to (`extension`:
+    /// the GLB, or the recipe it is built with) before its output is renamed
+    /// into the folder (same file system, so the rename is atomic and the
+    /// folder only ever holds whole outputs). Unique to this process and
+    /// output, so no other job or machine shares it.
+    pub fn scratch(&self, output: &str, extension: &str) -> PathBuf {
+        self.dir.join("tmp").join(format!(
+            "{output}.{}.{extension}",
+            crate::io::process_token()
+        ))
     }
 
     /// Removes scratch files older than `age` (left by runs that were killed).
@@ -230,6 +250,12 @@ mod tests {
         };
         cache.store(&record).unwrap();
         assert!(Cache::open(&dir).unwrap().made("a.glb"), "read when opened");
+        // A copy of the input under another name has its own record.
+        std::fs::write(dir.join("b.glb"), b"glb").unwrap();
+        assert_eq!(
+            cache.lookup(&k, &dir, "b.glb"),
+            Lookup::Miss("input, recipe or lodstudio changed")
+        );
         assert_eq!(
             cache.lookup(&k, &dir, "a.glb"),
             Lookup::Hit(Box::new(record))

@@ -40,6 +40,15 @@ pub fn estimate_peak(input_bytes: u64, compressed: bool, recipe: &Recipe) -> u64
     64 * 1024 * 1024 + bytes.saturating_mul(heaviest) + grids
 }
 
+/// Runs its closure when dropped.
+struct Release<'a>(&'a dyn Fn());
+
+impl Drop for Release<'_> {
+    fn drop(&mut self) {
+        (self.0)();
+    }
+}
+
 /// Runs `job(i)` for every job on `workers` threads, taking jobs in the
 /// order given (largest first) as the budget allows: job i starts when its
 /// `estimates[i]` fits what the running jobs leave of `budget`, or when
@@ -84,12 +93,17 @@ pub fn run_within_budget<T: Send>(
                             s = changed.wait(s).expect("scheduler lock");
                         }
                     };
+                    // Released even if the job panics, so no worker waits forever
+                    // (the panic then ends the scope).
+                    let _release = Release(&|| {
+                        if let Ok(mut s) = state.lock() {
+                            s.in_use -= estimates[i];
+                            s.running -= 1;
+                        }
+                        changed.notify_all();
+                    });
                     let out = job(i);
                     results.lock().expect("results lock")[i] = Some(out);
-                    let mut s = state.lock().expect("scheduler lock");
-                    s.in_use -= estimates[i];
-                    s.running -= 1;
-                    changed.notify_all();
                 }
             });
         }

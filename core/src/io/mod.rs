@@ -411,6 +411,19 @@ pub fn encode_mesh(path: &Path, mesh: &TriMesh) -> Result<Vec<u8>, String> {
     }
 }
 
+/// This process's name for temporary files: its id and a random number
+/// drawn once (std's hasher keys are seeded from the OS's randomness).
+pub fn process_token() -> &'static str {
+    static TOKEN: std::sync::OnceLock<String> = std::sync::OnceLock::new();
+    TOKEN.get_or_init(|| {
+        use std::hash::{BuildHasher, Hasher};
+        let random = std::collections::hash_map::RandomState::new()
+            .build_hasher()
+            .finish();
+        format!("{}-{random:016x}", std::process::id())
+    })
+}
+
 /// Writes `bytes` to `path` atomically: a temporary file in the same folder, then rename.
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
     use std::io::Write;
@@ -420,10 +433,12 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
         .unwrap_or(Path::new("."));
     let name = path.file_name().unwrap_or_default().to_string_lossy();
     // Unique per process and per write, so concurrent writes of one path
-    // (an autosave and an export, two studios) never share a temporary.
+    // (an autosave and an export, two studios) never share a temporary; the
+    // token tells processes apart where their ids are alike (pid 1 in every
+    // container of a job writing to one shared volume).
     static WRITES: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
     let n = WRITES.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-    let tmp: PathBuf = dir.join(format!(".{name}.tmp{}-{n}", std::process::id()));
+    let tmp: PathBuf = dir.join(format!(".{name}.tmp{}-{n}", process_token()));
     let result = (|| {
         let mut f = std::fs::File::create(&tmp)?;
         f.write_all(bytes)?;

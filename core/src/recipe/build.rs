@@ -80,10 +80,19 @@ impl Chain {
     }
 
     /// The LOD a loader shows at screen coverage `c` (the object's projected
-    /// height over the viewport's): the last whose threshold `c` reaches, or
-    /// `None` below the last threshold (the object is left out).
+    /// height over the viewport's): the first (finest) whose threshold `c`
+    /// reaches, or `None` below the last threshold (the object is left out).
     pub fn lod_at_coverage(&self, c: f32) -> Option<usize> {
         self.coverages.iter().position(|&t| c >= t)
+    }
+
+    /// The coverage at which LOD `k` takes over from the finer one (where
+    /// LOD k−1 switches out; LOD0: the object filling the viewport).
+    pub fn coverage_in(&self, k: usize) -> f32 {
+        match k {
+            0 => 1.0,
+            _ => self.coverages[k - 1],
+        }
     }
 
     /// The pixels LOD `i`'s bound covers at coverage `c` on the recipe's
@@ -223,12 +232,24 @@ fn simplify_rows(
 ) -> Result<Vec<DrawSet>, ChainError> {
     let targets: Vec<Target> = group
         .iter()
-        .map(|&j| match recipe.rows[j].tolerance {
-            RowTolerance::Percent(p) => Target::RelativeError(p / 100.0),
-            RowTolerance::Pixels(p) => Target::Error(pixels_to_error(p)),
-            RowTolerance::Ratio(r) => Target::Ratio(r),
+        .map(|&j| {
+            let target = match recipe.rows[j].tolerance {
+                RowTolerance::Percent(p) => Target::RelativeError(p / 100.0),
+                RowTolerance::Pixels(p) => Target::Error(pixels_to_error(p)),
+                RowTolerance::Ratio(r) => Target::Ratio(r),
+            };
+            match target {
+                // A finite tolerance can still overflow in object space.
+                Target::Error(e) | Target::RelativeError(e) if !e.is_finite() => {
+                    Err(ChainError::BadInput(format!(
+                        "rows[{j}].tolerance: {} is no finite error on this model",
+                        recipe.rows[j].label()
+                    )))
+                }
+                t => Ok(t),
+            }
         })
-        .collect();
+        .collect::<Result<_, _>>()?;
     let collapse = CollapseOptions {
         lock_borders: recipe.locks_borders(),
         ..Default::default()

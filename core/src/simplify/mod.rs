@@ -100,11 +100,13 @@ pub fn simplify(
 
 /// Simplifies `mesh` to every target of an LOD chain in one progressive
 /// collapse: collapses are deterministic and a collapser continues as a fresh
-/// run would, so the count targets (largest first) and the error targets
-/// (smallest first) each continue from the state the previous one reached,
-/// and one original's search structures certify them all. A chain of rows
-/// costs about one run to its coarsest row, not one run per row. Results come
-/// in the order of `targets`.
+/// run would, so the count targets (largest first) each equal a fresh run to
+/// their count, and the error targets (smallest first) each search on from
+/// the state the previous one reached; one original's search structures
+/// certify them all. An error target's result meets its error and is as
+/// deterministic as the rest, but its count may differ by the search's 2 %
+/// from a lone `simplify` to that error (its probes start elsewhere).
+/// Results come in the order of `targets`.
 pub fn simplify_chain(
     mesh: &TriMesh,
     targets: &[Target],

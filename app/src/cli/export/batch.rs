@@ -64,7 +64,13 @@ enum Outcome {
     Failed { error: String, bad_input: bool },
 }
 
-pub fn run(args: &ExportArgs, recipe: &Recipe, entries: Vec<Entry>) -> Result<(), CliError> {
+/// Runs the batch: `Err` when it was refused before any model ran (bad
+/// options, a clash of outputs), else the run's outcome (failed models).
+pub fn run(
+    args: &ExportArgs,
+    recipe: &Recipe,
+    entries: Vec<Entry>,
+) -> Result<Result<(), CliError>, CliError> {
     let b = &args.shards;
     let shard = b.shard()?;
     let threads = b
@@ -196,7 +202,7 @@ pub fn run(args: &ExportArgs, recipe: &Recipe, entries: Vec<Entry>) -> Result<()
         );
     }
     if failed == 0 {
-        return Ok(());
+        return Ok(Ok(()));
     }
     let first = &failures[0];
     // A child's error names its file already.
@@ -219,11 +225,11 @@ pub fn run(args: &ExportArgs, recipe: &Recipe, entries: Vec<Entry>) -> Result<()
             }
         )
     });
-    Err(if any_bad {
+    Ok(Err(if any_bad {
         CliError::BadInput(message)
     } else {
         CliError::Failure(message)
-    })
+    }))
 }
 
 /// Every entry with its output name, recipe (overrides applied) and size;
@@ -241,8 +247,7 @@ fn plan(recipe: &Recipe, entries: Vec<Entry>) -> Result<Vec<Job>, CliError> {
             )));
         }
         let recipe = entry_recipe(recipe, &entry);
-        let size = cache::input_files(&entry.input)
-            .map_or(0, |files| files.iter().map(|(_, b)| b.len() as u64).sum());
+        let size = cache::input_size(&entry.input);
         jobs.push(Job {
             entry,
             output,
@@ -308,17 +313,16 @@ fn build(args: &ExportArgs, cache: &Cache, job: &Job, child_threads: usize) -> O
             dir.join(&job.output).display()
         ));
     }
-    // The recipe by its content, so shards writing it at once agree.
-    let recipe_path = cache
-        .scratch(&cache::sha256_hex(&recipe_bytes))
-        .with_extension("json");
+    // This job's own recipe file and scratch output: no other job or
+    // machine shares them.
+    let recipe_path = cache.scratch(&job.output, "json");
     if let Err(e) = io::write_atomic(&recipe_path, &recipe_bytes) {
         return Outcome::Failed {
             error: format!("{}: cannot write: {e}", recipe_path.display()),
             bad_input: false,
         };
     }
-    let scratch = cache.scratch(&key);
+    let scratch = cache.scratch(&job.output, "glb");
     let child = run_child(&job.entry.input, &recipe_path, &scratch, child_threads);
     let _ = std::fs::remove_file(&recipe_path);
     let (mut report, peak) = match child {
@@ -328,36 +332,33 @@ fn build(args: &ExportArgs, cache: &Cache, job: &Job, child_threads: usize) -> O
             return e;
         }
     };
-    let placed = std::fs::read(&scratch).and_then(|bytes| {
-        std::fs::rename(&scratch, dir.join(&job.output))?;
-        Ok(bytes)
-    });
-    let bytes = match placed {
-        Ok(b) => b,
-        Err(e) => {
-            let _ = std::fs::remove_file(&scratch);
-            return Outcome::Failed {
-                error: format!("{}: cannot place the output: {e}", job.output),
-                bad_input: false,
-            };
-        }
-    };
     report["output"] = dir.join(&job.output).display().to_string().into();
     report["peak_memory_bytes"] = peak.into();
     report["reason"] = reason.into();
-    let record = Record {
-        key,
-        output: job.output.clone(),
-        output_sha256: cache::sha256_hex(&bytes),
-        report: report.clone(),
-    };
-    if let Err(e) = cache.store(&record) {
-        eprintln!("lodstudio: {}: cannot record in the cache: {e}", job.output);
+    // The record first, then the output: a kill between the two leaves a
+    // record whose output is missing (rebuilt next time), never an output
+    // without a record (which a rerun would take for the user's own file).
+    let placed = std::fs::read(&scratch).and_then(|bytes| {
+        let record = Record {
+            key,
+            output: job.output.clone(),
+            output_sha256: cache::sha256_hex(&bytes),
+            report: report.clone(),
+        };
+        cache.store(&record)?;
+        std::fs::rename(&scratch, dir.join(&job.output))
+    });
+    if let Err(e) = placed {
+        let _ = std::fs::remove_file(&scratch);
+        return Outcome::Failed {
+            error: format!("{}: cannot place the output: {e}", job.output),
+            bad_input: false,
+        };
     }
     Outcome::Built(report)
 }
 
-/// Runs `lodstudio export INPUT --recipe R -o OUT --force --json`; its
+/// Runs `lodstudio export --recipe R -o OUT --force --json -- INPUT`; its
 /// report and peak resident memory (bytes), or the failure it ended with.
 fn run_child(
     input: &Path,
@@ -371,12 +372,12 @@ fn run_child(
     })?;
     let mut cmd = Command::new(exe);
     cmd.arg("export")
-        .arg(input)
         .arg("--recipe")
         .arg(recipe)
         .arg("-o")
         .arg(out)
-        .args(["--force", "--json"])
+        .args(["--force", "--json", "--"])
+        .arg(input)
         .env("RAYON_NUM_THREADS", threads.to_string())
         .stdin(std::process::Stdio::null())
         .stdout(std::process::Stdio::piped())
