@@ -8,6 +8,8 @@ use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
 mod common;
+#[path = "common/pixels.rs"]
+mod pixels;
 
 use common::{save_ppm, studio, wait_while};
 use egui_kittest::Harness;
@@ -17,6 +19,7 @@ use lodstudio::session::{Autosave, Session};
 use lodstudio::studio::StudioApp;
 use lodstudio_core::lod::Method;
 use lodstudio_core::recipe::{Recipe, build_chain, parse_lods};
+use pixels::{colourful, viewport_image};
 
 fn shared(name: &str) -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
@@ -330,29 +333,6 @@ fn an_unsaved_chain_survives_a_restart() {
     let mut second = studio(None);
     second.state_mut().resume(Autosave::in_dir(&dir), true);
     assert_eq!(second.state().chain_settings().recipe, recipe);
-}
-
-/// The viewport's pixels (RGBA) inside its rect, every other row and column.
-fn viewport_image(harness: &mut Harness<'_, StudioApp>, name: &str) -> Vec<[u8; 4]> {
-    let rect = harness.get_by_label("3D viewport").rect();
-    let image = harness.render().expect("render the studio");
-    save_ppm(image.width(), image.height(), image.as_raw(), name);
-    let (x0, y0) = (rect.min.x.ceil() as u32 + 2, rect.min.y.ceil() as u32 + 2);
-    let (x1, y1) = (rect.max.x.floor() as u32 - 2, rect.max.y.floor() as u32 - 2);
-    (y0..y1)
-        .step_by(2)
-        .flat_map(|y| (x0..x1).step_by(2).map(move |x| (x, y)))
-        .map(|(x, y)| image.get_pixel(x, y).0)
-        .collect()
-}
-
-/// The share of the model's pixels (those unlike the corner) that are
-/// strongly coloured: the truck's texture, drawn.
-fn colourful(pixels: &[[u8; 4]]) -> f32 {
-    let background = pixels[0];
-    let model: Vec<&[u8; 4]> = pixels.iter().filter(|p| **p != background).collect();
-    let spread = |p: &[u8; 4]| p[..3].iter().max().unwrap() - p[..3].iter().min().unwrap();
-    model.iter().filter(|p| spread(p) > 60).count() as f32 / model.len().max(1) as f32
 }
 
 /// A chain of the textured milk truck: each edge-collapse row is drawn with

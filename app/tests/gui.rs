@@ -5,6 +5,8 @@ use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
 mod common;
+#[path = "common/pixels.rs"]
+mod pixels;
 
 use common::{save_ppm, studio, wait_while};
 use egui_kittest::Harness;
@@ -14,6 +16,7 @@ use lodstudio::settings::Method;
 use lodstudio::settings::simplify::TargetMode;
 use lodstudio::settings::voxel::FilterKind;
 use lodstudio::studio::StudioApp;
+use pixels::{colourful, viewport_image};
 
 /// Steps frames until the studio has no load running (bounded), then settles.
 fn wait_for_load(harness: &mut Harness<'_, StudioApp>) {
@@ -1437,22 +1440,6 @@ fn shared_truck() -> PathBuf {
     ))
 }
 
-/// The viewport's pixels (RGBA) inside its rect, every other row and column.
-fn viewport_image(harness: &mut Harness<'_, StudioApp>, name: &str) -> Vec<[u8; 4]> {
-    let rect = harness.get_by_label("3D viewport").rect();
-    let image = harness.render().expect("render the studio");
-    save_ppm(image.width(), image.height(), image.as_raw(), name);
-    let (x0, y0) = (rect.min.x.ceil() as u32 + 2, rect.min.y.ceil() as u32 + 2);
-    let (x1, y1) = (rect.max.x.floor() as u32 - 2, rect.max.y.floor() as u32 - 2);
-    let mut out = Vec::new();
-    for y in (y0..y1).step_by(2) {
-        for x in (x0..x1).step_by(2) {
-            out.push(image.get_pixel(x, y).0);
-        }
-    }
-    out
-}
-
 /// How far render `b` is from render `a` where either shows the model: the
 /// mean of each pixel's largest channel difference (of 255), and the share
 /// of pixels off by more than 64.
@@ -1470,16 +1457,6 @@ fn difference(a: &[[u8; 4]], b: &[[u8; 4]]) -> (f32, f32) {
     }
     let n = model.max(1) as f32;
     (sum as f32 / n, far as f32 / n)
-}
-
-/// How colourful a render is: the share of its non-background pixels whose
-/// channels spread by more than 60 of 255 (the truck's white body and dark
-/// glass are grey; its logo and wheels' texture are not).
-fn colourful(pixels: &[[u8; 4]]) -> f32 {
-    let background = pixels[0];
-    let model: Vec<&[u8; 4]> = pixels.iter().filter(|p| **p != background).collect();
-    let spread = |p: &[u8; 4]| p[..3].iter().max().unwrap() - p[..3].iter().min().unwrap();
-    model.iter().filter(|p| spread(p) > 60).count() as f32 / model.len().max(1) as f32
 }
 
 /// Issue 30's render test: the milk truck's base-colour texture is drawn by
