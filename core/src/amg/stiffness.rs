@@ -2,15 +2,101 @@
 //! projected to its tangent plane and Delaunay-triangulated; the triangle fan
 //! around the point, taken back to 3D, gives row i of Ã (eq. 5), which is then
 //! symmetrised (eq. 6) and given zero row sums (eq. 7).
+//!
+//! Only the fan around x_i is used, so it is found without triangulating the
+//! rest: inverting the projected neighbours about x_i (q ↦ q/|q|²) maps every
+//! circle through x_i to a line, its inside to the side away from x_i. A
+//! triangle (x_i, a, b) is Delaunay (its circumcircle holds no neighbour)
+//! exactly when a'b' is an edge of the inverted points' convex hull with x_i
+//! on the hull's side of it. A hull of k points per row replaces a Delaunay
+//! triangulation per row (spade's took 2 of the mug's 3 s).
 
-use glam::Vec3;
+use glam::{DVec2, Vec3};
 use rayon::prelude::*;
-use spade::{DelaunayTriangulation, Point2, Triangulation};
 use sprs::{CsMat, TriMat};
 
 use super::classifier::Classification;
 use super::neighbourhood::Neighbourhoods;
 use crate::progress::{Cancelled, Progress};
+
+/// One worker's buffers, reused for every row.
+#[derive(Default)]
+pub struct FanScratch {
+    /// Inverted projections, with the neighbour's place in the list and its index.
+    inverted: Vec<(DVec2, u32, u32)>,
+    hull: Vec<(DVec2, u32, u32)>,
+}
+
+/// z of the cross product of 2D vectors.
+fn cross(a: DVec2, b: DVec2) -> f64 {
+    a.x * b.y - a.y * b.x
+}
+
+/// One chain of Andrew's monotone hull over points sorted by x (lower chain
+/// left to right, then upper chain right to left), counter-clockwise and
+/// without collinear points; its last point starts the other chain.
+fn half_hull<'a>(
+    hull: &mut Vec<(DVec2, u32, u32)>,
+    sorted: impl Iterator<Item = &'a (DVec2, u32, u32)>,
+) {
+    let floor = hull.len();
+    for p in sorted {
+        while hull.len() >= floor + 2 {
+            let (a, b) = (hull[hull.len() - 2].0, hull[hull.len() - 1].0);
+            if cross(b - a, p.0 - a) > 0.0 {
+                break;
+            }
+            hull.pop();
+        }
+        hull.push(*p);
+    }
+    hull.pop();
+}
+
+/// The fan around x_i of the Delaunay triangulation of its projected
+/// neighbourhood, as neighbour pairs (a, b) with (x_i, a, b) counter-clockwise
+/// in the tangent frame. Neighbours projecting onto x_i or onto an earlier
+/// neighbour are left out, as one triangulation vertex per position would.
+fn delaunay_fan(
+    i: usize,
+    points: &[Vec3],
+    nb: &Neighbourhoods,
+    c: &Classification,
+    scratch: &mut FanScratch,
+) -> impl Iterator<Item = (u32, u32)> {
+    let f = c.frames[i];
+    let (e0, e1) = (f.e0.as_dvec3(), f.e1.as_dvec3());
+    let x = points[i].as_dvec3();
+    let FanScratch { inverted, hull } = scratch;
+    inverted.clear();
+    for (k, &j) in nb.lists[i].iter().enumerate() {
+        let d = points[j as usize].as_dvec3() - x;
+        let q = DVec2::new(d.dot(e0), d.dot(e1));
+        let r2 = q.length_squared();
+        if r2 > 0.0 && r2.is_finite() {
+            inverted.push((q / r2, k as u32, j));
+        }
+    }
+    // Sorted for the monotone chain; equal positions keep the earliest neighbour.
+    inverted.sort_unstable_by(|a, b| {
+        (a.0.x.total_cmp(&b.0.x))
+            .then(a.0.y.total_cmp(&b.0.y))
+            .then(a.1.cmp(&b.1))
+    });
+    inverted.dedup_by(|later, first| later.0 == first.0);
+    hull.clear();
+    if inverted.len() >= 2 {
+        half_hull(hull, inverted.iter());
+        half_hull(hull, inverted.iter().rev());
+    }
+    let n = hull.len();
+    let hull = &*hull;
+    (0..n).filter_map(move |e| {
+        let (a, b) = (hull[e], hull[(e + 1) % n]);
+        // x_i (the origin) on the hull's side of a'b': cross(b' − a', −a') = cross(a', b').
+        (cross(a.0, b.0) > 0.0).then_some((a.2, b.2))
+    })
+}
 
 /// The fan neighbours j of point i and the preliminary entries Ã_ij (eq. 5),
 /// integrated over the fan's 3D triangles with C(T) the mean nodal classifier
@@ -21,41 +107,11 @@ pub fn fan_row(
     nb: &Neighbourhoods,
     c: &Classification,
     contrast: f64,
+    scratch: &mut FanScratch,
 ) -> Vec<(u32, f64)> {
-    let f = c.frames[i];
-    let (e0, e1) = (f.e0.as_dvec3(), f.e1.as_dvec3());
     let x = points[i].as_dvec3();
-    let mut tri: DelaunayTriangulation<Point2<f64>> = DelaunayTriangulation::new();
-    // Local index of each triangulation vertex: 0 is x_i, k+1 is lists[i][k].
-    let mut local: Vec<usize> = Vec::with_capacity(nb.lists[i].len() + 1);
-    let members = std::iter::once(i as u32).chain(nb.lists[i].iter().copied());
-    for (k, j) in members.enumerate() {
-        let d = points[j as usize].as_dvec3() - x;
-        let Ok(h) = tri.insert(Point2::new(d.dot(e0), d.dot(e1))) else {
-            continue;
-        };
-        // Coincident projections share one vertex: the first point keeps it.
-        if h.index() == local.len() {
-            local.push(k);
-        }
-    }
-    let Some(v0) = tri
-        .vertices()
-        .next()
-        .filter(|_| !local.is_empty() && local[0] == 0)
-    else {
-        return Vec::new();
-    };
-    let global = |h: spade::handles::FixedVertexHandle| -> u32 {
-        let k = local[h.index()];
-        if k == 0 { i as u32 } else { nb.lists[i][k - 1] }
-    };
     let mut row: Vec<(u32, f64)> = Vec::new();
-    for e in v0.out_edges() {
-        if e.face().as_inner().is_none() {
-            continue;
-        }
-        let (a, b) = (global(e.to().fix()), global(e.next().to().fix()));
+    for (a, b) in delaunay_fan(i, points, nb, c, scratch) {
         let p = [
             x,
             points[a as usize].as_dvec3(),
@@ -91,11 +147,11 @@ pub fn stiffness(
     let n = points.len();
     let rows: Vec<Vec<(u32, f64)>> = (0..n)
         .into_par_iter()
-        .map(|i| {
+        .map_init(FanScratch::default, |scratch, i| {
             if progress.is_cancelled() {
                 Vec::new()
             } else {
-                fan_row(i, points, nb, c, contrast)
+                fan_row(i, points, nb, c, contrast, scratch)
             }
         })
         .collect();
