@@ -171,3 +171,76 @@ pub fn stiffness(
     }
     Ok(t.to_csr())
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::amg::classifier::Frame;
+    use crate::rng::Rng;
+    use spade::{DelaunayTriangulation, Point2, Triangulation};
+
+    /// The fan of point 0 in a full Delaunay triangulation (spade's, exact
+    /// predicates) of the projected neighbourhood, as in the paper (§2.2).
+    fn spade_fan(points: &[Vec3], list: &[u32]) -> Vec<(u32, u32)> {
+        let mut tri: DelaunayTriangulation<Point2<f64>> = DelaunayTriangulation::new();
+        let mut global = Vec::new();
+        for j in std::iter::once(0).chain(list.iter().copied()) {
+            let p = points[j as usize].as_dvec3();
+            let h = tri.insert(Point2::new(p.x, p.y)).unwrap();
+            if h.index() == global.len() {
+                global.push(j);
+            }
+        }
+        let v0 = tri.vertices().next().unwrap();
+        let mut fan: Vec<(u32, u32)> = v0
+            .out_edges()
+            .filter(|e| e.face().as_inner().is_some())
+            .map(|e| {
+                (
+                    global[e.to().fix().index()],
+                    global[e.next().to().fix().index()],
+                )
+            })
+            .collect();
+        fan.sort_unstable();
+        fan
+    }
+
+    #[test]
+    fn the_hull_fan_is_the_delaunay_fan_inside_and_on_the_border() {
+        let mut rng = Rng::new(7);
+        for case in 0..300 {
+            let k = 3 + case % 60;
+            // Point 0 at the origin: inside its neighbours, or (every third
+            // case) on their border, all neighbours to one side.
+            let side = case % 3 == 0;
+            let mut points = vec![Vec3::ZERO];
+            for _ in 0..k {
+                let x = rng.f32() * 2.0 - 1.0;
+                let x = if side { x.abs() + 0.01 } else { x };
+                points.push(Vec3::new(x, rng.f32() * 2.0 - 1.0, rng.f32() * 0.1));
+            }
+            // Duplicates of a neighbour and of point 0 (one vertex each).
+            points.push(points[1]);
+            points.push(Vec3::new(0.0, 0.0, 0.05));
+            let list: Vec<u32> = (1..points.len() as u32).collect();
+            let nb = Neighbourhoods {
+                lists: vec![list.clone()],
+                radii: vec![1.0],
+            };
+            let c = Classification {
+                value: vec![1.0; points.len()],
+                frames: vec![Frame {
+                    e0: Vec3::X,
+                    e1: Vec3::Y,
+                    e2: Vec3::Z,
+                }],
+            };
+            let mut fan: Vec<(u32, u32)> =
+                delaunay_fan(0, &points, &nb, &c, &mut FanScratch::default()).collect();
+            fan.sort_unstable();
+            assert_eq!(fan, spade_fan(&points, &list), "case {case}, k = {k}");
+            assert!(!fan.is_empty());
+        }
+    }
+}
