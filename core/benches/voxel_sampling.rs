@@ -6,8 +6,9 @@
 //!
 //! The bunny is open (its holes are capped for the rows). Run with
 //! `cargo bench -p lodstudio-core --bench voxel_sampling` (about
-//! six minutes here: the point sampler at 256 is the slow part). Prints a
-//! Markdown table; both samplers' volumes are compared voxel by voxel.
+//! six minutes here: the point sampler at 256 is the slow part); names after
+//! `--` keep only the models whose file name contains one (`-- bunny`).
+//! Prints a Markdown table; both samplers' volumes are compared voxel by voxel.
 
 mod common;
 
@@ -36,7 +37,14 @@ fn main() {
         "| input | n | grid | points s | rows s | speed-up | voxels differing | filter s | marching cubes s | rows + filter + MC s | meshopt remesh s | ratio to remesh |"
     );
     println!("|---|---|---|---|---|---|---|---|---|---|---|---|");
+    let only: Vec<String> = std::env::args()
+        .skip(1)
+        .filter(|a| !a.starts_with('-'))
+        .collect();
     for name in ["dragon_vrip.ply.gz", "horse.ply", "stanford-bunny.obj"] {
+        if !only.is_empty() && !only.iter().any(|o| name.contains(o.as_str())) {
+            continue;
+        }
         let m = common::load_mesh(
             PathBuf::from(env!("CARGO_MANIFEST_DIR"))
                 .join("../../shared/models")
