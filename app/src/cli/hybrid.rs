@@ -72,6 +72,10 @@ pub fn run(args: HybridArgs) -> Result<(), CliError> {
     }
     args.save.check(args.report.force)?;
     let mesh = load_mesh(&args.file, &args.input)?;
+    // The triangle-only twin first, kept as its curve alone: the two graphs
+    // are never in memory together (the dragon's peak: 2.06 GB -> see
+    // BENCHMARKS.md).
+    let triangle_curve = curve::curve(&build(&mesh, &opts.triangles_only())?);
     let start = std::time::Instant::now();
     let mrg = Arc::new(build(&mesh, &opts)?);
     args.save.write(
@@ -79,10 +83,8 @@ pub fn run(args: HybridArgs) -> Result<(), CliError> {
         serde_json::json!({"kappa": args.kappa, "tau": args.tau, "file": args.file.display().to_string()}),
     )?;
     let seconds = start.elapsed().as_secs_f64();
-    let triangle_only = build(&mesh, &opts.triangles_only())?;
     let input = mesh.triangles.len() as f64;
     let hybrid_curve = curve::curve(&mrg);
-    let triangle_curve = curve::curve(&triangle_only);
     if let Some(path) = &args.curve {
         let mut csv = String::from("curve,error,primitives\n");
         for (name, c) in [("hybrid", &hybrid_curve), ("triangles", &triangle_curve)] {
