@@ -16,7 +16,8 @@
 //! - layers (voxel paper §3): one primitive per layer with a material whose
 //!   base-colour alpha is the layer's opacity, blended unless opaque.
 
-use std::collections::BTreeSet;
+use std::collections::{BTreeSet, HashMap};
+use std::hash::{DefaultHasher, Hash, Hasher};
 
 use glam::Vec3;
 use serde_json::{Value, json};
@@ -77,6 +78,11 @@ pub struct GltfWriter {
     surface: Option<usize>,
     /// The input's materials written so far, with their glTF indices.
     originals: Vec<(Material, usize)>,
+    /// Images by a hash of their bytes, and textures by (image, sampler):
+    /// an AMG level has thousands of splat textures, and searching the lists
+    /// made writing the dragon's level 3 take 29 s.
+    image_by_hash: HashMap<u64, Vec<usize>>,
+    texture_by_parts: HashMap<(usize, usize), usize>,
 }
 
 fn le(data: &[f32]) -> Vec<u8> {
@@ -398,30 +404,39 @@ impl GltfWriter {
     /// The index of a texture sampling encoded image `bytes` with `sampler`; an
     /// image already embedded (materials sharing one atlas) is not embedded again.
     fn image(&mut self, bytes: &[u8], mime_type: &str, sampler: usize) -> usize {
-        let embedded = |w: &Self, image: &Value| {
-            let view = &w.views[image["bufferView"].as_u64().unwrap_or(0) as usize];
+        let mut hasher = DefaultHasher::new();
+        bytes.hash(&mut hasher);
+        let key = hasher.finish();
+        let embedded = |w: &Self, image: usize| {
+            let view = &w.views[w.images[image]["bufferView"].as_u64().unwrap_or(0) as usize];
             let at = view["byteOffset"].as_u64().unwrap_or(0) as usize;
             w.bin
                 .get(at..at + view["byteLength"].as_u64().unwrap_or(0) as usize)
                 == Some(bytes)
         };
-        let source = match self.images.iter().position(|i| embedded(self, i)) {
+        let same = self
+            .image_by_hash
+            .get(&key)
+            .and_then(|c| c.iter().copied().find(|&i| embedded(self, i)));
+        let source = match same {
             Some(i) => i,
             None => {
                 let view = self.view(bytes, None);
                 self.images
                     .push(json!({"bufferView": view, "mimeType": mime_type}));
-                self.images.len() - 1
+                let i = self.images.len() - 1;
+                self.image_by_hash.entry(key).or_default().push(i);
+                i
             }
         };
-        let texture = json!({"source": source, "sampler": sampler});
-        match self.textures.iter().position(|t| *t == texture) {
-            Some(i) => i,
-            None => {
-                self.textures.push(texture);
+        *self
+            .texture_by_parts
+            .entry((source, sampler))
+            .or_insert_with(|| {
+                self.textures
+                    .push(json!({"source": source, "sampler": sampler}));
                 self.textures.len() - 1
-            }
-        }
+            })
     }
 
     /// One child node per translucent layer (a separate mesh each, as
