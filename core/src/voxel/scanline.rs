@@ -22,7 +22,7 @@ use glam::{DVec3, Vec3};
 use rayon::prelude::*;
 
 use super::sampling::{Grid, sub_offset};
-use crate::geom::{Topology, TriMesh, Volume};
+use crate::geom::{TriMesh, Volume};
 use crate::implicit::Implicit;
 use crate::progress::{Cancelled, Progress};
 
@@ -91,30 +91,50 @@ impl Cap {
 /// oriented with the surface, and the caps; `None` when the surface is not
 /// manifold and consistently oriented or its boundary is not simple loops.
 fn capped(mesh: &TriMesh) -> Option<(Cow<'_, TriMesh>, Vec<Cap>)> {
-    if mesh.triangles.is_empty() {
+    if mesh.triangles.is_empty()
+        || mesh
+            .triangles
+            .iter()
+            .any(|t| t[0] == t[1] || t[1] == t[2] || t[2] == t[0])
+    {
         return None;
     }
-    let topo = Topology::of(mesh);
-    if !topo.is_manifold() || topo.inconsistent_edges > 0 {
+    // Edges sorted by their two ends, then direction (packed in 64 bits,
+    // so indices below 2³¹: any mesh that fits in memory): a directed edge
+    // used twice is an edge of three or more triangles or of two that
+    // disagree on orientation (then the signed crossings are no winding
+    // number); an edge used once is border. One sort of 3n keys.
+    if mesh.positions.len() > (u32::MAX >> 1) as usize {
         return None;
     }
-    if topo.is_closed() {
+    let key = |a: u32, b: u32| (a.min(b) as u64) << 32 | (a.max(b) as u64) << 1 | u64::from(a > b);
+    let mut edges: Vec<u64> = mesh
+        .triangles
+        .par_iter()
+        .flat_map_iter(|t| [key(t[0], t[1]), key(t[1], t[2]), key(t[2], t[0])])
+        .collect();
+    edges.par_sort_unstable();
+    if edges.windows(2).any(|w| w[0] == w[1]) {
+        return None;
+    }
+    let border: Vec<(u32, u32)> = edges
+        .chunk_by(|x, y| x >> 1 == y >> 1)
+        .filter(|same| same.len() == 1)
+        .map(|e| {
+            let (lo, hi) = ((e[0] >> 32) as u32, (e[0] as u32) >> 1);
+            if e[0] & 1 == 1 { (hi, lo) } else { (lo, hi) }
+        })
+        .collect();
+    if border.is_empty() {
         return Some((Cow::Borrowed(mesh), Vec::new()));
     }
-    let mut closed = TriMesh::new(mesh.positions.clone(), mesh.triangles.clone());
-    // Boundary edges: the directed edges whose reverse no triangle has.
-    let mut uses: HashMap<(u32, u32), u32> = HashMap::new();
-    for t in &mesh.triangles {
-        for (a, b) in [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])] {
-            *uses.entry((a, b)).or_default() += 1;
-        }
-    }
     let mut next: HashMap<u32, u32> = HashMap::new();
-    for (&(a, b), _) in uses.iter().filter(|(e, _)| !uses.contains_key(&(e.1, e.0))) {
+    for &(a, b) in &border {
         if next.insert(a, b).is_some() {
             return None;
         }
     }
+    let mut closed = TriMesh::new(mesh.positions.clone(), mesh.triangles.clone());
     let mut starts: Vec<u32> = next.keys().copied().collect();
     starts.sort_unstable();
     let mut seen = std::collections::HashSet::new();
@@ -265,12 +285,20 @@ pub fn sample_by_rows(
                     let total: i32 = row.iter().map(|c| c.1).sum();
                     let (mut next, mut before) = (0, 0);
                     if near.is_empty() {
-                        for (ix, &sx) in xs.iter().enumerate() {
-                            while next < row.len() && row[next].0 <= sx as f64 {
-                                before += row[next].1;
-                                next += 1;
+                        // Between two crossings the winding is constant: the
+                        // sub-samples from the first at or past one crossing
+                        // to the first at or past the next fill their voxels.
+                        let mut start = 0;
+                        for c in row.iter() {
+                            let end = xs.partition_point(|&sx| (sx as f64) < c.0);
+                            if total != before {
+                                fill(line, start, end, k);
                             }
-                            line[ix / k] += u16::from(total != before);
+                            before += c.1;
+                            start = end;
+                        }
+                        if total != before {
+                            fill(line, start, xs.len(), k);
                         }
                         continue;
                     }
@@ -331,6 +359,23 @@ pub fn sample_by_rows(
             Ok(())
         })?;
     Ok(grid.volume(data))
+}
+
+/// Counts the sub-samples `start..end` of a row (k per voxel) in their voxels.
+fn fill(line: &mut [u16], start: usize, end: usize, k: usize) {
+    if start >= end {
+        return;
+    }
+    let (first, last) = (start / k, (end - 1) / k);
+    if first == last {
+        line[first] += (end - start) as u16;
+        return;
+    }
+    line[first] += (k * (first + 1) - start) as u16;
+    for v in &mut line[first + 1..last] {
+        *v += k as u16;
+    }
+    line[last] += (end - last * k) as u16;
 }
 
 /// Where the row along x through (y, z) meets a triangle.
