@@ -27,11 +27,6 @@ pub struct FanScratch {
     hull: Vec<(DVec2, u32, u32)>,
 }
 
-/// z of the cross product of 2D vectors.
-fn cross(a: DVec2, b: DVec2) -> f64 {
-    a.x * b.y - a.y * b.x
-}
-
 /// One chain of Andrew's monotone hull over points sorted by x (lower chain
 /// left to right, then upper chain right to left), counter-clockwise and
 /// without collinear points; its last point starts the other chain.
@@ -43,7 +38,7 @@ fn half_hull<'a>(
     for p in sorted {
         while hull.len() >= floor + 2 {
             let (a, b) = (hull[hull.len() - 2].0, hull[hull.len() - 1].0);
-            if cross(b - a, p.0 - a) > 0.0 {
+            if (b - a).perp_dot(p.0 - a) > 0.0 {
                 break;
             }
             hull.pop();
@@ -93,8 +88,8 @@ fn delaunay_fan(
     let hull = &*hull;
     (0..n).filter_map(move |e| {
         let (a, b) = (hull[e], hull[(e + 1) % n]);
-        // x_i (the origin) on the hull's side of a'b': cross(b' − a', −a') = cross(a', b').
-        (cross(a.0, b.0) > 0.0).then_some((a.2, b.2))
+        // x_i (the origin) on the hull's side of a'b': (b' − a') × (−a') = a' × b'.
+        (a.0.perp_dot(b.0) > 0.0).then_some((a.2, b.2))
     })
 }
 

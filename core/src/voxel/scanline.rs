@@ -10,10 +10,9 @@
 //! angle over 4π, which matters (can move a sub-sample across ½) only near a
 //! cap, where it is computed exactly at a few sub-samples per row and carried
 //! along it between them by a bound on its gradient (Biot–Savart over the
-//! loop): 12–15× fewer solid angles than one per sub-sample. A row passing within round-off of an
-//! edge or a vertex of the projected surface would count a crossing twice or
-//! not at all: its sub-samples are classified point by point instead, by the
-//! solid itself.
+//! loop). A row passing within round-off of an edge or a vertex of the
+//! projected surface would count a crossing twice or not at all: its
+//! sub-samples are classified point by point instead, by the solid itself.
 
 use std::borrow::Cow;
 use std::collections::HashMap;
