@@ -31,6 +31,7 @@ use glam::Vec3;
 use rayon::prelude::*;
 
 use super::projection::Projection;
+use super::recertify::{Recertify, Trace};
 use crate::distance::MeshDistance;
 use crate::geom::TriMesh;
 use crate::progress::{Cancelled, Progress};
@@ -288,8 +289,13 @@ pub fn max_distance_bound(
     (top.upper.max(lower) * (1.0 + ROUNDING), lower, owner)
 }
 
-/// Bound, lower bound and best covering triangle of `to`, per triangle of `from`.
-type SideBounds = Vec<(f32, f32, u32)>;
+/// A triangle's bound, lower bound and best covering triangle of the other surface.
+pub(super) type Bounds = (f32, f32, u32);
+/// A point's exact distance to a surface and its nearest triangle.
+pub(super) type Nearest = (f32, u32);
+
+/// [`Bounds`] per triangle of `from`.
+type SideBounds = Vec<Bounds>;
 
 /// One direction of the certificate: the triangles of `from` against the surface `to`.
 struct Side<'a> {
@@ -321,12 +327,13 @@ impl Tracker<'_> {
 }
 
 impl<'a> Side<'a> {
+    /// `at_vertex`: exact distance and nearest triangle of `to` per vertex of `from`.
     fn new(
         from: &'a TriMesh,
         to: &'a MeshDistance<'a>,
         projection: Option<&'a Projection<'a>>,
+        at_vertex: Vec<(f32, u32)>,
     ) -> Self {
-        let at_vertex = from.positions.par_iter().map(|p| to.nearest(*p)).collect();
         Side {
             from,
             to,
@@ -340,11 +347,21 @@ impl<'a> Side<'a> {
     }
 
     /// For every triangle: its bound, the largest exact distance found, and the
-    /// triangle of `to` that covers it best as a whole.
-    fn bounds(&self, opts: &BoundOptions, enough: f32, track: &Tracker) -> SideBounds {
+    /// triangle of `to` that covers it best as a whole; `known` where an
+    /// earlier certificate carries it.
+    fn bounds(
+        &self,
+        opts: &BoundOptions,
+        enough: f32,
+        track: &Tracker,
+        known: Option<&[Option<Bounds>]>,
+    ) -> SideBounds {
         (0..self.from.triangles.len())
             .into_par_iter()
             .map(|t| {
+                if let Some(b) = known.and_then(|k| k[t]) {
+                    return b;
+                }
                 if !track.tick() {
                     return (f32::INFINITY, 0.0, 0);
                 }
@@ -432,27 +449,102 @@ pub fn certify_against(
     opts: &BoundOptions,
     progress: &Progress,
 ) -> Result<Certificate, Cancelled> {
+    if let Some(c) = empty(original.mesh, simplified) {
+        return Ok(c);
+    }
+    let (rev, fwd, _) = certify_sides(original, simplified, None, opts, progress)?;
+    Ok(certificate(&rev, &fwd))
+}
+
+/// The certificate where either surface is empty: nothing of S leaves the
+/// original unbounded; no original leaves nothing to be far from.
+fn empty(original: &TriMesh, simplified: &TriMesh) -> Option<Certificate> {
+    let n = simplified.triangles.len();
+    (n == 0 || original.triangles.is_empty()).then(|| Certificate {
+        triangle_bounds: vec![0.0; n],
+        attributed: Vec::new(),
+        forward: if original.triangles.is_empty() {
+            0.0
+        } else {
+            f32::INFINITY
+        },
+        reverse: 0.0,
+    })
+}
+
+/// Certifies a state of an edge collapse (`ids`: the collapser's id of each
+/// triangle of `simplified`, ascending) and keeps the trace that certifies
+/// later states of the same collapse; with `earlier`, the trace of an earlier
+/// state, what it proved that still holds carries (module `recertify`).
+pub fn certify_traced(
+    original: &Original,
+    simplified: &TriMesh,
+    ids: &[u32],
+    earlier: Option<&Trace>,
+    opts: &BoundOptions,
+    progress: &Progress,
+) -> Result<(Certificate, Trace), Cancelled> {
+    if let Some(c) = empty(original.mesh, simplified) {
+        let rev = vec![(0.0, 0.0, 0); ids.len()];
+        return Ok((c, Trace::new(ids, simplified, &rev, &[], &[])));
+    }
+    let recertify = earlier.and_then(|e| Recertify::new(e, original.mesh, simplified, ids));
+    let (rev, fwd, at_vertex) = certify_sides(original, simplified, recertify, opts, progress)?;
+    let trace = Trace::new(ids, simplified, &rev, &fwd, &at_vertex);
+    Ok((certificate(&rev, &fwd), trace))
+}
+
+/// Both directions' per-triangle bounds, and the original's vertices' exact
+/// distances and nearest triangles of S.
+fn certify_sides(
+    original: &Original,
+    simplified: &TriMesh,
+    recertify: Option<Recertify>,
+    opts: &BoundOptions,
+    progress: &Progress,
+) -> Result<(SideBounds, SideBounds, Vec<Nearest>), Cancelled> {
     let Original {
         mesh: original,
         distance: to_o,
         projection,
     } = original;
     let n = simplified.triangles.len();
-    if n == 0 || original.triangles.is_empty() {
-        return Ok(Certificate {
-            triangle_bounds: vec![0.0; n],
-            attributed: Vec::new(),
-            forward: if original.triangles.is_empty() {
-                0.0
-            } else {
-                f32::INFINITY
-            },
-            reverse: 0.0,
-        });
-    }
+    let enough_above = |l: f32| {
+        if opts.per_triangle {
+            0.0
+        } else {
+            l * (1.0 + opts.rel_tol)
+        }
+    };
     let to_s = MeshDistance::new(simplified);
-    let rev = Side::new(simplified, to_o, Some(projection));
-    let fwd = Side::new(original, &to_s, None);
+    // What an earlier certificate carries is not measured again. Fixed
+    // chunks of vertices are searched in order, each from its predecessor's
+    // nearest triangle (files list neighbours together): a good first guess
+    // prunes the search, and chunks keep the result the same on any number
+    // of threads.
+    let nearest = |to: &MeshDistance, p: &[Vec3], known: Option<&[Option<Nearest>]>| {
+        const CHUNK: usize = 256;
+        let mut at = vec![(0.0, 0); p.len()];
+        at.par_chunks_mut(CHUNK).enumerate().for_each(|(c, chunk)| {
+            let mut hint = u32::MAX;
+            for (k, a) in chunk.iter_mut().enumerate() {
+                let v = c * CHUNK + k;
+                *a = known
+                    .and_then(|known| known[v])
+                    .unwrap_or_else(|| to.nearest_near(p[v], hint));
+                hint = a.1;
+            }
+        });
+        at
+    };
+    let rev_at = nearest(to_o, &simplified.positions, None);
+    let fwd_at = nearest(
+        &to_s,
+        &original.positions,
+        recertify.as_ref().map(|r| r.at_vertex.as_slice()),
+    );
+    let rev = Side::new(simplified, to_o, Some(projection), rev_at);
+    let fwd = Side::new(original, &to_s, None, fwd_at);
     progress.check()?;
     // The largest exact vertex distance is a lower bound of the result: refining a
     // triangle far below it cannot change the maximum, so the absolute tolerance
@@ -462,25 +554,29 @@ pub fn certify_against(
         .iter()
         .chain(&fwd.at_vertex)
         .map(|x| x.0)
-        .fold(0.0, f32::max);
+        .fold(recertify.as_ref().map_or(0.0, |r| r.lower()), f32::max);
     let opts = BoundOptions {
         abs_tol: opts.abs_tol.max(opts.rel_tol * lower),
         ..*opts
     };
-    let enough_above = |l: f32| {
-        if opts.per_triangle {
-            0.0
-        } else {
-            l * (1.0 + opts.rel_tol)
-        }
+    let known = |side: fn(&Recertify) -> &Vec<Option<Bounds>>| {
+        recertify.as_ref().map(|r| side(r).as_slice())
+    };
+    let (rev_known, fwd_known) = (known(|r| &r.reverse), known(|r| &r.forward));
+    // Pass one measures what does not carry; the refinement looks at all.
+    let fresh = |k: Option<&[Option<_>]>, all: usize| {
+        k.map_or(all, |k| k.iter().filter(|b| b.is_none()).count())
     };
     let track = Tracker {
         progress,
         done: AtomicUsize::new(0),
-        total: 2 * (n + original.triangles.len()),
+        total: n
+            + original.triangles.len()
+            + fresh(rev_known, n)
+            + fresh(fwd_known, original.triangles.len()),
     };
-    let mut reverse = rev.bounds(&opts, enough_above(lower), &track);
-    let mut forward = fwd.bounds(&opts, enough_above(lower), &track);
+    let mut reverse = rev.bounds(&opts, enough_above(lower), &track, rev_known);
+    let mut forward = fwd.bounds(&opts, enough_above(lower), &track, fwd_known);
     progress.check()?;
     // Pass one raised the lower bound; refine what is still above it.
     let found = reverse
@@ -491,17 +587,23 @@ pub fn certify_against(
     rev.refine(&mut reverse, &opts, enough_above(found), &track);
     fwd.refine(&mut forward, &opts, enough_above(found), &track);
     progress.check()?;
+    Ok((reverse, forward, fwd.at_vertex))
+}
+
+/// A triangle's bound is the larger of its S → O bound and the O → S
+/// bounds of the original triangles attributed to it.
+fn certificate(reverse: &SideBounds, forward: &SideBounds) -> Certificate {
     let mut triangle_bounds: Vec<f32> = reverse.iter().map(|x| x.0).collect();
-    for (b, _, owner) in &forward {
+    for (b, _, owner) in forward {
         let tb = &mut triangle_bounds[*owner as usize];
         *tb = tb.max(*b);
     }
-    Ok(Certificate {
+    Certificate {
         triangle_bounds,
         attributed: forward.iter().map(|x| x.2).collect(),
         forward: forward.iter().map(|x| x.0).fold(0.0, f32::max),
         reverse: reverse.iter().map(|x| x.0).fold(0.0, f32::max),
-    })
+    }
 }
 
 #[cfg(test)]

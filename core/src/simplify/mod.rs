@@ -6,9 +6,11 @@
 //! bound of its new triangles; `bound` certifies a result: every output
 //! triangle carries a true upper bound on the two-sided Hausdorff distance
 //! between itself and the part of the original surface attributed to it, and
-//! `error_bound` is their maximum. `progressive` records the collapses once
-//! as a hierarchy whose every prefix carries a certified bound, for cuts
-//! that move with a slider instead of re-running.
+//! `error_bound` is their maximum; `recertify` certifies a later state of the
+//! same collapse from an earlier certificate, re-measuring only near what
+//! changed (an error search's probes, an LOD chain's rows). `progressive`
+//! records the collapses once as a hierarchy whose every prefix carries a
+//! certified bound, for cuts that move with a slider instead of re-running.
 
 mod attribution;
 pub mod bound;
@@ -17,14 +19,17 @@ pub mod progressive;
 pub mod projection;
 pub mod quadric;
 mod queue;
+pub mod recertify;
 pub mod step_bounds;
 
 pub use bound::{
-    BoundOptions, Certificate, Original, certify, certify_against, certify_with_progress,
+    BoundOptions, Certificate, Original, certify, certify_against, certify_traced,
+    certify_with_progress,
 };
 pub use collapse::{
     Candidate, Collapse, CollapseOptions, EdgeCollapser, StarCostFn, quadric_cost, quadric_mean,
 };
+pub use recertify::Trace;
 
 use crate::geom::TriMesh;
 use crate::progress::{Cancelled, Progress};
@@ -66,6 +71,9 @@ impl Simplified {
     }
 }
 
+/// A result with the trace that certifies later states of its collapse.
+type Certified = (Simplified, Trace);
+
 /// Invalid simplification parameters.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum SimplifyError {
@@ -102,7 +110,8 @@ pub fn simplify(
 /// collapse: collapses are deterministic and a collapser continues as a fresh
 /// run would, so the count targets (largest first) each equal a fresh run to
 /// their count, and the error targets (smallest first) each search on from
-/// the state the previous one reached; one original's search structures
+/// the state the previous one reached, each probe certified from the last
+/// certified state's trace (`recertify`); one original's search structures
 /// certify them all. An error target's result meets its error and is as
 /// deterministic as the rest, but its count may differ by the search's 2 %
 /// from a lone `simplify` to that error (its probes start elsewhere).
@@ -182,33 +191,45 @@ pub fn simplify_chain(
         // collapses (which run on one thread), for every certificate.
         let mut building = Some(scope.spawn(|| Original::new(mesh)));
         let mut original = None;
-        let mut certify = |s: &EdgeCollapser| -> Result<Simplified, SimplifyError> {
-            let original = original.get_or_insert_with(|| {
-                let handle = building.take().expect("joined once");
-                handle
-                    .join()
-                    .unwrap_or_else(|p| std::panic::resume_unwind(p))
-            });
-            let (out, _) = s.mesh();
-            progress.stage("certifying the error bound");
-            let certificate = certify_against(original, &out, &bound_opts, progress)?;
-            Ok(Simplified {
-                mesh: out,
-                certificate,
-                collapses: s.collapses(),
-            })
-        };
+        // A state's certificate, carrying what an earlier state's trace
+        // proved that still holds (module `recertify`).
+        let mut certify =
+            |s: &EdgeCollapser, earlier: Option<&Trace>| -> Result<Certified, SimplifyError> {
+                let original = original.get_or_insert_with(|| {
+                    let handle = building.take().expect("joined once");
+                    handle
+                        .join()
+                        .unwrap_or_else(|p| std::panic::resume_unwind(p))
+                });
+                let (out, ids) = s.mesh();
+                progress.stage("certifying the error bound");
+                let (certificate, trace) =
+                    certify_traced(original, &out, &ids, earlier, &bound_opts, progress)?;
+                let r = Simplified {
+                    mesh: out,
+                    certificate,
+                    collapses: s.collapses(),
+                };
+                Ok((r, trace))
+            };
         let start = EdgeCollapser::new(mesh, collapse_opts);
         let mut state = start.clone();
         for (i, count) in counts {
             collapse(&mut state, count)?;
-            results[i] = Some(certify(&state)?);
+            results[i] = Some(certify(&state, None)?.0);
         }
-        let mut state = start;
+        let (mut state, mut certified, mut probed) = (start, None, Vec::new());
         for (i, max_error) in errors {
-            let (r, reached) = to_error(state, max_error, collapse, &mut certify)?;
-            results[i] = Some(r);
-            state = reached;
+            let (r, reached) = to_error(
+                state,
+                certified,
+                max_error,
+                &mut probed,
+                collapse,
+                &mut certify,
+            )?;
+            results[i] = Some(r.0.clone());
+            (state, certified) = (reached, Some(r));
         }
         Ok::<(), SimplifyError>(())
     })?;
@@ -222,18 +243,39 @@ pub fn simplify_chain(
 /// halve the count while the bound holds, then bisect. Collapses are
 /// deterministic and a clone of the collapser continues as it would, so each
 /// probe resumes from the last count that held instead of re-running from
-/// the input (the halving adds up to one run). Returns the result with the
-/// collapser state that made it, where a coarser error's search may start.
+/// the input (the halving adds up to one run), and is certified from that
+/// count's trace. `certified`, where given, is `start`'s certificate within
+/// every smaller error (the previous row of a chain); `probed` holds the
+/// (count, bound) of every probe so far and gains this search's: a count
+/// below `start` that a smaller error's search found over this error starts
+/// the bisection without halving (a chain's rows double their errors, and
+/// the halving's first probe, far from any certified state, is the dearest).
+/// Returns the result with the collapser state that made it, where a coarser
+/// error's search may start.
 fn to_error(
     start: EdgeCollapser,
+    certified: Option<Certified>,
     max_error: f32,
+    probed: &mut Vec<(usize, f32)>,
     collapse: impl Fn(&mut EdgeCollapser, usize) -> Result<(), SimplifyError>,
-    mut certify: impl FnMut(&EdgeCollapser) -> Result<Simplified, SimplifyError>,
-) -> Result<(Simplified, EdgeCollapser), SimplifyError> {
+    mut certify: impl FnMut(&EdgeCollapser, Option<&Trace>) -> Result<Certified, SimplifyError>,
+) -> Result<(Certified, EdgeCollapser), SimplifyError> {
     let n = start.triangle_count();
-    let (mut good, mut good_state, mut good_n) = (None, start, n);
+    // `good_state`'s certificate, and whether it is within `max_error`.
+    let (mut known, mut good_state, mut good_n) = (certified, start, n);
+    let mut good = known
+        .as_ref()
+        .is_some_and(|(r, _)| r.error_bound() <= max_error);
     // Halving until a probe fails (or reaches 0), then bisecting from there.
-    let (mut probe, mut bad_n, mut bisecting) = (n / 2, 0usize, false);
+    let known_bad = probed
+        .iter()
+        .filter(|&&(c, b)| c < n && b > max_error)
+        .map(|p| p.0)
+        .max();
+    let (mut probe, mut bad_n, mut bisecting) = match known_bad {
+        Some(bad) => (n / 2, bad, true),
+        None => (n / 2, 0usize, false),
+    };
     loop {
         if bisecting {
             if good_n <= bad_n + 1 || good_n - bad_n <= good_n / 50 {
@@ -246,17 +288,15 @@ fn to_error(
         }
         let mut s = good_state.clone();
         collapse(&mut s, probe)?;
-        if s.collapses() == good_state.collapses()
-            && let Some(g) = good
-        {
+        if s.collapses() == good_state.collapses() && good {
             // Nothing more can collapse: every smaller count gives this mesh.
-            return Ok((g, good_state));
+            break;
         }
-        let r = certify(&s)?;
+        let (r, trace) = certify(&s, known.as_ref().map(|k| &k.1))?;
+        probed.push((probe, r.error_bound()));
         if r.error_bound() <= max_error {
             good_n = r.mesh.triangles.len().min(probe);
-            good = Some(r);
-            good_state = s;
+            (known, good, good_state) = (Some((r, trace)), true, s);
             if !bisecting {
                 probe /= 2;
             }
@@ -265,9 +305,9 @@ fn to_error(
             bisecting = true;
         }
     }
-    match good {
-        Some(g) => Ok((g, good_state)),
-        None => Ok((certify(&good_state)?, good_state)),
+    match known {
+        Some(k) if good => Ok((k, good_state)),
+        _ => Ok((certify(&good_state, None)?, good_state)),
     }
 }
 

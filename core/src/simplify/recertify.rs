@@ -1,0 +1,360 @@
+//! Re-certifying a later state of the same edge collapse from an earlier
+//! state's certificate: an error search's probes and an LOD chain's rows
+//! (issue 26) would otherwise each pay a pass over the whole original.
+//!
+//! Collapses never edit a triangle: they retire some and make new ones under
+//! new ids (`collapse`), so a later state S_B is an earlier S_A less the
+//! removed triangles plus the added ones, by the collapser's ids. Then, with
+//! O the original:
+//! - S → O: a triangle of S_A still in S_B keeps its bound (O is unchanged);
+//! - O → S: an original triangle's bound u against S_A used only triangles
+//!   of S_A within u of it (convexity and Lipschitz, module `bound`, both use
+//!   a tried or nearest triangle at most the bound away). When no removed or
+//!   added triangle comes within u of it, every triangle it used is in S_B,
+//!   so u bounds it against S_B, and its exact distances stay exact (no added
+//!   triangle is nearer): lower bounds and nearest triangles carry too.
+//!
+//! "Within u" is tested conservatively on a grid of cells marked under the
+//! changed triangles' boxes. Nothing is loosened: what carries is a bound
+//! the earlier certificate proved for a surface the later one still has;
+//! everything else is certified afresh.
+
+use glam::Vec3;
+use rayon::prelude::*;
+
+use super::bound::{Bounds, Nearest};
+use crate::geom::{Aabb, TriMesh};
+
+/// What a certificate keeps for certifying later states of its collapse.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Trace {
+    /// The collapser's id of each triangle of S, ascending.
+    ids: Vec<u32>,
+    /// Each triangle of S's box.
+    boxes: Vec<Aabb>,
+    /// S → O per triangle of S: upper and lower bound.
+    reverse: Vec<(f32, f32)>,
+    /// O → S per original triangle: upper and lower bound, and the triangle
+    /// of S that covers it best.
+    forward: Vec<Bounds>,
+    /// Per original vertex: exact distance to S and its nearest triangle.
+    at_vertex: Vec<Nearest>,
+}
+
+impl Trace {
+    pub(super) fn new(
+        ids: &[u32],
+        simplified: &TriMesh,
+        reverse: &[Bounds],
+        forward: &[Bounds],
+        at_vertex: &[Nearest],
+    ) -> Self {
+        Trace {
+            ids: ids.to_vec(),
+            boxes: (0..simplified.triangles.len())
+                .map(|t| triangle_box(&simplified.triangle(t)))
+                .collect(),
+            reverse: reverse.iter().map(|b| (b.0, b.1)).collect(),
+            forward: forward.to_vec(),
+            at_vertex: at_vertex.to_vec(),
+        }
+    }
+}
+
+/// An earlier state's trace matched against a later state S_B: what
+/// carries, by S_B's indices (`None`: certified afresh).
+pub(super) struct Recertify {
+    /// Per triangle of S_B: its S → O bounds where it was in S_A.
+    pub reverse: Vec<Option<Bounds>>,
+    /// Per original triangle: its O → S bounds where nothing changed in reach.
+    pub forward: Vec<Option<Bounds>>,
+    /// Per original vertex: exact distance and nearest triangle, where every
+    /// triangle it is in carries (its distance is at most their bounds).
+    pub at_vertex: Vec<Option<Nearest>>,
+}
+
+/// Cells along the longest side of the original's box: fine enough that an
+/// original triangle's reach (its box grown by its bound) touches a few.
+const CELLS: f32 = 256.0;
+
+/// A grid over a box: the cells a box overlaps.
+struct Cells {
+    origin: Vec3,
+    inv_cell: f32,
+    dims: [usize; 3],
+}
+
+impl Cells {
+    fn new(bounds: Aabb, along_longest: f32) -> Self {
+        let extent = bounds.extent().max(Vec3::splat(f32::MIN_POSITIVE));
+        let cell = (extent.max_element() / along_longest).max(f32::MIN_POSITIVE);
+        let dims = (extent / cell)
+            .ceil()
+            .to_array()
+            .map(|d| (d as usize).clamp(1, along_longest as usize));
+        Cells {
+            origin: bounds.min,
+            inv_cell: 1.0 / cell,
+            dims,
+        }
+    }
+
+    fn len(&self) -> usize {
+        self.dims[0] * self.dims[1] * self.dims[2]
+    }
+
+    /// The cells a box overlaps, clamped to the grid (overlapping boxes
+    /// keep overlapping ranges, so the tests stay conservative outside it).
+    fn each(&self, b: &Aabb, mut f: impl FnMut(usize) -> bool) -> bool {
+        let lo = ((b.min - self.origin) * self.inv_cell).floor().to_array();
+        let hi = ((b.max - self.origin) * self.inv_cell).floor().to_array();
+        let [xs, ys, zs] = [0, 1, 2].map(|k| {
+            let top = self.dims[k] - 1;
+            // NaN and ±∞ clamp to the grid's ends (`as` saturates).
+            let c = |x: f32| (x.max(0.0) as usize).min(top);
+            c(lo[k])..=c(hi[k])
+        });
+        for z in zs {
+            for y in ys.clone() {
+                for x in xs.clone() {
+                    if !f((z * self.dims[1] + y) * self.dims[0] + x) {
+                        return false;
+                    }
+                }
+            }
+        }
+        true
+    }
+}
+
+/// Cells marked under boxes.
+struct Marks {
+    cells: Cells,
+    bits: Vec<u64>,
+}
+
+impl Marks {
+    fn new(bounds: Aabb) -> Self {
+        let cells = Cells::new(bounds, CELLS);
+        let bits = vec![0; cells.len().div_ceil(64)];
+        Marks { cells, bits }
+    }
+
+    fn mark(&mut self, b: &Aabb) {
+        let bits = &mut self.bits;
+        self.cells.each(b, |i| {
+            bits[i / 64] |= 1 << (i % 64);
+            true
+        });
+    }
+
+    fn touches(&self, b: &Aabb) -> bool {
+        !self
+            .cells
+            .each(b, |i| self.bits[i / 64] & (1 << (i % 64)) == 0)
+    }
+}
+
+fn triangle_box(p: &[Vec3; 3]) -> Aabb {
+    Aabb::from_points(p)
+}
+
+/// A box grown by `d` (and a hair for round-off: the tests must be conservative).
+fn grown(b: Aabb, d: f32) -> Aabb {
+    let g = Vec3::splat(d * (1.0 + 1e-4) + 1e-6 * (b.max - b.min).length());
+    Aabb {
+        min: b.min - g,
+        max: b.max + g,
+    }
+}
+
+impl Recertify {
+    /// `None` where `earlier` is of another original.
+    pub fn new(earlier: &Trace, original: &TriMesh, later: &TriMesh, ids: &[u32]) -> Option<Self> {
+        if earlier.forward.len() != original.triangles.len()
+            || earlier.at_vertex.len() != original.positions.len()
+        {
+            return None;
+        }
+        // Both id lists ascend: one merge finds what stayed, went and came.
+        let mut stayed = vec![None; earlier.ids.len()];
+        let mut reverse = vec![None; ids.len()];
+        let mut changes = Marks::new(Aabb::from_points(&original.positions));
+        let (mut i, mut j) = (0, 0);
+        while i < earlier.ids.len() || j < ids.len() {
+            match (earlier.ids.get(i), ids.get(j)) {
+                (Some(a), Some(b)) if a == b => {
+                    let (u, l) = earlier.reverse[i];
+                    reverse[j] = Some((u, l, 0));
+                    stayed[i] = Some(j as u32);
+                    i += 1;
+                    j += 1;
+                }
+                (Some(a), b) if b.is_none_or(|b| a < b) => {
+                    changes.mark(&earlier.boxes[i]);
+                    i += 1;
+                }
+                _ => {
+                    changes.mark(&triangle_box(&later.triangle(j)));
+                    j += 1;
+                }
+            }
+        }
+        let index = |i: u32| stayed.get(i as usize).copied().flatten();
+        let forward: Vec<Option<Bounds>> = earlier
+            .forward
+            .par_iter()
+            .enumerate()
+            .map(|(t, &(u, l, owner))| {
+                let owner = index(owner)?;
+                let reach = grown(triangle_box(&original.triangle(t)), u);
+                (u.is_finite() && !changes.touches(&reach)).then_some((u, l, owner))
+            })
+            .collect();
+        let mut exact = vec![false; original.positions.len()];
+        for (t, f) in forward.iter().enumerate() {
+            if f.is_some() {
+                for v in original.triangles[t] {
+                    exact[v as usize] = true;
+                }
+            }
+        }
+        for (t, f) in forward.iter().enumerate() {
+            if f.is_none() {
+                for v in original.triangles[t] {
+                    exact[v as usize] = false;
+                }
+            }
+        }
+        let at_vertex = earlier
+            .at_vertex
+            .par_iter()
+            .zip(&exact)
+            .map(|(&(d, near), &exact)| {
+                if exact {
+                    index(near).map(|k| (d, k))
+                } else {
+                    None
+                }
+            })
+            .collect();
+        Some(Recertify {
+            reverse,
+            forward,
+            at_vertex,
+        })
+    }
+
+    /// The largest lower bound of the later state's distance it carries.
+    pub fn lower(&self) -> f32 {
+        let bounds = self.reverse.iter().chain(&self.forward).flatten();
+        let vertices = self.at_vertex.iter().flatten().map(|a| a.0);
+        bounds.map(|b| b.1).chain(vertices).fold(0.0, f32::max)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::distance::{MeshDistance, SamplingOptions, hausdorff_mesh_mesh};
+    use crate::progress::Progress;
+    use crate::simplify::{
+        BoundOptions, CollapseOptions, EdgeCollapser, Original, certify_against, certify_traced,
+    };
+
+    /// Along one collapse, from a certified state to a later one 4 % and 50 %
+    /// further: what carries is what a fresh measurement of the later state
+    /// says (vertices' distances equal, triangles' bounds hold on dense
+    /// samples), and the re-certified bound holds against sampling and is as
+    /// tight as a fresh certificate's (within its relative tolerance).
+    #[test]
+    fn what_carries_holds_for_the_later_state() {
+        let mesh = crate::builtins::torus(1.0, 0.35, 120, 48);
+        let original = Original::new(&mesh);
+        let opts = BoundOptions::for_diagonal(mesh.bounds().diagonal());
+        // Coarse states' bounds span cells of the grid; fine ones' do not.
+        for (start, step) in [(8, 0.96), (8, 0.5), (100, 0.96), (100, 0.8)] {
+            let mut collapser = EdgeCollapser::new(&mesh, CollapseOptions::default());
+            collapser.run(mesh.triangles.len() / start, |_, _| true);
+            let (a, a_ids) = collapser.mesh();
+            let (_, trace) =
+                certify_traced(&original, &a, &a_ids, None, &opts, &Progress::new()).unwrap();
+            let mut later = collapser.clone();
+            later.run((a.triangles.len() as f32 * step) as usize, |_, _| true);
+            let (b, ids) = later.mesh();
+            let re = Recertify::new(&trace, &mesh, &b, &ids).expect("same original");
+            let to_b = MeshDistance::new(&b);
+            let carried = re.forward.iter().flatten().count();
+            if (start, step) == (8, 0.96) {
+                assert!(carried > mesh.triangles.len() / 2, "{carried} carried");
+                assert!(re.reverse.iter().flatten().count() > b.triangles.len() / 2);
+            }
+            assert!(carried > 0, "{start} {step}");
+            for (v, a) in re.at_vertex.iter().enumerate() {
+                if let Some((d, near)) = a {
+                    let (exact, _) = to_b.nearest(mesh.positions[v]);
+                    assert_eq!(*d, exact, "vertex {v}");
+                    assert_eq!(*d, to_b.triangle_distance(mesh.positions[v], *near));
+                }
+            }
+            for (t, f) in re.forward.iter().enumerate() {
+                if let Some((u, l, _)) = f {
+                    let [p, q, r] = mesh.triangle(t);
+                    for (i, j) in [(0, 0), (4, 0), (0, 4), (1, 1), (2, 1), (1, 2)] {
+                        let y = p + (q - p) * (i as f32 / 4.0) + (r - p) * (j as f32 / 4.0);
+                        // A sample's own coordinates round (|y| < 1.4: 1e-6 covers it).
+                        assert!(to_b.distance(y) <= *u + 1e-6, "step {step}, triangle {t}");
+                    }
+                    assert!(*l <= *u);
+                }
+            }
+            let (recertified, _) =
+                certify_traced(&original, &b, &ids, Some(&trace), &opts, &Progress::new())
+                    .expect("not cancelled");
+            let fresh = certify_against(&original, &b, &opts, &Progress::new()).unwrap();
+            let sampled = hausdorff_mesh_mesh(&mesh, &b, &SamplingOptions::default()).two_sided();
+            let (r, f) = (recertified.error_bound(), fresh.error_bound());
+            assert!(r >= sampled, "step {step}: {r} < sampled {sampled}");
+            assert!(
+                r <= f * (1.0 + opts.rel_tol) + opts.abs_tol,
+                "{r} vs fresh {f}"
+            );
+            assert_eq!(recertified.attributed.len(), mesh.triangles.len());
+        }
+    }
+
+    /// A box marks the cells it overlaps and no others, and boxes outside
+    /// the grid clamp to its border cells.
+    #[test]
+    fn marked_cells_are_the_ones_under_the_box() {
+        let mut g = Marks::new(Aabb {
+            min: Vec3::ZERO,
+            max: Vec3::splat(256.0),
+        });
+        assert_eq!(g.cells.dims, [256, 256, 256]);
+        g.mark(&Aabb {
+            min: Vec3::new(10.5, 10.5, 10.5),
+            max: Vec3::new(11.5, 10.6, 10.6),
+        });
+        let probe = |x: f32| Aabb {
+            min: Vec3::new(x, 10.2, 10.2),
+            max: Vec3::new(x + 0.1, 10.3, 10.3),
+        };
+        assert!(g.touches(&probe(10.0)));
+        assert!(g.touches(&probe(11.8)));
+        assert!(!g.touches(&probe(12.1)));
+        assert!(!g.touches(&probe(9.5)));
+        g.mark(&Aabb {
+            min: Vec3::splat(300.0),
+            max: Vec3::splat(400.0),
+        });
+        assert!(g.touches(&Aabb {
+            min: Vec3::splat(255.5),
+            max: Vec3::splat(500.0),
+        }));
+        assert!(!g.touches(&Aabb {
+            min: Vec3::splat(200.0),
+            max: Vec3::splat(254.0),
+        }));
+    }
+}
