@@ -6,15 +6,17 @@
 //! bound of its new triangles; `bound` certifies a result: every output
 //! triangle carries a true upper bound on the two-sided Hausdorff distance
 //! between itself and the part of the original surface attributed to it, and
-//! `error_bound` is their maximum; `recertify` certifies a later state of the
-//! same collapse from an earlier certificate, re-measuring only near what
-//! changed (an error search's probes, an LOD chain's rows). `progressive`
+//! `error_bound` is their maximum; `recertify` certifies a state of a
+//! collapse from another state's certificate, re-measuring only near what
+//! changed, and `history` keeps every state of one collapse at hand (an
+//! error search's probes, an LOD chain's rows). `progressive`
 //! records the collapses once as a hierarchy whose every prefix carries a
 //! certified bound, for cuts that move with a slider instead of re-running.
 
 mod attribution;
 pub mod bound;
 pub mod collapse;
+mod history;
 pub mod progressive;
 pub mod projection;
 pub mod quadric;
@@ -33,6 +35,7 @@ pub use recertify::Trace;
 
 use crate::geom::TriMesh;
 use crate::progress::{Cancelled, Progress};
+use history::History;
 
 /// When to stop collapsing.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -71,7 +74,7 @@ impl Simplified {
     }
 }
 
-/// A result with the trace that certifies later states of its collapse.
+/// A result with the trace that certifies other states of its collapse.
 type Certified = (Simplified, Trace);
 
 /// Invalid simplification parameters.
@@ -107,10 +110,10 @@ pub fn simplify(
 }
 
 /// Simplifies `mesh` to every target of an LOD chain in one progressive
-/// collapse: collapses are deterministic and a collapser continues as a fresh
-/// run would, so the count targets (largest first) each equal a fresh run to
-/// their count, and the error targets (smallest first) each search on from
-/// the state the previous one reached, each probe certified from the last
+/// collapse, run forward once with every state at hand (`history`):
+/// collapses are deterministic, so each count target equals a fresh run to
+/// its count, and the error targets (smallest first) each search on from the
+/// state the previous one reached, each probe certified from the nearest
 /// certified state's trace (`recertify`); one original's search structures
 /// certify them all. An error target's result meets its error and is as
 /// deterministic as the rest, but its count may differ by the search's 2 %
@@ -150,28 +153,6 @@ pub fn simplify_chain(
         per_triangle: per_triangle_bounds,
         ..BoundOptions::for_diagonal(diag)
     };
-    // Collapses `s` on down to `target` triangles (or as far as it can go).
-    let collapse = |s: &mut EdgeCollapser, target: usize| -> Result<(), SimplifyError> {
-        progress.stage("collapsing edges");
-        let from = s.triangle_count();
-        let mut cancelled = false;
-        s.run(target, |s, _| {
-            if s.collapses().is_multiple_of(512) {
-                let done =
-                    (from - s.triangle_count()) as f32 / from.saturating_sub(target).max(1) as f32;
-                progress.set_fraction(done);
-                cancelled = progress.is_cancelled();
-                if progress.wants_preview() {
-                    progress.publish(crate::lod::DrawSet {
-                        mesh: s.mesh().0,
-                        ..Default::default()
-                    });
-                }
-            }
-            !cancelled
-        });
-        Ok(progress.check()?)
-    };
     // Count goals by decreasing count, error goals by increasing error.
     let mut counts: Vec<(usize, usize)> = goals
         .iter()
@@ -191,45 +172,42 @@ pub fn simplify_chain(
         // collapses (which run on one thread), for every certificate.
         let mut building = Some(scope.spawn(|| Original::new(mesh)));
         let mut original = None;
-        // A state's certificate, carrying what an earlier state's trace
+        // A state's certificate, carrying what another state's trace
         // proved that still holds (module `recertify`).
         let mut certify =
-            |s: &EdgeCollapser, earlier: Option<&Trace>| -> Result<Certified, SimplifyError> {
+            |h: &History, k: usize, earlier: Option<&Trace>| -> Result<Certified, SimplifyError> {
                 let original = original.get_or_insert_with(|| {
                     let handle = building.take().expect("joined once");
                     handle
                         .join()
                         .unwrap_or_else(|p| std::panic::resume_unwind(p))
                 });
-                let (out, ids) = s.mesh();
+                let (out, ids) = h.mesh_at(k);
                 progress.stage("certifying the error bound");
                 let (certificate, trace) =
                     certify_traced(original, &out, &ids, earlier, &bound_opts, progress)?;
                 let r = Simplified {
                     mesh: out,
                     certificate,
-                    collapses: s.collapses(),
+                    collapses: k,
                 };
                 Ok((r, trace))
             };
-        let start = EdgeCollapser::new(mesh, collapse_opts);
-        let mut state = start.clone();
+        let mut history = History::new(EdgeCollapser::new(mesh, collapse_opts));
         for (i, count) in counts {
-            collapse(&mut state, count)?;
-            results[i] = Some(certify(&state, None)?.0);
+            let k = history.reach(count, progress)?;
+            results[i] = Some(certify(&history, k, None)?.0);
         }
-        let (mut state, mut certified, mut probed) = (start, None, Vec::new());
+        let (mut from, mut certified, mut probed) = (0, None, Vec::new());
         for (i, max_error) in errors {
-            let (r, reached) = to_error(
-                state,
+            let search = Search {
+                from,
                 certified,
                 max_error,
-                &mut probed,
-                collapse,
-                &mut certify,
-            )?;
+            };
+            let (r, k) = to_error(&mut history, search, &mut probed, progress, &mut certify)?;
             results[i] = Some(r.0.clone());
-            (state, certified) = (reached, Some(r));
+            (from, certified) = (k, Some(r));
         }
         Ok::<(), SimplifyError>(())
     })?;
@@ -239,33 +217,44 @@ pub fn simplify_chain(
         .collect())
 }
 
-/// The smallest triangle count whose certified bound is within `max_error`:
-/// halve the count while the bound holds, then bisect. Collapses are
-/// deterministic and a clone of the collapser continues as it would, so each
-/// probe resumes from the last count that held instead of re-running from
-/// the input (the halving adds up to one run), and is certified from that
-/// count's trace. `certified`, where given, is `start`'s certificate within
-/// every smaller error (the previous row of a chain); `probed` holds the
-/// (count, bound) of every probe so far and gains this search's: a count
-/// below `start` that a smaller error's search found over this error starts
-/// the bisection without halving (a chain's rows double their errors, and
-/// the halving's first probe, far from any certified state, is the dearest).
-/// Returns the result with the collapser state that made it, where a coarser
-/// error's search may start.
-fn to_error(
-    start: EdgeCollapser,
+/// Where an error search starts: state `from` of the collapse, with its
+/// certificate where a smaller error's search made it (a chain's previous
+/// row, within every smaller error).
+struct Search {
+    from: usize,
     certified: Option<Certified>,
     max_error: f32,
+}
+
+/// The smallest triangle count whose certified bound is within `max_error`:
+/// halve the count while the bound holds, then bisect. Every probe is a state
+/// of the one collapse `history` holds, certified from the nearest certified
+/// state's trace (`recertify`). `probed` holds the (count, bound) of every
+/// probe so far and gains this search's: a count below the start that a
+/// smaller error's search found over this error starts the bisection without
+/// halving (a chain's rows double their errors, and the halving's first
+/// probe, far from any certified state, is the dearest). Returns the result
+/// and its state, where a coarser error's search may start.
+fn to_error(
+    history: &mut History,
+    search: Search,
     probed: &mut Vec<(usize, f32)>,
-    collapse: impl Fn(&mut EdgeCollapser, usize) -> Result<(), SimplifyError>,
-    mut certify: impl FnMut(&EdgeCollapser, Option<&Trace>) -> Result<Certified, SimplifyError>,
-) -> Result<(Certified, EdgeCollapser), SimplifyError> {
-    let n = start.triangle_count();
-    // `good_state`'s certificate, and whether it is within `max_error`.
-    let (mut known, mut good_state, mut good_n) = (certified, start, n);
+    progress: &Progress,
+    mut certify: impl FnMut(&History, usize, Option<&Trace>) -> Result<Certified, SimplifyError>,
+) -> Result<(Certified, usize), SimplifyError> {
+    let Search {
+        from,
+        certified,
+        max_error,
+    } = search;
+    let n = history.count(from);
+    // The good state's certificate (within `max_error` once `good`), and
+    // the last failed probe's: either may be the nearer to a probe.
+    let (mut known, mut good_k, mut good_n) = (certified, from, n);
     let mut good = known
         .as_ref()
         .is_some_and(|(r, _)| r.error_bound() <= max_error);
+    let mut failed: Option<(usize, Trace)> = None;
     // Halving until a probe fails (or reaches 0), then bisecting from there.
     let known_bad = probed
         .iter()
@@ -286,28 +275,33 @@ fn to_error(
             bisecting = true;
             continue;
         }
-        let mut s = good_state.clone();
-        collapse(&mut s, probe)?;
-        if s.collapses() == good_state.collapses() && good {
+        let k = history.reach(probe, progress)?;
+        if k == good_k && good {
             // Nothing more can collapse: every smaller count gives this mesh.
             break;
         }
-        let (r, trace) = certify(&s, known.as_ref().map(|k| &k.1))?;
+        let nearer = match (&known, &failed) {
+            (_, Some((fk, t))) if fk.abs_diff(k) < good_k.abs_diff(k) => Some(t),
+            (Some((_, t)), _) => Some(t),
+            _ => failed.as_ref().map(|f| &f.1),
+        };
+        let (r, trace) = certify(history, k, nearer)?;
         probed.push((probe, r.error_bound()));
         if r.error_bound() <= max_error {
             good_n = r.mesh.triangles.len().min(probe);
-            (known, good, good_state) = (Some((r, trace)), true, s);
+            (known, good, good_k) = (Some((r, trace)), true, k);
             if !bisecting {
                 probe /= 2;
             }
         } else {
+            failed = Some((k, trace));
             bad_n = probe;
             bisecting = true;
         }
     }
     match known {
-        Some(k) if good => Ok((k, good_state)),
-        _ => Ok((certify(&good_state, None)?, good_state)),
+        Some(c) if good => Ok((c, good_k)),
+        _ => Ok((certify(history, good_k, None)?, good_k)),
     }
 }
 
