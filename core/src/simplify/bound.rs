@@ -496,11 +496,14 @@ pub fn certify_traced(
 ) -> Result<(Certificate, Trace), Cancelled> {
     if let Some(c) = empty(original.mesh, simplified) {
         let rev = vec![(0.0, 0.0, 0); ids.len()];
-        return Ok((c, Trace::new(ids, simplified, &rev, &[], &[])));
+        return Ok((
+            c,
+            Trace::new(original.mesh, ids, simplified, &rev, &[], &[]),
+        ));
     }
     let recertify = earlier.and_then(|e| Recertify::new(e, original.mesh, simplified, ids));
     let (rev, fwd, at_vertex) = certify_sides(original, simplified, recertify, opts, progress)?;
-    let trace = Trace::new(ids, simplified, &rev, &fwd, &at_vertex);
+    let trace = Trace::new(original.mesh, ids, simplified, &rev, &fwd, &at_vertex);
     Ok((certificate(&rev, &fwd), trace))
 }
 

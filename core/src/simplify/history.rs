@@ -24,7 +24,9 @@ pub(super) struct History {
 }
 
 impl History {
+    /// `collapser` has made no collapse yet (state 0 is its start).
     pub fn new(collapser: EdgeCollapser) -> Self {
+        debug_assert_eq!(collapser.collapses(), 0);
         let ever = collapser.arrays().triangles.len();
         // Triangles the collapser dropped before any collapse are dead from the start.
         let mut died = vec![0; ever];
@@ -86,6 +88,7 @@ impl History {
     /// The mesh of state `k` (compacted) and the collapser's id of each of
     /// its triangles, ascending.
     pub fn mesh_at(&self, k: usize) -> (TriMesh, Vec<u32>) {
+        debug_assert!(k < self.counts.len(), "state {k} not reached");
         let k = k as u32;
         let ids: Vec<u32> = (0..self.born.len() as u32)
             .filter(|&t| self.born[t as usize] <= k && k < self.died[t as usize])

@@ -28,6 +28,8 @@ use crate::geom::{Aabb, TriMesh};
 /// What a certificate keeps for certifying other states of its collapse.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Trace {
+    /// The original's box: a trace of another original carries nothing.
+    original: Aabb,
     /// The collapser's id of each triangle of S, ascending.
     ids: Vec<u32>,
     /// Each triangle of S's box.
@@ -43,6 +45,7 @@ pub struct Trace {
 
 impl Trace {
     pub(super) fn new(
+        original: &TriMesh,
         ids: &[u32],
         simplified: &TriMesh,
         reverse: &[Bounds],
@@ -50,6 +53,7 @@ impl Trace {
         at_vertex: &[Nearest],
     ) -> Self {
         Trace {
+            original: Aabb::from_points(&original.positions),
             ids: ids.to_vec(),
             boxes: (0..simplified.triangles.len())
                 .map(|t| triangle_box(&simplified.triangle(t)))
@@ -105,15 +109,21 @@ impl Cells {
 
     /// The cells a box overlaps, clamped to the grid (overlapping boxes
     /// keep overlapping ranges, so the tests stay conservative outside it).
-    fn each(&self, b: &Aabb, mut f: impl FnMut(usize) -> bool) -> bool {
+    fn ranges(&self, b: &Aabb) -> [std::ops::RangeInclusive<usize>; 3] {
         let lo = ((b.min - self.origin) * self.inv_cell).floor().to_array();
         let hi = ((b.max - self.origin) * self.inv_cell).floor().to_array();
-        let [xs, ys, zs] = [0, 1, 2].map(|k| {
+        [0, 1, 2].map(|k| {
             let top = self.dims[k] - 1;
             // NaN and ±∞ clamp to the grid's ends (`as` saturates).
             let c = |x: f32| (x.max(0.0) as usize).min(top);
             c(lo[k])..=c(hi[k])
-        });
+        })
+    }
+
+    /// Calls `f` on each cell a box overlaps while it returns true; false
+    /// where it stopped.
+    fn each(&self, b: &Aabb, mut f: impl FnMut(usize) -> bool) -> bool {
+        let [xs, ys, zs] = self.ranges(b);
         for z in zs {
             for y in ys.clone() {
                 for x in xs.clone() {
@@ -131,16 +141,27 @@ impl Cells {
 struct Marks {
     cells: Cells,
     bits: Vec<u64>,
+    any: bool,
 }
+
+/// Cells a reach may span before it counts as touching a change unread: a
+/// large bound over few changes would otherwise read a large block of the
+/// grid per original triangle.
+const MOST_CELLS: usize = 512;
 
 impl Marks {
     fn new(bounds: Aabb) -> Self {
         let cells = Cells::new(bounds, CELLS);
         let bits = vec![0; cells.len().div_ceil(64)];
-        Marks { cells, bits }
+        Marks {
+            cells,
+            bits,
+            any: false,
+        }
     }
 
     fn mark(&mut self, b: &Aabb) {
+        self.any = true;
         let bits = &mut self.bits;
         self.cells.each(b, |i| {
             bits[i / 64] |= 1 << (i % 64);
@@ -148,7 +169,21 @@ impl Marks {
         });
     }
 
+    /// Whether a box overlaps a marked cell (or spans too many to read).
     fn touches(&self, b: &Aabb) -> bool {
+        if !self.any {
+            return false;
+        }
+        if self
+            .cells
+            .ranges(b)
+            .iter()
+            .map(|r| r.clone().count())
+            .product::<usize>()
+            > MOST_CELLS
+        {
+            return true;
+        }
         !self
             .cells
             .each(b, |i| self.bits[i / 64] & (1 << (i % 64)) == 0)
@@ -171,26 +206,32 @@ fn grown(b: Aabb, d: f32) -> Aabb {
 impl Recertify {
     /// `None` where `earlier` is of another original.
     pub fn new(earlier: &Trace, original: &TriMesh, later: &TriMesh, ids: &[u32]) -> Option<Self> {
+        let bounds = Aabb::from_points(&original.positions);
         if earlier.forward.len() != original.triangles.len()
             || earlier.at_vertex.len() != original.positions.len()
+            || earlier.original != bounds
         {
             return None;
         }
         // Both id lists ascend: one merge finds what stayed, went and came.
+        // A triangle stays where its id and its box agree (a trace of another
+        // collapse of the same original shares ids, not triangles).
         let mut stayed = vec![None; earlier.ids.len()];
         let mut reverse = vec![None; ids.len()];
-        let mut changes = Marks::new(Aabb::from_points(&original.positions));
+        let mut changes = Marks::new(bounds);
         let (mut i, mut j) = (0, 0);
         while i < earlier.ids.len() || j < ids.len() {
             match (earlier.ids.get(i), ids.get(j)) {
-                (Some(a), Some(b)) if a == b => {
+                (Some(a), Some(b))
+                    if a == b && earlier.boxes[i] == triangle_box(&later.triangle(j)) =>
+                {
                     let (u, l) = earlier.reverse[i];
                     reverse[j] = Some((u, l, 0));
                     stayed[i] = Some(j as u32);
                     i += 1;
                     j += 1;
                 }
-                (Some(a), b) if b.is_none_or(|b| a < b) => {
+                (Some(a), b) if b.is_none_or(|b| a <= b) => {
                     changes.mark(&earlier.boxes[i]);
                     i += 1;
                 }
@@ -331,14 +372,20 @@ mod tests {
         }
     }
 
-    /// A box marks the cells it overlaps and no others, and boxes outside
-    /// the grid clamp to its border cells.
+    /// A box marks the cells it overlaps and no others, boxes outside the
+    /// grid clamp to its border cells, and a box over more cells than are
+    /// read counts as touching (unless nothing is marked).
     #[test]
     fn marked_cells_are_the_ones_under_the_box() {
         let mut g = Marks::new(Aabb {
             min: Vec3::ZERO,
             max: Vec3::splat(256.0),
         });
+        let everything = Aabb {
+            min: Vec3::ZERO,
+            max: Vec3::splat(256.0),
+        };
+        assert!(!g.touches(&everything));
         assert_eq!(g.cells.dims, [256, 256, 256]);
         g.mark(&Aabb {
             min: Vec3::new(10.5, 10.5, 10.5),
@@ -361,8 +408,12 @@ mod tests {
             max: Vec3::splat(500.0),
         }));
         assert!(!g.touches(&Aabb {
-            min: Vec3::splat(200.0),
+            min: Vec3::splat(248.0),
             max: Vec3::splat(254.0),
+        }));
+        assert!(g.touches(&Aabb {
+            min: Vec3::splat(100.0),
+            max: Vec3::splat(120.0),
         }));
     }
 }
