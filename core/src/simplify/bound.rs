@@ -33,7 +33,7 @@ use rayon::prelude::*;
 use super::projection::Projection;
 use super::recertify::{Recertify, Trace};
 use crate::distance::MeshDistance;
-use crate::geom::TriMesh;
+use crate::geom::{Aabb, TriMesh};
 use crate::progress::{Cancelled, Progress};
 
 /// How hard branch and bound works.
@@ -334,21 +334,6 @@ impl Tracker<'_> {
 }
 
 impl<'a> Side<'a> {
-    /// `at_vertex`: exact distance and nearest triangle of `to` per vertex of `from`.
-    fn new(
-        from: &'a TriMesh,
-        to: &'a MeshDistance<'a>,
-        projection: Option<&'a Projection<'a>>,
-        at_vertex: Vec<(f32, u32)>,
-    ) -> Self {
-        Side {
-            from,
-            to,
-            at_vertex,
-            projection,
-        }
-    }
-
     fn at(&self, t: usize) -> [(f32, u32); 3] {
         self.from.triangles[t].map(|v| self.at_vertex[v as usize])
     }
@@ -405,6 +390,7 @@ impl<'a> Side<'a> {
 /// target certifies a dozen probes, and the dragon's take 0.3 s to build.
 pub struct Original<'a> {
     mesh: &'a TriMesh,
+    bounds: Aabb,
     distance: MeshDistance<'a>,
     projection: Projection<'a>,
 }
@@ -413,6 +399,7 @@ impl<'a> Original<'a> {
     pub fn new(mesh: &'a TriMesh) -> Self {
         Original {
             mesh,
+            bounds: mesh.bounds(),
             distance: MeshDistance::new(mesh),
             projection: Projection::new(mesh),
         }
@@ -420,6 +407,10 @@ impl<'a> Original<'a> {
 
     pub fn mesh(&self) -> &'a TriMesh {
         self.mesh
+    }
+
+    pub fn bounds(&self) -> Aabb {
+        self.bounds
     }
 
     /// Nearest-triangle distances to the original.
@@ -496,15 +487,14 @@ pub fn certify_traced(
 ) -> Result<(Certificate, Trace), Cancelled> {
     if let Some(c) = empty(original.mesh, simplified) {
         let rev = vec![(0.0, 0.0, 0); ids.len()];
-        return Ok((
-            c,
-            Trace::new(original.mesh, ids, simplified, &rev, &[], &[]),
-        ));
+        let trace = Trace::new(original, ids, simplified, &rev, Vec::new(), Vec::new());
+        return Ok((c, trace));
     }
-    let recertify = earlier.and_then(|e| Recertify::new(e, original.mesh, simplified, ids));
+    let recertify = earlier.and_then(|e| Recertify::new(e, original, simplified, ids));
     let (rev, fwd, at_vertex) = certify_sides(original, simplified, recertify, opts, progress)?;
-    let trace = Trace::new(original.mesh, ids, simplified, &rev, &fwd, &at_vertex);
-    Ok((certificate(&rev, &fwd), trace))
+    let certificate = certificate(&rev, &fwd);
+    let trace = Trace::new(original, ids, simplified, &rev, fwd, at_vertex);
+    Ok((certificate, trace))
 }
 
 /// Both directions' per-triangle bounds, and the original's vertices' exact
@@ -520,6 +510,7 @@ fn certify_sides(
         mesh: original,
         distance: to_o,
         projection,
+        ..
     } = original;
     let n = simplified.triangles.len();
     let enough_above = |l: f32| {
@@ -556,8 +547,18 @@ fn certify_sides(
         &original.positions,
         recertify.as_ref().map(|r| r.at_vertex.as_slice()),
     );
-    let rev = Side::new(simplified, to_o, Some(projection), rev_at);
-    let fwd = Side::new(original, &to_s, None, fwd_at);
+    let rev = Side {
+        from: simplified,
+        to: to_o,
+        at_vertex: rev_at,
+        projection: Some(projection),
+    };
+    let fwd = Side {
+        from: original,
+        to: &to_s,
+        at_vertex: fwd_at,
+        projection: None,
+    };
     progress.check()?;
     // The largest exact vertex distance is a lower bound of the result: refining a
     // triangle far below it cannot change the maximum, so the absolute tolerance

@@ -22,7 +22,7 @@
 use glam::Vec3;
 use rayon::prelude::*;
 
-use super::bound::{Bounds, Nearest};
+use super::bound::{Bounds, Nearest, Original};
 use crate::geom::{Aabb, TriMesh};
 
 /// What a certificate keeps for certifying other states of its collapse.
@@ -45,22 +45,22 @@ pub struct Trace {
 
 impl Trace {
     pub(super) fn new(
-        original: &TriMesh,
+        original: &Original,
         ids: &[u32],
         simplified: &TriMesh,
         reverse: &[Bounds],
-        forward: &[Bounds],
-        at_vertex: &[Nearest],
+        forward: Vec<Bounds>,
+        at_vertex: Vec<Nearest>,
     ) -> Self {
         Trace {
-            original: Aabb::from_points(&original.positions),
+            original: original.bounds(),
             ids: ids.to_vec(),
             boxes: (0..simplified.triangles.len())
                 .map(|t| triangle_box(&simplified.triangle(t)))
                 .collect(),
             reverse: reverse.iter().map(|b| (b.0, b.1)).collect(),
-            forward: forward.to_vec(),
-            at_vertex: at_vertex.to_vec(),
+            forward,
+            at_vertex,
         }
     }
 }
@@ -205,8 +205,9 @@ fn grown(b: Aabb, d: f32) -> Aabb {
 
 impl Recertify {
     /// `None` where `earlier` is of another original.
-    pub fn new(earlier: &Trace, original: &TriMesh, later: &TriMesh, ids: &[u32]) -> Option<Self> {
-        let bounds = Aabb::from_points(&original.positions);
+    pub fn new(earlier: &Trace, original: &Original, later: &TriMesh, ids: &[u32]) -> Option<Self> {
+        let bounds = original.bounds();
+        let original = original.mesh();
         if earlier.forward.len() != original.triangles.len()
             || earlier.at_vertex.len() != original.positions.len()
             || earlier.original != bounds
@@ -327,7 +328,7 @@ mod tests {
         for (first, step) in [(n / 8, 0.96), (n / 8, 0.5), (n / 100, 0.96), (n / 100, 0.8)] {
             let (a, b) = (state(first), state((first as f32 * step) as usize));
             for ((_, _, trace), (s, ids, _)) in [(&a, &b), (&b, &a)] {
-                let re = Recertify::new(trace, &mesh, s, ids).expect("same original");
+                let re = Recertify::new(trace, &original, s, ids).expect("same original");
                 let to_s = MeshDistance::new(s);
                 let carried = re.forward.iter().flatten().count();
                 if step > 0.9 && first == n / 8 {
