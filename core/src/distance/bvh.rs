@@ -104,13 +104,24 @@ impl Bvh {
         start: (f32, u32),
         dist: impl Fn(u32) -> f32,
     ) -> Option<(f32, u32)> {
+        self.nearest_by(start, |b| b.distance(p), dist)
+    }
+
+    /// [`Bvh::nearest_from`] in the units of `box_dist` (the distance to a
+    /// box, or anything that grows with it: squares save the roots).
+    pub fn nearest_by(
+        &self,
+        start: (f32, u32),
+        box_dist: impl Fn(&Aabb) -> f32,
+        dist: impl Fn(u32) -> f32,
+    ) -> Option<(f32, u32)> {
         let mut best = start;
         let mut stack: [u32; 64] = [0; 64];
         let mut top = usize::from(!self.nodes.is_empty());
         while top > 0 {
             top -= 1;
             let node = &self.nodes[stack[top] as usize];
-            if node.bounds.distance(p) >= best.0 {
+            if box_dist(&node.bounds) >= best.0 {
                 continue;
             }
             if node.count > 0 {
@@ -125,8 +136,8 @@ impl Bvh {
             }
             let (l, r) = (stack[top] + 1, node.start_or_right);
             let (dl, dr) = (
-                self.nodes[l as usize].bounds.distance(p),
-                self.nodes[r as usize].bounds.distance(p),
+                box_dist(&self.nodes[l as usize].bounds),
+                box_dist(&self.nodes[r as usize].bounds),
             );
             // Push the farther child first so the nearer one is searched first.
             let (near, far) = if dl <= dr { (l, r) } else { (r, l) };
@@ -144,27 +155,39 @@ impl Bvh {
 pub struct MeshDistance<'a> {
     pub(crate) mesh: &'a TriMesh,
     pub(crate) bvh: Bvh,
+    /// Each triangle's corners: one read per triangle tested, not four.
+    corners: Vec<[Vec3; 3]>,
 }
 
 impl<'a> MeshDistance<'a> {
     pub fn new(mesh: &'a TriMesh) -> Self {
-        let boxes: Vec<Aabb> = (0..mesh.triangles.len())
-            .map(|t| Aabb::from_points(&mesh.triangle(t)))
+        let corners: Vec<[Vec3; 3]> = (0..mesh.triangles.len())
+            .map(|t| mesh.triangle(t))
             .collect();
+        let boxes: Vec<Aabb> = corners.iter().map(Aabb::from_points).collect();
         Self {
             mesh,
             bvh: Bvh::build(&boxes),
+            corners,
         }
     }
 
     /// Closest surface point and its triangle; `None` for an empty mesh.
     pub fn closest(&self, p: Vec3) -> Option<(Vec3, u32)> {
-        let (_, t) = self.bvh.nearest(p, |t| {
-            let [a, b, c] = self.mesh.triangle(t as usize);
-            closest_point_on_triangle(p, a, b, c).distance(p)
-        })?;
-        let [a, b, c] = self.mesh.triangle(t as usize);
+        let (_, t) = self.nearest_squared(p, (f32::INFINITY, u32::MAX))?;
+        let [a, b, c] = self.corners[t as usize];
         Some((closest_point_on_triangle(p, a, b, c), t))
+    }
+
+    /// The nearest triangle by squared distance, from a known one.
+    fn nearest_squared(&self, p: Vec3, start: (f32, u32)) -> Option<(f32, u32)> {
+        let d2 = |t: u32| self.triangle_distance_squared(p, t);
+        self.bvh.nearest_by(start, |b| b.distance_squared(p), d2)
+    }
+
+    fn triangle_distance_squared(&self, p: Vec3, t: u32) -> f32 {
+        let [a, b, c] = self.corners[t as usize];
+        closest_point_on_triangle(p, a, b, c).distance_squared(p)
     }
 
     pub fn distance(&self, p: Vec3) -> f32 {
@@ -174,28 +197,24 @@ impl<'a> MeshDistance<'a> {
 
     /// Exact distance from `p` to triangle `t` of the mesh.
     pub fn triangle_distance(&self, p: Vec3, t: u32) -> f32 {
-        let [a, b, c] = self.mesh.triangle(t as usize);
-        closest_point_on_triangle(p, a, b, c).distance(p)
+        self.triangle_distance_squared(p, t).sqrt()
     }
 
     /// Distance to the surface and the nearest triangle (`u32::MAX` when empty).
     pub fn nearest(&self, p: Vec3) -> (f32, u32) {
-        self.bvh
-            .nearest(p, |t| self.triangle_distance(p, t))
-            .unwrap_or((f32::INFINITY, u32::MAX))
+        self.nearest_near(p, u32::MAX)
     }
 
     /// [`MeshDistance::nearest`] searched from triangle `hint` (a neighbour's
     /// nearest triangle is usually near).
     pub fn nearest_near(&self, p: Vec3, hint: u32) -> (f32, u32) {
-        let start = if (hint as usize) < self.mesh.triangles.len() {
-            (self.triangle_distance(p, hint), hint)
+        let start = if (hint as usize) < self.corners.len() {
+            (self.triangle_distance_squared(p, hint), hint)
         } else {
             (f32::INFINITY, u32::MAX)
         };
-        self.bvh
-            .nearest_from(p, start, |t| self.triangle_distance(p, t))
-            .unwrap_or((f32::INFINITY, u32::MAX))
+        self.nearest_squared(p, start)
+            .map_or((f32::INFINITY, u32::MAX), |(d2, t)| (d2.sqrt(), t))
     }
 }
 

@@ -94,8 +94,15 @@ impl Aabb {
 
     /// Distance from `p` to the box (0 inside): a lower bound for anything inside it.
     pub fn distance(&self, p: Vec3) -> f32 {
-        let d = (self.min - p).max(p - self.max).max(Vec3::ZERO);
-        d.length()
+        self.distance_squared(p).sqrt()
+    }
+
+    /// Its square, for comparisons that need no root.
+    pub fn distance_squared(&self, p: Vec3) -> f32 {
+        (self.min - p)
+            .max(p - self.max)
+            .max(Vec3::ZERO)
+            .length_squared()
     }
 }
 
