@@ -25,7 +25,7 @@
 
 use std::cmp::Ordering;
 use std::collections::BinaryHeap;
-use std::sync::atomic::{AtomicUsize, Ordering as AtomicOrdering};
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering as AtomicOrdering};
 
 use glam::Vec3;
 use rayon::prelude::*;
@@ -307,11 +307,14 @@ struct Side<'a> {
     projection: Option<&'a Projection<'a>>,
 }
 
-/// Progress over the first pass, and the cancel flag checked per triangle.
+/// Progress over the first pass, and the cancel flag checked per triangle;
+/// the pass also ends once a triangle's exact distance exceeds `over`.
 struct Tracker<'a> {
     progress: &'a Progress,
     done: AtomicUsize,
     total: usize,
+    over: f32,
+    exceeded: AtomicBool,
 }
 
 /// Triangles a worker counts before it adds them to the shared count: one
@@ -320,7 +323,8 @@ struct Tracker<'a> {
 const TICKS: u32 = 256;
 
 impl Tracker<'_> {
-    /// Counts one triangle on a worker's `local` count; false once cancelled.
+    /// Counts one triangle on a worker's `local` count; false once cancelled
+    /// or over.
     fn tick(&self, local: &mut u32) -> bool {
         *local += 1;
         if *local == TICKS {
@@ -329,13 +333,28 @@ impl Tracker<'_> {
             self.progress
                 .set_fraction((d + TICKS as usize) as f32 / self.total.max(1) as f32);
         }
-        !self.progress.is_cancelled()
+        !self.progress.is_cancelled() && !self.exceeded.load(AtomicOrdering::Relaxed)
+    }
+
+    /// Notes a triangle's lower bound.
+    fn found(&self, lower: f32) {
+        if lower > self.over {
+            self.exceeded.store(true, AtomicOrdering::Relaxed);
+        }
     }
 }
 
 impl<'a> Side<'a> {
     fn at(&self, t: usize) -> [(f32, u32); 3] {
         self.from.triangles[t].map(|v| self.at_vertex[v as usize])
+    }
+
+    /// The largest distance of a vertex of a triangle.
+    fn corner_lower(&self) -> f32 {
+        (0..self.from.triangles.len())
+            .into_par_iter()
+            .map(|t| self.at(t).iter().fold(0.0, |m, a| a.0.max(m)))
+            .reduce(|| 0.0, f32::max)
     }
 
     /// For every triangle: its bound, the largest exact distance found, and the
@@ -361,7 +380,9 @@ impl<'a> Side<'a> {
                     }
                     let at = self.at(t);
                     let tri = self.from.triangle(t);
-                    max_distance_bound(tri, at, (self.to, self.projection), opts, enough)
+                    let b = max_distance_bound(tri, at, (self.to, self.projection), opts, enough);
+                    track.found(b.1);
+                    b
                 },
             )
             .collect()
@@ -453,8 +474,11 @@ pub fn certify_against(
     if let Some(c) = empty(original.mesh, simplified) {
         return Ok(c);
     }
-    let (rev, fwd, _) = certify_sides(original, simplified, None, opts, progress)?;
-    Ok(certificate(&rev, &fwd))
+    match certify_sides(original, simplified, None, opts, f32::INFINITY, progress) {
+        Ok((rev, fwd, _)) => Ok(certificate(&rev, &fwd)),
+        Err(Stop::Cancelled) => Err(Cancelled),
+        Err(Stop::Over(_)) => unreachable!("no distance exceeds infinity"),
+    }
 }
 
 /// The certificate where either surface is empty: nothing of S leaves the
@@ -473,28 +497,63 @@ fn empty(original: &TriMesh, simplified: &TriMesh) -> Option<Certificate> {
     })
 }
 
+/// What certifying a state of a collapse found.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Traced {
+    /// Its certificate, and the trace that certifies other states.
+    Certified(Certificate, Trace),
+    /// Over the `over` it was asked about: an exact distance beyond it was
+    /// found (the certificate would exceed it too, so an error search needs
+    /// no more); the largest vertex distance where that told, else `over`.
+    Over(f32),
+}
+
 /// Certifies a state of an edge collapse (`ids`: the collapser's id of each
 /// triangle of `simplified`, ascending) and keeps the trace that certifies
 /// other states of the same collapse; with `earlier`, the trace of another
 /// state, what it proved that still holds carries (module `recertify`).
+/// Stops as soon as an exact distance exceeds `over` (∞: never): an error
+/// search's failed probe mostly costs the vertices' distances alone.
 pub fn certify_traced(
     original: &Original,
     simplified: &TriMesh,
     ids: &[u32],
     earlier: Option<&Trace>,
     opts: &BoundOptions,
+    over: f32,
     progress: &Progress,
-) -> Result<(Certificate, Trace), Cancelled> {
+) -> Result<Traced, Cancelled> {
     if let Some(c) = empty(original.mesh, simplified) {
+        if c.error_bound() > over {
+            return Ok(Traced::Over(c.error_bound()));
+        }
         let rev = vec![(0.0, 0.0, 0); ids.len()];
         let trace = Trace::new(original, ids, simplified, &rev, Vec::new(), Vec::new());
-        return Ok((c, trace));
+        return Ok(Traced::Certified(c, trace));
     }
     let recertify = earlier.and_then(|e| Recertify::new(e, original, simplified, ids));
-    let (rev, fwd, at_vertex) = certify_sides(original, simplified, recertify, opts, progress)?;
-    let certificate = certificate(&rev, &fwd);
-    let trace = Trace::new(original, ids, simplified, &rev, fwd, at_vertex);
-    Ok((certificate, trace))
+    match certify_sides(original, simplified, recertify, opts, over, progress) {
+        Ok((rev, fwd, at_vertex)) => {
+            let certificate = certificate(&rev, &fwd);
+            let trace = Trace::new(original, ids, simplified, &rev, fwd, at_vertex);
+            Ok(Traced::Certified(certificate, trace))
+        }
+        Err(Stop::Over(lower)) => Ok(Traced::Over(lower)),
+        Err(Stop::Cancelled) => Err(Cancelled),
+    }
+}
+
+/// Why certifying stopped early.
+enum Stop {
+    Cancelled,
+    /// An exact distance (a lower bound of the result) over the limit.
+    Over(f32),
+}
+
+impl From<Cancelled> for Stop {
+    fn from(_: Cancelled) -> Self {
+        Stop::Cancelled
+    }
 }
 
 /// Both directions' per-triangle bounds, and the original's vertices' exact
@@ -504,8 +563,9 @@ fn certify_sides(
     simplified: &TriMesh,
     recertify: Option<Recertify>,
     opts: &BoundOptions,
+    over: f32,
     progress: &Progress,
-) -> Result<(SideBounds, SideBounds, Vec<Nearest>), Cancelled> {
+) -> Result<(SideBounds, SideBounds, Vec<Nearest>), Stop> {
     let Original {
         mesh: original,
         distance: to_o,
@@ -569,6 +629,17 @@ fn certify_sides(
         .chain(&fwd.at_vertex)
         .map(|x| x.0)
         .fold(recertify.as_ref().map_or(0.0, |r| r.lower()), f32::max);
+    // Only a vertex of a triangle counts against `over` (a point of the
+    // input lies in no triangle, so no triangle's bound covers it).
+    if lower > over {
+        let reached = rev
+            .corner_lower()
+            .max(fwd.corner_lower())
+            .max(recertify.as_ref().map_or(0.0, |r| r.lower()));
+        if reached > over {
+            return Err(Stop::Over(reached));
+        }
+    }
     let opts = BoundOptions {
         abs_tol: opts.abs_tol.max(opts.rel_tol * lower),
         ..*opts
@@ -585,6 +656,8 @@ fn certify_sides(
         progress,
         done: AtomicUsize::new(0),
         total: fresh(rev_known, n) + fresh(fwd_known, original.triangles.len()),
+        over,
+        exceeded: AtomicBool::new(false),
     };
     let mut reverse = rev.bounds(&opts, enough_above(lower), &track, rev_known);
     let mut forward = fwd.bounds(&opts, enough_above(lower), &track, fwd_known);
@@ -595,6 +668,11 @@ fn certify_sides(
         .chain(&forward)
         .map(|x| x.1)
         .fold(lower, f32::max);
+    if found > over {
+        // Which triangle stopped the pass depends on the workers' timing:
+        // only "over `over`" is the same on any number of threads.
+        return Err(Stop::Over(over));
+    }
     rev.refine(&mut reverse, &opts, enough_above(found), &track);
     fwd.refine(&mut forward, &opts, enough_above(found), &track);
     progress.check()?;
@@ -669,6 +747,43 @@ mod tests {
             upper < single[0].min(single[1]),
             "cut {upper} vs single {single:?}"
         );
+    }
+
+    /// Asked whether a state is over a limit, certifying stops early only
+    /// where an exact distance proves the state over it (so its certificate
+    /// is over it too); otherwise it gives the full certificate, unchanged.
+    #[test]
+    fn an_early_stop_is_proven_over() {
+        use crate::simplify::{CollapseOptions, EdgeCollapser};
+        let mesh = crate::builtins::torus(1.0, 0.35, 96, 40);
+        let original = Original::new(&mesh);
+        let opts = BoundOptions::for_diagonal(mesh.bounds().diagonal());
+        let n = mesh.triangles.len();
+        let mut stopped = 0;
+        for count in [n / 10, n / 40, 120] {
+            let mut collapser = EdgeCollapser::new(&mesh, CollapseOptions::default());
+            collapser.run(count, |_, _| true);
+            let (s, ids) = collapser.mesh();
+            let p = Progress::new();
+            let certify = |over| certify_traced(&original, &s, &ids, None, &opts, over, &p);
+            let Ok(Traced::Certified(full, _)) = certify(f32::INFINITY) else {
+                panic!("no limit, no stop")
+            };
+            let b = full.error_bound();
+            for over in [0.3 * b, 0.9 * b, 0.99 * b, b] {
+                match certify(over).unwrap() {
+                    Traced::Over(lower) => {
+                        assert!(
+                            over < b && over <= lower && lower <= b,
+                            "{over} {lower} {b}"
+                        );
+                        stopped += 1;
+                    }
+                    Traced::Certified(c, _) => assert_eq!(c, full, "{count}: {over}"),
+                }
+            }
+        }
+        assert!(stopped >= 3, "{stopped} early stops");
     }
 
     /// A coarse sphere against a fine one: the bound holds against dense

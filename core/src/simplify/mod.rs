@@ -25,7 +25,7 @@ pub mod recertify;
 pub mod step_bounds;
 
 pub use bound::{
-    BoundOptions, Certificate, Original, certify, certify_against, certify_traced,
+    BoundOptions, Certificate, Original, Traced, certify, certify_against, certify_traced,
     certify_with_progress,
 };
 pub use collapse::{
@@ -76,6 +76,25 @@ impl Simplified {
 
 /// A result with the trace that certifies other states of its collapse.
 type Certified = (Simplified, Trace);
+
+/// A probe of an error search: certified, or an exact distance over the
+/// error (its certificate would be over too), all a failed probe needs.
+// One per probe, moved once: boxing the result buys nothing.
+#[allow(clippy::large_enum_variant)]
+enum Verdict {
+    Certified(Certified),
+    Over(f32),
+}
+
+impl Verdict {
+    /// The certificate of a state certified with no limit to be over.
+    fn certified(self) -> Certified {
+        match self {
+            Verdict::Certified(c) => c,
+            Verdict::Over(lower) => unreachable!("{lower} is over no limit"),
+        }
+    }
+}
 
 /// Invalid simplification parameters.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -173,30 +192,35 @@ pub fn simplify_chain(
         let mut building = Some(scope.spawn(|| Original::new(mesh)));
         let mut original = None;
         // A state's certificate, carrying what another state's trace
-        // proved that still holds (module `recertify`).
-        let mut certify =
-            |h: &History, k: usize, earlier: Option<&Trace>| -> Result<Certified, SimplifyError> {
-                let original = original.get_or_insert_with(|| {
-                    let handle = building.take().expect("joined once");
-                    handle
-                        .join()
-                        .unwrap_or_else(|p| std::panic::resume_unwind(p))
-                });
-                let (out, ids) = h.mesh_at(k);
-                progress.stage("certifying the error bound");
-                let (certificate, trace) =
-                    certify_traced(original, &out, &ids, earlier, &bound_opts, progress)?;
-                let r = Simplified {
-                    mesh: out,
-                    certificate,
-                    collapses: k,
-                };
-                Ok((r, trace))
-            };
+        // proved that still holds (module `recertify`), or an exact distance
+        // over `over` that ends it early.
+        let mut certify = |h: &History, k: usize, earlier: Option<&Trace>, over: f32| {
+            let original = original.get_or_insert_with(|| {
+                let handle = building.take().expect("joined once");
+                handle
+                    .join()
+                    .unwrap_or_else(|p| std::panic::resume_unwind(p))
+            });
+            let (out, ids) = h.mesh_at(k);
+            progress.stage("certifying the error bound");
+            let traced =
+                certify_traced(original, &out, &ids, earlier, &bound_opts, over, progress)?;
+            Ok(match traced {
+                Traced::Certified(certificate, trace) => {
+                    let r = Simplified {
+                        mesh: out,
+                        certificate,
+                        collapses: k,
+                    };
+                    Verdict::Certified((r, trace))
+                }
+                Traced::Over(lower) => Verdict::Over(lower),
+            })
+        };
         let mut history = History::new(EdgeCollapser::new(mesh, collapse_opts));
         for (i, count) in counts {
             let k = history.reach(count, progress)?;
-            results[i] = Some(certify(&history, k, None)?.0);
+            results[i] = Some(certify(&history, k, None, f32::INFINITY)?.certified().0);
         }
         let (mut from, mut certified, mut probed) = (0, None, Vec::new());
         for (i, max_error) in errors {
@@ -240,7 +264,7 @@ fn to_error(
     search: Search,
     probed: &mut Vec<(usize, f32)>,
     progress: &Progress,
-    mut certify: impl FnMut(&History, usize, Option<&Trace>) -> Result<Certified, SimplifyError>,
+    mut certify: impl FnMut(&History, usize, Option<&Trace>, f32) -> Result<Verdict, SimplifyError>,
 ) -> Result<(Certified, usize), SimplifyError> {
     let Search {
         from,
@@ -285,23 +309,35 @@ fn to_error(
             (Some((_, t)), _) => Some(t),
             _ => failed.as_ref().map(|f| &f.1),
         };
-        let (r, trace) = certify(history, k, nearer)?;
-        probed.push((probe, r.error_bound()));
-        if r.error_bound() <= max_error {
-            good_n = r.mesh.triangles.len().min(probe);
-            (known, good, good_k) = (Some((r, trace)), true, k);
-            if !bisecting {
-                probe /= 2;
+        match certify(history, k, nearer, max_error)? {
+            Verdict::Certified((r, trace)) if r.error_bound() <= max_error => {
+                probed.push((probe, r.error_bound()));
+                good_n = r.mesh.triangles.len().min(probe);
+                (known, good, good_k) = (Some((r, trace)), true, k);
+                if !bisecting {
+                    probe /= 2;
+                }
             }
-        } else {
-            failed = Some((k, trace));
-            bad_n = probe;
-            bisecting = true;
+            over => {
+                let lower = match over {
+                    Verdict::Certified((r, trace)) => {
+                        failed = Some((k, trace));
+                        r.error_bound()
+                    }
+                    Verdict::Over(lower) => lower,
+                };
+                probed.push((probe, lower));
+                bad_n = probe;
+                bisecting = true;
+            }
         }
     }
     match known {
         Some(c) if good => Ok((c, good_k)),
-        _ => Ok((certify(history, good_k, None)?, good_k)),
+        _ => Ok((
+            certify(history, good_k, None, f32::INFINITY)?.certified(),
+            good_k,
+        )),
     }
 }
 

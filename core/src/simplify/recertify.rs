@@ -301,8 +301,31 @@ mod tests {
     use crate::distance::{MeshDistance, SamplingOptions, hausdorff_mesh_mesh};
     use crate::progress::Progress;
     use crate::simplify::{
-        BoundOptions, CollapseOptions, EdgeCollapser, Original, certify_against, certify_traced,
+        BoundOptions, Certificate, CollapseOptions, EdgeCollapser, Original, Traced,
+        certify_against, certify_traced,
     };
+
+    /// A certificate asked about no limit, and its trace.
+    fn certified(
+        original: &Original,
+        s: &TriMesh,
+        ids: &[u32],
+        earlier: Option<&Trace>,
+        opts: &BoundOptions,
+    ) -> (Certificate, Trace) {
+        match certify_traced(
+            original,
+            s,
+            ids,
+            earlier,
+            opts,
+            f32::INFINITY,
+            &Progress::new(),
+        ) {
+            Ok(Traced::Certified(c, t)) => (c, t),
+            other => panic!("{other:?}"),
+        }
+    }
 
     /// Along one collapse, between a certified state and one 4 %, 20 % or
     /// 50 % further, either way: what carries is what a fresh measurement of
@@ -319,8 +342,7 @@ mod tests {
             let mut collapser = EdgeCollapser::new(&mesh, CollapseOptions::default());
             collapser.run(count, |_, _| true);
             let (s, ids) = collapser.mesh();
-            let (_, trace) =
-                certify_traced(&original, &s, &ids, None, &opts, &Progress::new()).unwrap();
+            let (_, trace) = certified(&original, &s, &ids, None, &opts);
             (s, ids, trace)
         };
         let n = mesh.triangles.len();
@@ -354,15 +376,13 @@ mod tests {
                         assert!(*l <= *u);
                     }
                 }
-                let p = Progress::new();
-                let (recertified, traced) =
-                    certify_traced(&original, s, ids, Some(trace), &opts, &p).unwrap();
+                let (recertified, traced) = certified(&original, s, ids, Some(trace), &opts);
                 // Every vertex's distance, carried or searched afresh, is exact.
                 for (v, (d, near)) in traced.at_vertex.iter().enumerate() {
                     assert_eq!(*d, to_s.nearest(mesh.positions[v]).0, "vertex {v}");
                     assert_eq!(*d, to_s.triangle_distance(mesh.positions[v], *near));
                 }
-                let fresh = certify_against(&original, s, &opts, &p).unwrap();
+                let fresh = certify_against(&original, s, &opts, &Progress::new()).unwrap();
                 let sampled =
                     hausdorff_mesh_mesh(&mesh, s, &SamplingOptions::default()).two_sided();
                 let (r, f) = (recertified.error_bound(), fresh.error_bound());
