@@ -253,8 +253,10 @@ struct Search {
 /// The smallest triangle count whose certified bound is within `max_error`:
 /// halve the count while the bound holds, then bisect. Every probe is a state
 /// of the one collapse `history` holds, certified from the nearest certified
-/// state's trace (`recertify`). `probed` holds the (count, bound) of every
-/// probe so far and gains this search's: a count below the start that a
+/// state's trace (`recertify`); a probe that fails stops at the first exact
+/// distance over `max_error`. `probed` holds the (count, bound) of every
+/// probe so far (a failed one's: a lower bound of it) and gains this
+/// search's: a count below the start that a
 /// smaller error's search found over this error starts the bisection without
 /// halving (a chain's rows double their errors, and the halving's first
 /// probe, far from any certified state, is the dearest). Returns the result
