@@ -414,15 +414,23 @@ pub struct Original<'a> {
     bounds: Aabb,
     distance: MeshDistance<'a>,
     projection: Projection<'a>,
+    /// Per vertex: whether a triangle has it (a point of the input has none,
+    /// and no triangle's bound covers it).
+    on_surface: Vec<bool>,
 }
 
 impl<'a> Original<'a> {
     pub fn new(mesh: &'a TriMesh) -> Self {
+        let mut on_surface = vec![false; mesh.positions.len()];
+        for &v in mesh.triangles.iter().flatten() {
+            on_surface[v as usize] = true;
+        }
         Original {
             mesh,
             bounds: mesh.bounds(),
             distance: MeshDistance::new(mesh),
             projection: Projection::new(mesh),
+            on_surface,
         }
     }
 
@@ -504,7 +512,8 @@ pub enum Traced {
     Certified(Certificate, Trace),
     /// Over the `over` it was asked about: an exact distance beyond it was
     /// found (the certificate would exceed it too, so an error search needs
-    /// no more); the largest vertex distance where that told, else `over`.
+    /// no more); the largest vertex distance of S where that told, else
+    /// `over`.
     Over(f32),
 }
 
@@ -570,6 +579,7 @@ fn certify_sides(
         mesh: original,
         distance: to_o,
         projection,
+        on_surface,
         ..
     } = original;
     let n = simplified.triangles.len();
@@ -585,11 +595,20 @@ fn certify_sides(
     // of vertices are searched in order, each from its predecessor's nearest
     // triangle (files list neighbours together): a good first guess prunes
     // the search, and chunks keep the result the same on any number of
-    // threads.
-    let nearest = |to: &MeshDistance, p: &[Vec3], known: Option<&[Option<Nearest>]>| {
+    // threads. A watched vertex (on the surface) farther than `over` ends
+    // the search: which one a worker met first depends on timing, that one
+    // exists does not.
+    let beyond = AtomicBool::new(false);
+    let nearest = |to: &MeshDistance,
+                   p: &[Vec3],
+                   known: Option<&[Option<Nearest>]>,
+                   watched: Option<&[bool]>| {
         const CHUNK: usize = 256;
         let mut at = vec![(0.0, 0); p.len()];
         at.par_chunks_mut(CHUNK).enumerate().for_each(|(c, chunk)| {
+            if beyond.load(AtomicOrdering::Relaxed) {
+                return;
+            }
             let mut hint = u32::MAX;
             for (k, a) in chunk.iter_mut().enumerate() {
                 let v = c * CHUNK + k;
@@ -597,16 +616,23 @@ fn certify_sides(
                     .and_then(|known| known[v])
                     .unwrap_or_else(|| to.nearest_near(p[v], hint));
                 hint = a.1;
+                if a.0 > over && watched.is_some_and(|w| w[v]) {
+                    beyond.store(true, AtomicOrdering::Relaxed);
+                }
             }
         });
         at
     };
-    let rev_at = nearest(to_o, &simplified.positions, None);
+    let rev_at = nearest(to_o, &simplified.positions, None, None);
     let fwd_at = nearest(
         &to_s,
         &original.positions,
         recertify.as_ref().map(|r| r.at_vertex.as_slice()),
+        Some(on_surface),
     );
+    if beyond.into_inner() {
+        return Err(Stop::Over(over));
+    }
     let rev = Side {
         from: simplified,
         to: to_o,
@@ -751,7 +777,8 @@ mod tests {
 
     /// Asked whether a state is over a limit, certifying stops early only
     /// where an exact distance proves the state over it (so its certificate
-    /// is over it too); otherwise it gives the full certificate, unchanged.
+    /// is over it too), the same on one thread as on many; otherwise it
+    /// gives the full certificate, unchanged.
     #[test]
     fn an_early_stop_is_proven_over() {
         use crate::simplify::{CollapseOptions, EdgeCollapser};
@@ -770,8 +797,16 @@ mod tests {
                 panic!("no limit, no stop")
             };
             let b = full.error_bound();
+            let one_thread = rayon::ThreadPoolBuilder::new()
+                .num_threads(1)
+                .build()
+                .unwrap();
             for over in [0.3 * b, 0.9 * b, 0.99 * b, b] {
-                match certify(over).unwrap() {
+                let verdict = certify(over).unwrap();
+                // The same on any number of threads (a search's next probe
+                // and a chain's later rows depend on it).
+                assert_eq!(one_thread.install(|| certify(over)).unwrap(), verdict);
+                match verdict {
                     Traced::Over(lower) => {
                         assert!(
                             over < b && over <= lower && lower <= b,
