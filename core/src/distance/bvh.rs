@@ -195,6 +195,11 @@ impl<'a> MeshDistance<'a> {
             .map_or(f32::INFINITY, |(q, _)| q.distance(p))
     }
 
+    /// Each triangle's corners, in the mesh's order.
+    pub fn corners(&self) -> &[[Vec3; 3]] {
+        &self.corners
+    }
+
     /// Exact distance from `p` to triangle `t` of the mesh.
     pub fn triangle_distance(&self, p: Vec3, t: u32) -> f32 {
         self.triangle_distance_squared(p, t).sqrt()

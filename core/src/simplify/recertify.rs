@@ -137,10 +137,48 @@ impl Cells {
     }
 }
 
-/// Cells marked under boxes.
-struct Marks {
+/// One grid's cells marked under boxes.
+struct Bits {
     cells: Cells,
     bits: Vec<u64>,
+}
+
+impl Bits {
+    fn new(bounds: Aabb, along_longest: f32) -> Self {
+        let cells = Cells::new(bounds, along_longest);
+        let bits = vec![0; cells.len().div_ceil(64)];
+        Bits { cells, bits }
+    }
+
+    fn mark(&mut self, b: &Aabb) {
+        let bits = &mut self.bits;
+        self.cells.each(b, |i| {
+            bits[i / 64] |= 1 << (i % 64);
+            true
+        });
+    }
+
+    /// Whether a box overlaps a marked cell; `None` where it spans more than
+    /// [`MOST_CELLS`] (too many to read).
+    fn touches(&self, b: &Aabb) -> Option<bool> {
+        let spans = self.cells.ranges(b).into_iter().map(|r| r.count());
+        if spans.product::<usize>() > MOST_CELLS {
+            return None;
+        }
+        Some(
+            !self
+                .cells
+                .each(b, |i| self.bits[i / 64] & (1 << (i % 64)) == 0),
+        )
+    }
+}
+
+/// Cells marked under boxes, on the grid and on one [`COARSER`] times
+/// coarser: most reaches miss every change, and a few coarse cells say so
+/// (a reach over a coarse row's bound spans a hundred fine cells).
+struct Marks {
+    fine: Bits,
+    coarse: Bits,
     any: bool,
 }
 
@@ -149,44 +187,27 @@ struct Marks {
 /// grid per original triangle.
 const MOST_CELLS: usize = 512;
 
+/// Fine cells per coarse cell, along each side.
+const COARSER: f32 = 8.0;
+
 impl Marks {
     fn new(bounds: Aabb) -> Self {
-        let cells = Cells::new(bounds, CELLS);
-        let bits = vec![0; cells.len().div_ceil(64)];
         Marks {
-            cells,
-            bits,
+            fine: Bits::new(bounds, CELLS),
+            coarse: Bits::new(bounds, CELLS / COARSER),
             any: false,
         }
     }
 
     fn mark(&mut self, b: &Aabb) {
         self.any = true;
-        let bits = &mut self.bits;
-        self.cells.each(b, |i| {
-            bits[i / 64] |= 1 << (i % 64);
-            true
-        });
+        self.fine.mark(b);
+        self.coarse.mark(b);
     }
 
     /// Whether a box overlaps a marked cell (or spans too many to read).
     fn touches(&self, b: &Aabb) -> bool {
-        if !self.any {
-            return false;
-        }
-        if self
-            .cells
-            .ranges(b)
-            .iter()
-            .map(|r| r.clone().count())
-            .product::<usize>()
-            > MOST_CELLS
-        {
-            return true;
-        }
-        !self
-            .cells
-            .each(b, |i| self.bits[i / 64] & (1 << (i % 64)) == 0)
+        self.any && self.coarse.touches(b) != Some(false) && self.fine.touches(b) != Some(false)
     }
 }
 
@@ -207,6 +228,7 @@ impl Recertify {
     /// `None` where `earlier` is of another original.
     pub fn new(earlier: &Trace, original: &Original, later: &TriMesh, ids: &[u32]) -> Option<Self> {
         let bounds = original.bounds();
+        let corners = original.distance().corners();
         let original = original.mesh();
         if earlier.forward.len() != original.triangles.len()
             || earlier.at_vertex.len() != original.positions.len()
@@ -249,7 +271,7 @@ impl Recertify {
             .enumerate()
             .map(|(t, &(u, l, owner))| {
                 let owner = index(owner)?;
-                let reach = grown(triangle_box(&original.triangle(t)), u);
+                let reach = grown(triangle_box(&corners[t]), u);
                 (u.is_finite() && !changes.touches(&reach)).then_some((u, l, owner))
             })
             .collect();
@@ -394,8 +416,8 @@ mod tests {
     }
 
     /// A box marks the cells it overlaps and no others, boxes outside the
-    /// grid clamp to its border cells, and a box over more cells than are
-    /// read counts as touching (unless nothing is marked).
+    /// grid clamp to its border cells, and a box over more fine cells than
+    /// are read is answered by the coarse grid (unless nothing is marked).
     #[test]
     fn marked_cells_are_the_ones_under_the_box() {
         let mut g = Marks::new(Aabb {
@@ -407,7 +429,8 @@ mod tests {
             max: Vec3::splat(256.0),
         };
         assert!(!g.touches(&everything));
-        assert_eq!(g.cells.dims, [256, 256, 256]);
+        assert_eq!(g.fine.cells.dims, [256, 256, 256]);
+        assert_eq!(g.coarse.cells.dims, [32, 32, 32]);
         g.mark(&Aabb {
             min: Vec3::new(10.5, 10.5, 10.5),
             max: Vec3::new(11.5, 10.6, 10.6),
@@ -432,9 +455,20 @@ mod tests {
             min: Vec3::splat(248.0),
             max: Vec3::splat(254.0),
         }));
-        assert!(g.touches(&Aabb {
+        // Over more fine cells than are read: the coarse grid answers where
+        // it has no mark, and a mark under it counts as touching.
+        assert!(!g.touches(&Aabb {
             min: Vec3::splat(100.0),
             max: Vec3::splat(120.0),
+        }));
+        assert!(g.touches(&Aabb {
+            min: Vec3::splat(0.0),
+            max: Vec3::splat(30.0),
+        }));
+        // A box beside a mark in the same coarse cell: the fine grid answers.
+        assert!(!g.touches(&Aabb {
+            min: Vec3::splat(13.5),
+            max: Vec3::splat(14.5),
         }));
     }
 }
