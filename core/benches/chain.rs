@@ -5,7 +5,8 @@
 //! (certified bounds) and ratio rows:
 //!
 //! - the chain through `build_chain` (what the studio and `export` run);
-//! - its finest row alone (a one-row recipe);
+//! - its finest row alone (a one-row recipe); both the median of three
+//!   alternating runs;
 //! - the five rows as five fresh runs one after another (the export before);
 //! - the peer: meshoptimizer's `simplify` to the five counts the chain made.
 //!
@@ -33,6 +34,15 @@ const DRAGON: &str = concat!(
     env!("CARGO_MANIFEST_DIR"),
     "/../../shared/models/dragon_vrip.ply.gz"
 );
+
+/// Runs of the chain and of its finest row, alternating: this machine's
+/// times vary by a quarter from run to run, the median much less.
+const RUNS: usize = 3;
+
+fn median(mut runs: Vec<f64>) -> f64 {
+    runs.sort_by(f64::total_cmp);
+    runs[runs.len() / 2]
+}
 
 fn seconds(f: impl FnOnce()) -> f64 {
     let t = Instant::now();
@@ -89,14 +99,19 @@ fn main() {
             let items = parse_lods(rows, Some(lodstudio_core::lod::Method::EdgeCollapse)).unwrap();
             let recipe = Recipe::new(items.clone());
             eprintln!("{m} triangles, rows {rows}");
-            let mut chain = None;
-            let chain_s =
-                seconds(|| chain = Some(build_chain(&model, &recipe, &Progress::new()).unwrap()));
-            let chain = chain.unwrap();
             let finest = Recipe::new(items[..1].to_vec());
-            let finest_s = seconds(|| {
-                build_chain(&model, &finest, &Progress::new()).unwrap();
-            });
+            let mut chain = None;
+            let (mut chain_s, mut finest_s) = (Vec::new(), Vec::new());
+            for _ in 0..RUNS {
+                chain_s.push(seconds(|| {
+                    chain = Some(build_chain(&model, &recipe, &Progress::new()).unwrap())
+                }));
+                finest_s.push(seconds(|| {
+                    build_chain(&model, &finest, &Progress::new()).unwrap();
+                }));
+            }
+            let (chain_s, finest_s) = (median(chain_s), median(finest_s));
+            let chain = chain.unwrap();
             let fresh_s: f64 = items
                 .iter()
                 .map(|row| {
