@@ -420,14 +420,12 @@ mod tests {
     /// are read is answered by the coarse grid (unless nothing is marked).
     #[test]
     fn marked_cells_are_the_ones_under_the_box() {
-        let mut g = Marks::new(Aabb {
-            min: Vec3::ZERO,
-            max: Vec3::splat(256.0),
-        });
-        let everything = Aabb {
-            min: Vec3::ZERO,
-            max: Vec3::splat(256.0),
+        let cube = |a: f32, b: f32| Aabb {
+            min: Vec3::splat(a),
+            max: Vec3::splat(b),
         };
+        let everything = cube(0.0, 256.0);
+        let mut g = Marks::new(everything);
         assert!(!g.touches(&everything));
         assert_eq!(g.fine.cells.dims, [256, 256, 256]);
         assert_eq!(g.coarse.cells.dims, [32, 32, 32]);
@@ -443,32 +441,14 @@ mod tests {
         assert!(g.touches(&probe(11.8)));
         assert!(!g.touches(&probe(12.1)));
         assert!(!g.touches(&probe(9.5)));
-        g.mark(&Aabb {
-            min: Vec3::splat(300.0),
-            max: Vec3::splat(400.0),
-        });
-        assert!(g.touches(&Aabb {
-            min: Vec3::splat(255.5),
-            max: Vec3::splat(500.0),
-        }));
-        assert!(!g.touches(&Aabb {
-            min: Vec3::splat(248.0),
-            max: Vec3::splat(254.0),
-        }));
+        g.mark(&cube(300.0, 400.0));
+        assert!(g.touches(&cube(255.5, 500.0)));
+        assert!(!g.touches(&cube(248.0, 254.0)));
         // Over more fine cells than are read: the coarse grid answers where
         // it has no mark, and a mark under it counts as touching.
-        assert!(!g.touches(&Aabb {
-            min: Vec3::splat(100.0),
-            max: Vec3::splat(120.0),
-        }));
-        assert!(g.touches(&Aabb {
-            min: Vec3::splat(0.0),
-            max: Vec3::splat(30.0),
-        }));
+        assert!(!g.touches(&cube(100.0, 120.0)));
+        assert!(g.touches(&cube(0.0, 30.0)));
         // A box beside a mark in the same coarse cell: the fine grid answers.
-        assert!(!g.touches(&Aabb {
-            min: Vec3::splat(13.5),
-            max: Vec3::splat(14.5),
-        }));
+        assert!(!g.touches(&cube(13.5, 14.5)));
     }
 }
