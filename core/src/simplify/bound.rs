@@ -512,8 +512,8 @@ pub enum Traced {
     Certified(Certificate, Trace),
     /// Over the `over` it was asked about: an exact distance beyond it was
     /// found (the certificate would exceed it too, so an error search needs
-    /// no more); the largest vertex distance of S where that told, else
-    /// `over`.
+    /// no more); the largest such distance where S's vertices or carried
+    /// bounds told, else `over`.
     Over(f32),
 }
 
@@ -656,11 +656,11 @@ fn certify_sides(
         .map(|x| x.0)
         .fold(recertify.as_ref().map_or(0.0, |r| r.lower()), f32::max);
     // Only a vertex of a triangle counts against `over` (a point of the
-    // input lies in no triangle, so no triangle's bound covers it).
+    // input lies in no triangle, so no triangle's bound covers it); the
+    // original's were watched above.
     if lower > over {
         let reached = rev
             .corner_lower()
-            .max(fwd.corner_lower())
             .max(recertify.as_ref().map_or(0.0, |r| r.lower()));
         if reached > over {
             return Err(Stop::Over(reached));
