@@ -203,19 +203,29 @@ pub const PATCH_CAP: usize = 4096;
 /// With `projection` (of X), a piece that stays above the tolerance also
 /// tries the planar projection (module `projection`) once before it is split:
 /// most triangles of a simplification are certified whole that way.
-/// Refinement also stops once the bound is at most `enough`. Returns the upper
-/// bound, the largest exact distance found (a lower bound) and the triangle of
-/// X that covers `tri` best as a whole.
+/// Refinement also stops once the bound is at most `enough`, and, while the
+/// exact distances found stay under `aim` (0: none), once it is at most
+/// `aim` and not before: past the tolerance if need be, so a search's
+/// question (is the bound within it?) is decided, up to the split budget.
+/// Returns the upper bound, the largest exact distance found (a lower bound)
+/// and the triangle of X that covers `tri` best as a whole.
 pub fn max_distance_bound(
     tri: [Vec3; 3],
     at: [(f32, u32); 3],
     (target, projection): (&MeshDistance, Option<&Projection>),
     opts: &BoundOptions,
     enough: f32,
+    aim: f32,
 ) -> (f32, f32, u32) {
     let (d, near) = (at.map(|x| x.0), at.map(|x| x.1));
     let mut lower = d[0].max(d[1]).max(d[2]);
-    let threshold = |lower: f32| enough.max(lower * (1.0 + opts.rel_tol) + opts.abs_tol);
+    let threshold = |lower: f32| {
+        if lower < aim {
+            enough.max(aim)
+        } else {
+            enough.max(lower * (1.0 + opts.rel_tol) + opts.abs_tol)
+        }
+    };
     let (upper, owner) = piece_bound(&tri, &d, &near, target);
     let mut top = Piece {
         upper,
@@ -363,7 +373,7 @@ impl<'a> Side<'a> {
     fn bounds(
         &self,
         opts: &BoundOptions,
-        enough: f32,
+        (enough, aim): (f32, f32),
         track: &Tracker,
         known: Option<&[Option<Bounds>]>,
     ) -> SideBounds {
@@ -380,7 +390,8 @@ impl<'a> Side<'a> {
                     }
                     let at = self.at(t);
                     let tri = self.from.triangle(t);
-                    let b = max_distance_bound(tri, at, (self.to, self.projection), opts, enough);
+                    let to = (self.to, self.projection);
+                    let b = max_distance_bound(tri, at, to, opts, enough, aim);
                     track.found(b.1);
                     b
                 },
@@ -388,18 +399,23 @@ impl<'a> Side<'a> {
             .collect()
     }
 
-    /// Second pass: triangles still above `enough` get a larger split budget
-    /// (only they can decide the maximum).
-    fn refine(&self, bounds: &mut SideBounds, opts: &BoundOptions, enough: f32, track: &Tracker) {
+    /// Second pass: triangles still above `enough` and `aim` get a larger
+    /// split budget (only they can decide the maximum, or the question).
+    fn refine(
+        &self,
+        bounds: &mut SideBounds,
+        opts: &BoundOptions,
+        (enough, aim): (f32, f32),
+        track: &Tracker,
+    ) {
         let deep = BoundOptions {
             max_splits: opts.max_splits * 4,
             ..*opts
         };
         bounds.par_iter_mut().enumerate().for_each(|(t, b)| {
-            if b.0 > enough && !track.progress.is_cancelled() {
-                let to = (self.to, self.projection);
-                let (upper, lower, _) =
-                    max_distance_bound(self.from.triangle(t), self.at(t), to, &deep, enough);
+            if b.0 > enough.max(aim) && !track.progress.is_cancelled() {
+                let (tri, to) = (self.from.triangle(t), (self.to, self.projection));
+                let (upper, lower, _) = max_distance_bound(tri, self.at(t), to, &deep, enough, aim);
                 *b = (upper.min(b.0), lower.max(b.1), b.2);
             }
         });
@@ -482,7 +498,7 @@ pub fn certify_against(
     if let Some(c) = empty(original.mesh, simplified) {
         return Ok(c);
     }
-    match certify_sides(original, simplified, None, opts, f32::INFINITY, progress) {
+    match certify_sides(original, simplified, None, opts, Ask::Tight, progress) {
         Ok((rev, fwd, _)) => Ok(certificate(&rev, &fwd)),
         Err(Stop::Cancelled) => Err(Cancelled),
         Err(Stop::Over(_)) => unreachable!("no distance exceeds infinity"),
@@ -505,15 +521,50 @@ fn empty(original: &TriMesh, simplified: &TriMesh) -> Option<Certificate> {
     })
 }
 
+/// What a certificate is asked: an error search's probe only whether its
+/// bound is within the error, a result its tightest bound.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Ask {
+    /// The tightest bound the options' tolerance gives.
+    Tight,
+    /// Whether the bound is within this limit. A piece is refined until its
+    /// bound is within it, not to the tolerance: the certificate lands
+    /// anywhere up to the limit (so it is not the tight one), far fewer
+    /// pieces are refined or projected, and a state whose distances stay
+    /// under the limit is not failed for a bound the tolerance left above
+    /// it. An exact distance over the limit ends it early
+    /// ([`Traced::Over`]).
+    Within(f32),
+}
+
+impl Ask {
+    /// An exact distance over this ends the certificate.
+    fn over(self) -> f32 {
+        match self {
+            Ask::Tight => f32::INFINITY,
+            Ask::Within(limit) => limit,
+        }
+    }
+
+    /// What refinement aims under: the limit less the rounding slack every
+    /// bound gets, so a piece that reaches it is within the limit.
+    fn aim(self) -> f32 {
+        match self {
+            Ask::Tight => 0.0,
+            Ask::Within(limit) => limit * (1.0 - 4.0 * ROUNDING),
+        }
+    }
+}
+
 /// What certifying a state of a collapse found.
 #[derive(Debug, Clone, PartialEq)]
 pub enum Traced {
     /// Its certificate, and the trace that certifies other states.
     Certified(Certificate, Trace),
-    /// Over the `over` it was asked about: an exact distance beyond it was
-    /// found (the certificate would exceed it too, so an error search needs
-    /// no more); the largest such distance where S's vertices or carried
-    /// bounds told, else `over`.
+    /// Over the limit it was asked about ([`Ask::Within`]): an exact
+    /// distance beyond it was found (the certificate would exceed it too, so
+    /// an error search needs no more); the largest such distance where S's
+    /// vertices or carried bounds told, else the limit.
     Over(f32),
 }
 
@@ -521,19 +572,20 @@ pub enum Traced {
 /// triangle of `simplified`, ascending) and keeps the trace that certifies
 /// other states of the same collapse; with `earlier`, the trace of another
 /// state, what it proved that still holds carries (module `recertify`).
-/// Stops as soon as an exact distance exceeds `over` (∞: never): an error
-/// search's failed probe mostly costs the vertices' distances alone.
+/// Asked [`Ask::Within`] a limit, it stops as soon as an exact distance
+/// exceeds it: an error search's failed probe mostly costs the vertices'
+/// distances alone.
 pub fn certify_traced(
     original: &Original,
     simplified: &TriMesh,
     ids: &[u32],
     earlier: Option<&Trace>,
     opts: &BoundOptions,
-    over: f32,
+    ask: Ask,
     progress: &Progress,
 ) -> Result<Traced, Cancelled> {
     if let Some(c) = empty(original.mesh, simplified) {
-        if c.error_bound() > over {
+        if c.error_bound() > ask.over() {
             return Ok(Traced::Over(c.error_bound()));
         }
         let rev = vec![(0.0, 0.0, 0); ids.len()];
@@ -541,7 +593,7 @@ pub fn certify_traced(
         return Ok(Traced::Certified(c, trace));
     }
     let recertify = earlier.and_then(|e| Recertify::new(e, original, simplified, ids));
-    match certify_sides(original, simplified, recertify, opts, over, progress) {
+    match certify_sides(original, simplified, recertify, opts, ask, progress) {
         Ok((rev, fwd, at_vertex)) => {
             let certificate = certificate(&rev, &fwd);
             let trace = Trace::new(original, ids, simplified, &rev, fwd, at_vertex);
@@ -572,9 +624,10 @@ fn certify_sides(
     simplified: &TriMesh,
     recertify: Option<Recertify>,
     opts: &BoundOptions,
-    over: f32,
+    ask: Ask,
     progress: &Progress,
 ) -> Result<(SideBounds, SideBounds, Vec<Nearest>), Stop> {
+    let (over, aim) = (ask.over(), ask.aim());
     let Original {
         mesh: original,
         distance: to_o,
@@ -685,8 +738,8 @@ fn certify_sides(
         over,
         exceeded: AtomicBool::new(false),
     };
-    let mut reverse = rev.bounds(&opts, enough_above(lower), &track, rev_known);
-    let mut forward = fwd.bounds(&opts, enough_above(lower), &track, fwd_known);
+    let mut reverse = rev.bounds(&opts, (enough_above(lower), aim), &track, rev_known);
+    let mut forward = fwd.bounds(&opts, (enough_above(lower), aim), &track, fwd_known);
     progress.check()?;
     // Pass one raised the lower bound; refine what is still above it.
     let found = reverse
@@ -699,8 +752,8 @@ fn certify_sides(
         // only "over `over`" is the same on any number of threads.
         return Err(Stop::Over(over));
     }
-    rev.refine(&mut reverse, &opts, enough_above(found), &track);
-    fwd.refine(&mut forward, &opts, enough_above(found), &track);
+    rev.refine(&mut reverse, &opts, (enough_above(found), aim), &track);
+    fwd.refine(&mut forward, &opts, (enough_above(found), aim), &track);
     progress.check()?;
     Ok((reverse, forward, fwd.at_vertex))
 }
@@ -753,7 +806,7 @@ mod tests {
             max_splits: 0,
             ..BoundOptions::for_diagonal(2.0)
         };
-        let (upper, _, _) = max_distance_bound(tri, at, (&target, None), &opts, 0.0);
+        let (upper, _, _) = max_distance_bound(tri, at, (&target, None), &opts, 0.0, 0.0);
         let mut sampled = 0.0f32;
         let n = 200;
         for i in 0..=n {
@@ -775,50 +828,80 @@ mod tests {
         );
     }
 
-    /// Asked whether a state is over a limit, certifying stops early only
+    /// Asked whether a state is within a limit, certifying stops early only
     /// where an exact distance proves the state over it (so its certificate
-    /// is over it too), the same on one thread as on many; otherwise it
-    /// gives the full certificate, unchanged.
+    /// is over it too); a certificate it gives is within the limit and holds
+    /// against sampling, though it is looser than the tight one; a limit the
+    /// tight bound meets is always met; a limit the tolerance left the tight
+    /// bound above is met where the distance is under it (refinement goes
+    /// past the tolerance); and every verdict is the same on one thread as
+    /// on many.
     #[test]
-    fn an_early_stop_is_proven_over() {
+    fn a_limit_is_decided_and_an_early_stop_is_proven_over() {
         use crate::simplify::{CollapseOptions, EdgeCollapser};
         let mesh = crate::builtins::torus(1.0, 0.35, 96, 40);
         let original = Original::new(&mesh);
         let opts = BoundOptions::for_diagonal(mesh.bounds().diagonal());
         let n = mesh.triangles.len();
-        let mut stopped = 0;
+        let one_thread = rayon::ThreadPoolBuilder::new()
+            .num_threads(1)
+            .build()
+            .unwrap();
+        let (mut stopped, mut past_tolerance) = (0, 0);
         for count in [n / 10, n / 40, 120] {
             let mut collapser = EdgeCollapser::new(&mesh, CollapseOptions::default());
             collapser.run(count, |_, _| true);
             let (s, ids) = collapser.mesh();
             let p = Progress::new();
-            let certify = |over| certify_traced(&original, &s, &ids, None, &opts, over, &p);
-            let Ok(Traced::Certified(full, _)) = certify(f32::INFINITY) else {
+            let certify = |ask| certify_traced(&original, &s, &ids, None, &opts, ask, &p);
+            let Ok(Traced::Certified(tight, _)) = certify(Ask::Tight) else {
                 panic!("no limit, no stop")
             };
-            let b = full.error_bound();
-            let one_thread = rayon::ThreadPoolBuilder::new()
-                .num_threads(1)
-                .build()
-                .unwrap();
-            for over in [0.3 * b, 0.9 * b, 0.99 * b, b] {
-                let verdict = certify(over).unwrap();
+            let b = tight.error_bound();
+            let sampled = hausdorff_mesh_mesh(
+                &mesh,
+                &s,
+                &SamplingOptions {
+                    samples: 50_000,
+                    seed: 5,
+                },
+            )
+            .two_sided();
+            for limit in [0.3 * b, 0.9 * b, 0.97 * b, 0.99 * b, 1.5 * b] {
+                let verdict = certify(Ask::Within(limit)).unwrap();
                 // The same on any number of threads (a search's next probe
                 // and a chain's later rows depend on it).
-                assert_eq!(one_thread.install(|| certify(over)).unwrap(), verdict);
+                assert_eq!(
+                    one_thread.install(|| certify(Ask::Within(limit))).unwrap(),
+                    verdict
+                );
                 match verdict {
                     Traced::Over(lower) => {
                         assert!(
-                            over < b && over <= lower && lower <= b,
-                            "{over} {lower} {b}"
+                            limit < b && limit <= lower && lower <= b,
+                            "{limit} {lower} {b}"
                         );
                         stopped += 1;
                     }
-                    Traced::Certified(c, _) => assert_eq!(c, full, "{count}: {over}"),
+                    Traced::Certified(c, _) => {
+                        let within = c.error_bound();
+                        assert!(sampled <= within, "{count}: {within} < sampled {sampled}");
+                        if within <= limit && limit < b {
+                            past_tolerance += 1;
+                        }
+                    }
                 }
             }
+            let Ok(Traced::Certified(c, _)) = certify(Ask::Within(1.5 * b)) else {
+                panic!("{count}: a limit above the tight bound must be met")
+            };
+            assert!(c.error_bound() <= 1.5 * b);
         }
         assert!(stopped >= 3, "{stopped} early stops");
+        assert!(
+            past_tolerance >= 1,
+            "no limit under the tight bound was met"
+        );
     }
 
     /// A coarse sphere against a fine one: the bound holds against dense

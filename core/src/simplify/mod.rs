@@ -25,7 +25,7 @@ pub mod recertify;
 pub mod step_bounds;
 
 pub use bound::{
-    BoundOptions, Certificate, Original, Traced, certify, certify_against, certify_traced,
+    Ask, BoundOptions, Certificate, Original, Traced, certify, certify_against, certify_traced,
     certify_with_progress,
 };
 pub use collapse::{
@@ -193,8 +193,8 @@ pub fn simplify_chain(
         let mut original = None;
         // A state's certificate, carrying what another state's trace
         // proved that still holds (module `recertify`), or an exact distance
-        // over `over` that ends it early.
-        let mut certify = |h: &History, k: usize, earlier: Option<&Trace>, over: f32| {
+        // over the limit asked about that ends it early.
+        let mut certify = |h: &History, k: usize, earlier: Option<&Trace>, ask: Ask| {
             let original = original.get_or_insert_with(|| {
                 let handle = building.take().expect("joined once");
                 handle
@@ -203,8 +203,7 @@ pub fn simplify_chain(
             });
             let (out, ids) = h.mesh_at(k);
             progress.stage("certifying the error bound");
-            let traced =
-                certify_traced(original, &out, &ids, earlier, &bound_opts, over, progress)?;
+            let traced = certify_traced(original, &out, &ids, earlier, &bound_opts, ask, progress)?;
             Ok(match traced {
                 Traced::Certified(certificate, trace) => {
                     let r = Simplified {
@@ -220,7 +219,7 @@ pub fn simplify_chain(
         let mut history = History::new(EdgeCollapser::new(mesh, collapse_opts));
         for (i, count) in counts {
             let k = history.reach(count, progress)?;
-            results[i] = Some(certify(&history, k, None, f32::INFINITY)?.certified().0);
+            results[i] = Some(certify(&history, k, None, Ask::Tight)?.certified().0);
         }
         let (mut from, mut certified, mut probed) = (0, None, Vec::new());
         for (i, max_error) in errors {
@@ -253,8 +252,11 @@ struct Search {
 /// The smallest triangle count whose certified bound is within `max_error`:
 /// halve the count while the bound holds, then bisect. Every probe is a state
 /// of the one collapse `history` holds, certified from the nearest certified
-/// state's trace (`recertify`); a probe that fails stops at the first exact
-/// distance over `max_error`. `probed` holds the (count, bound) of every
+/// state's trace (`recertify`) and asked only whether it is within
+/// `max_error` (`Ask::Within`): a probe that fails stops at the first exact
+/// distance over it, one that holds is refined no further than it, so the
+/// result is certified again, tight, from its own trace (everything
+/// carries: only what is above the tolerance is refined). `probed` holds the (count, bound) of every
 /// probe so far (a failed one's: a lower bound of it) and gains this
 /// search's: a count below the start that a
 /// smaller error's search found over this error starts the bisection without
@@ -266,7 +268,7 @@ fn to_error(
     search: Search,
     probed: &mut Vec<(usize, f32)>,
     progress: &Progress,
-    mut certify: impl FnMut(&History, usize, Option<&Trace>, f32) -> Result<Verdict, SimplifyError>,
+    mut certify: impl FnMut(&History, usize, Option<&Trace>, Ask) -> Result<Verdict, SimplifyError>,
 ) -> Result<(Certified, usize), SimplifyError> {
     let Search {
         from,
@@ -274,9 +276,10 @@ fn to_error(
         max_error,
     } = search;
     let n = history.count(from);
-    // The good state's certificate (within `max_error` once `good`), and
-    // the last failed probe's: either may be the nearer to a probe.
-    let (mut known, mut good_k, mut good_n) = (certified, from, n);
+    // The good state's certificate (within `max_error` once `good`; tight
+    // until a probe replaces it), and the last failed probe's: either may be
+    // the nearer to a probe.
+    let (mut known, mut good_k, mut good_n, mut tight) = (certified, from, n, true);
     let mut good = known
         .as_ref()
         .is_some_and(|(r, _)| r.error_bound() <= max_error);
@@ -311,11 +314,11 @@ fn to_error(
             (Some((_, t)), _) => Some(t),
             _ => failed.as_ref().map(|f| &f.1),
         };
-        match certify(history, k, nearer, max_error)? {
+        match certify(history, k, nearer, Ask::Within(max_error))? {
             Verdict::Certified((r, trace)) if r.error_bound() <= max_error => {
                 probed.push((probe, r.error_bound()));
                 good_n = r.mesh.triangles.len().min(probe);
-                (known, good, good_k) = (Some((r, trace)), true, k);
+                (known, good, good_k, tight) = (Some((r, trace)), true, k, false);
                 if !bisecting {
                     probe /= 2;
                 }
@@ -334,13 +337,13 @@ fn to_error(
             }
         }
     }
-    match known {
-        Some(c) if good => Ok((c, good_k)),
-        _ => Ok((
-            certify(history, good_k, None, f32::INFINITY)?.certified(),
-            good_k,
-        )),
-    }
+    let earlier = match known {
+        Some(c) if good && tight => return Ok((c, good_k)),
+        Some((_, trace)) if good => Some(trace),
+        _ => None,
+    };
+    let tight = certify(history, good_k, earlier.as_ref(), Ask::Tight)?;
+    Ok((tight.certified(), good_k))
 }
 
 #[cfg(test)]
@@ -412,7 +415,10 @@ mod tests {
             };
             simplify(&mesh, &opts, &Progress::new()).unwrap()
         };
-        for e in [0.002, 0.02] {
+        // 0.5: the search ends where nothing more collapses, far under it
+        // (its probes' certificates, asked only about the limit, are not
+        // the result's).
+        for e in [0.002, 0.02, 0.5] {
             let searched = run(Target::RelativeError(e));
             let fresh = run(Target::Triangles(searched.mesh.triangles.len()));
             assert!(searched.mesh.triangles.len() < mesh.triangles.len() / 4);

@@ -323,7 +323,7 @@ mod tests {
     use crate::distance::{MeshDistance, SamplingOptions, hausdorff_mesh_mesh};
     use crate::progress::Progress;
     use crate::simplify::{
-        BoundOptions, Certificate, CollapseOptions, EdgeCollapser, Original, Traced,
+        Ask, BoundOptions, Certificate, CollapseOptions, EdgeCollapser, Original, Traced,
         certify_against, certify_traced,
     };
 
@@ -341,7 +341,7 @@ mod tests {
             ids,
             earlier,
             opts,
-            f32::INFINITY,
+            Ask::Tight,
             &Progress::new(),
         ) {
             Ok(Traced::Certified(c, t)) => (c, t),

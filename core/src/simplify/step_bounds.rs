@@ -314,7 +314,7 @@ impl<'a> StepBounds<'a> {
         let forward = self.attribution.forward(t);
         let enough = forward.max(below);
         let to = (self.original, Some(self.projection));
-        let (reverse, _, _) = max_distance_bound(p, at, to, &self.opts, enough);
+        let (reverse, _, _) = max_distance_bound(p, at, to, &self.opts, enough, 0.0);
         // f32 round-off of the coordinates (flat collapses bound to 0).
         let scale = p.iter().map(|v| v.abs().max_element()).fold(0.0, f32::max);
         reverse.max(forward) + 8.0 * f32::EPSILON * scale
