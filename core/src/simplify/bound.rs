@@ -676,7 +676,21 @@ fn certify_sides(
         });
         at
     };
-    let rev_at = nearest(to_o, &simplified.positions, None, None);
+    let rev = Side {
+        from: simplified,
+        to: to_o,
+        at_vertex: nearest(to_o, &simplified.positions, None, None),
+        projection: Some(projection),
+    };
+    // S's corners (a point of the input lies in no triangle, so only a
+    // vertex of a triangle counts) and what carried are exact distances: one
+    // over `over` ends it before the original's vertices are searched (those
+    // are watched during their search).
+    let carried = recertify.as_ref().map_or(0.0, |r| r.lower());
+    let reached = rev.corner_lower().max(carried);
+    if reached > over {
+        return Err(Stop::Over(reached));
+    }
     let fwd_at = nearest(
         &to_s,
         &original.positions,
@@ -686,12 +700,6 @@ fn certify_sides(
     if beyond.into_inner() {
         return Err(Stop::Over(over));
     }
-    let rev = Side {
-        from: simplified,
-        to: to_o,
-        at_vertex: rev_at,
-        projection: Some(projection),
-    };
     let fwd = Side {
         from: original,
         to: &to_s,
@@ -707,18 +715,7 @@ fn certify_sides(
         .iter()
         .chain(&fwd.at_vertex)
         .map(|x| x.0)
-        .fold(recertify.as_ref().map_or(0.0, |r| r.lower()), f32::max);
-    // Only a vertex of a triangle counts against `over` (a point of the
-    // input lies in no triangle, so no triangle's bound covers it); the
-    // original's were watched above.
-    if lower > over {
-        let reached = rev
-            .corner_lower()
-            .max(recertify.as_ref().map_or(0.0, |r| r.lower()));
-        if reached > over {
-            return Err(Stop::Over(reached));
-        }
-    }
+        .fold(carried, f32::max);
     let opts = BoundOptions {
         abs_tol: opts.abs_tol.max(opts.rel_tol * lower),
         ..*opts
