@@ -32,6 +32,7 @@ use rayon::prelude::*;
 
 use super::projection::Projection;
 use super::recertify::{Recertify, Trace};
+use super::relay::Relay;
 use crate::distance::MeshDistance;
 use crate::geom::{Aabb, TriMesh};
 use crate::progress::{Cancelled, Progress};
@@ -86,7 +87,7 @@ const INV_SQRT3: f32 = 0.577_350_3;
 
 /// Relative slack for f32 round-off in the distance computations: a bound that is
 /// exact in real arithmetic can come out a few ulps under a measurement.
-const ROUNDING: f32 = 1e-5;
+pub(super) const ROUNDING: f32 = 1e-5;
 
 /// Covering radius bound of a triangle by its vertices.
 fn cover_radius(p: &[Vec3; 3]) -> f32 {
@@ -299,6 +300,57 @@ pub fn max_distance_bound(
     (top.upper.max(lower) * (1.0 + ROUNDING), lower, owner)
 }
 
+/// The nearest triangle of a point left unsearched ([`nearest_points`]).
+pub(super) const UNKNOWN: u32 = u32::MAX;
+
+/// What ends [`nearest_points`] early: a watched point farther than the
+/// distance sets the flag.
+type Watch<'w> = (&'w [bool], f32, &'w AtomicBool);
+
+/// Each point's exact distance and nearest triangle of `to`: `known` where
+/// another certificate carries it, `(0, UNKNOWN)` where `need` leaves it
+/// out. Fixed chunks of points are searched in order, each from its
+/// predecessor's nearest triangle (files list neighbours together): a good
+/// first guess prunes the search, and chunks keep the result the same on
+/// any number of threads. A watched point farther than the watch's distance
+/// ends the search: which one a worker met first depends on timing, that
+/// one exists does not.
+pub(super) fn nearest_points(
+    to: &MeshDistance,
+    p: &[Vec3],
+    known: Option<&[Option<Nearest>]>,
+    need: Option<&[bool]>,
+    watch: Option<Watch>,
+) -> Vec<Nearest> {
+    const CHUNK: usize = 256;
+    let mut at = vec![(0.0, UNKNOWN); p.len()];
+    let stopped = || watch.is_some_and(|w| w.2.load(AtomicOrdering::Relaxed));
+    at.par_chunks_mut(CHUNK).enumerate().for_each(|(c, chunk)| {
+        if stopped() {
+            return;
+        }
+        let mut hint = UNKNOWN;
+        for (k, a) in chunk.iter_mut().enumerate() {
+            let v = c * CHUNK + k;
+            if let Some(known) = known.and_then(|known| known[v]) {
+                *a = known;
+            } else if need.is_none_or(|need| need[v]) {
+                *a = to.nearest_near(p[v], hint);
+            } else {
+                continue;
+            }
+            hint = a.1;
+            if let Some((watched, over, beyond)) = watch
+                && a.0 > over
+                && watched[v]
+            {
+                beyond.store(true, AtomicOrdering::Relaxed);
+            }
+        }
+    });
+    at
+}
+
 /// A triangle's bound, lower bound and best covering triangle of the other surface.
 pub(super) type Bounds = (f32, f32, u32);
 /// A point's exact distance to a surface and its nearest triangle.
@@ -355,8 +407,13 @@ impl Tracker<'_> {
 }
 
 impl<'a> Side<'a> {
+    /// Its corners' exact distances and nearest triangles (searched here
+    /// where [`nearest_points`] left them out).
     fn at(&self, t: usize) -> [(f32, u32); 3] {
-        self.from.triangles[t].map(|v| self.at_vertex[v as usize])
+        self.from.triangles[t].map(|v| match self.at_vertex[v as usize] {
+            (_, UNKNOWN) => self.to.nearest(self.from.positions[v as usize]),
+            at => at,
+        })
     }
 
     /// The largest distance of a vertex of a triangle.
@@ -523,8 +580,8 @@ fn empty(original: &TriMesh, simplified: &TriMesh) -> Option<Certificate> {
 
 /// What a certificate is asked: an error search's probe only whether its
 /// bound is within the error, a result its tightest bound.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub enum Ask {
+#[derive(Clone, Copy)]
+pub enum Ask<'r> {
     /// The tightest bound the options' tolerance gives.
     Tight,
     /// Whether the bound is within this limit. A piece is refined until its
@@ -533,16 +590,25 @@ pub enum Ask {
     /// pieces are refined or projected, and a state whose distances stay
     /// under the limit is not failed for a bound the tolerance left above
     /// it. An exact distance over the limit ends it early
-    /// ([`Traced::Over`]).
-    Within(f32),
+    /// ([`Traced::Over`]). With a relay (a finer certified state, module
+    /// `relay`), what it bounds within the limit is not measured directly.
+    Within(f32, Option<&'r Relay<'r>>),
 }
 
-impl Ask {
+impl<'r> Ask<'r> {
     /// An exact distance over this ends the certificate.
     fn over(self) -> f32 {
         match self {
             Ask::Tight => f32::INFINITY,
-            Ask::Within(limit) => limit,
+            Ask::Within(limit, _) => limit,
+        }
+    }
+
+    /// The relay, where it serves the limit.
+    fn relay(self) -> Option<&'r Relay<'r>> {
+        match self {
+            Ask::Tight => None,
+            Ask::Within(limit, relay) => relay.filter(|r| r.serves(limit)),
         }
     }
 
@@ -551,7 +617,7 @@ impl Ask {
     fn aim(self) -> f32 {
         match self {
             Ask::Tight => 0.0,
-            Ask::Within(limit) => limit * (1.0 - 4.0 * ROUNDING),
+            Ask::Within(limit, _) => limit * (1.0 - 4.0 * ROUNDING),
         }
     }
 }
@@ -592,6 +658,10 @@ pub fn certify_traced(
         let trace = Trace::new(original, ids, simplified, &rev, Vec::new(), Vec::new());
         return Ok(Traced::Certified(c, trace));
     }
+    // A relayed probe carries nothing: the relay bounds what would carry
+    // for less than finding what carries (the changes' grid, a pass over
+    // the original's triangles).
+    let earlier = earlier.filter(|_| ask.relay().is_none());
     let recertify = earlier.and_then(|e| Recertify::new(e, original, simplified, ids));
     match certify_sides(original, simplified, recertify, opts, ask, progress) {
         Ok((rev, fwd, at_vertex)) => {
@@ -644,42 +714,10 @@ fn certify_sides(
         }
     };
     let to_s = MeshDistance::new(simplified);
-    // What another certificate carries is not measured again. Fixed chunks
-    // of vertices are searched in order, each from its predecessor's nearest
-    // triangle (files list neighbours together): a good first guess prunes
-    // the search, and chunks keep the result the same on any number of
-    // threads. A watched vertex (on the surface) farther than `over` ends
-    // the search: which one a worker met first depends on timing, that one
-    // exists does not.
-    let beyond = AtomicBool::new(false);
-    let nearest = |to: &MeshDistance,
-                   p: &[Vec3],
-                   known: Option<&[Option<Nearest>]>,
-                   watched: Option<&[bool]>| {
-        const CHUNK: usize = 256;
-        let mut at = vec![(0.0, 0); p.len()];
-        at.par_chunks_mut(CHUNK).enumerate().for_each(|(c, chunk)| {
-            if beyond.load(AtomicOrdering::Relaxed) {
-                return;
-            }
-            let mut hint = u32::MAX;
-            for (k, a) in chunk.iter_mut().enumerate() {
-                let v = c * CHUNK + k;
-                *a = known
-                    .and_then(|known| known[v])
-                    .unwrap_or_else(|| to.nearest_near(p[v], hint));
-                hint = a.1;
-                if a.0 > over && watched.is_some_and(|w| w[v]) {
-                    beyond.store(true, AtomicOrdering::Relaxed);
-                }
-            }
-        });
-        at
-    };
     let rev = Side {
         from: simplified,
         to: to_o,
-        at_vertex: nearest(to_o, &simplified.positions, None, None),
+        at_vertex: nearest_points(to_o, &simplified.positions, None, None, None),
         projection: Some(projection),
     };
     // S's corners (a point of the input lies in no triangle, so only a
@@ -691,11 +729,38 @@ fn certify_sides(
     if reached > over {
         return Err(Stop::Over(reached));
     }
-    let fwd_at = nearest(
+    let known = |side: fn(&Recertify) -> &Vec<Option<Bounds>>| {
+        recertify.as_ref().map(|r| side(r).as_slice())
+    };
+    let (mut rev_known, mut fwd_known) = (known(|r| &r.reverse), known(|r| &r.forward));
+    // What carries, or what a finer certified state bounds within the
+    // limit (module `relay`; a relayed probe carries nothing), is not
+    // measured again.
+    let relayed;
+    if let Some(relay) = ask.relay() {
+        let corner = |t: usize| rev.at(t).iter().fold(0.0, |m, a| a.0.max(m));
+        relayed = relay.bounds((simplified, &to_s), corner, opts, aim);
+        (rev_known, fwd_known) = (Some(relayed.0.as_slice()), Some(relayed.1.as_slice()));
+    }
+    // Only the vertices of the original's triangles still open are searched
+    // (a triangle's direct bound needs its corners'; those of a triangle
+    // that carried or relayed are searched only if it is refined).
+    let need = fwd_known.map(|known| {
+        let mut need = vec![false; original.positions.len()];
+        for (t, _) in known.iter().enumerate().filter(|k| k.1.is_none()) {
+            for v in original.triangles[t] {
+                need[v as usize] = true;
+            }
+        }
+        need
+    });
+    let beyond = AtomicBool::new(false);
+    let fwd_at = nearest_points(
         &to_s,
         &original.positions,
         recertify.as_ref().map(|r| r.at_vertex.as_slice()),
-        Some(on_surface),
+        need.as_deref(),
+        Some((on_surface, over, &beyond)),
     );
     if beyond.into_inner() {
         return Err(Stop::Over(over));
@@ -720,10 +785,6 @@ fn certify_sides(
         abs_tol: opts.abs_tol.max(opts.rel_tol * lower),
         ..*opts
     };
-    let known = |side: fn(&Recertify) -> &Vec<Option<Bounds>>| {
-        recertify.as_ref().map(|r| side(r).as_slice())
-    };
-    let (rev_known, fwd_known) = (known(|r| &r.reverse), known(|r| &r.forward));
     // Pass one measures what does not carry (the refinement is short).
     let fresh = |k: Option<&[Option<_>]>, all: usize| {
         k.map_or(all, |k| k.iter().filter(|b| b.is_none()).count())
@@ -865,11 +926,13 @@ mod tests {
             )
             .two_sided();
             for limit in [0.3 * b, 0.9 * b, 0.97 * b, 0.99 * b, 1.5 * b] {
-                let verdict = certify(Ask::Within(limit)).unwrap();
+                let verdict = certify(Ask::Within(limit, None)).unwrap();
                 // The same on any number of threads (a search's next probe
                 // and a chain's later rows depend on it).
                 assert_eq!(
-                    one_thread.install(|| certify(Ask::Within(limit))).unwrap(),
+                    one_thread
+                        .install(|| certify(Ask::Within(limit, None)))
+                        .unwrap(),
                     verdict
                 );
                 match verdict {
@@ -889,7 +952,7 @@ mod tests {
                     }
                 }
             }
-            let Ok(Traced::Certified(c, _)) = certify(Ask::Within(1.5 * b)) else {
+            let Ok(Traced::Certified(c, _)) = certify(Ask::Within(1.5 * b, None)) else {
                 panic!("{count}: a limit above the tight bound must be met")
             };
             assert!(c.error_bound() <= 1.5 * b);

@@ -8,8 +8,10 @@
 //! between itself and the part of the original surface attributed to it, and
 //! `error_bound` is their maximum; `recertify` certifies a state of a
 //! collapse from another state's certificate, re-measuring only near what
-//! changed, and `history` keeps every state of one collapse at hand (an
-//! error search's probes, an LOD chain's rows). `progressive`
+//! changed, `relay` certifies a coarse state through a finer certified one
+//! (an LOD chain's coarser rows through its finest), and `history` keeps
+//! every state of one collapse at hand (an error search's probes, an LOD
+//! chain's rows). `progressive`
 //! records the collapses once as a hierarchy whose every prefix carries a
 //! certified bound, for cuts that move with a slider instead of re-running.
 
@@ -22,6 +24,7 @@ pub mod projection;
 pub mod quadric;
 mod queue;
 pub mod recertify;
+pub mod relay;
 pub mod step_bounds;
 
 pub use bound::{
@@ -32,6 +35,7 @@ pub use collapse::{
     Candidate, Collapse, CollapseOptions, EdgeCollapser, StarCostFn, quadric_cost, quadric_mean,
 };
 pub use recertify::Trace;
+pub use relay::Relay;
 
 use crate::geom::TriMesh;
 use crate::progress::{Cancelled, Progress};
@@ -222,13 +226,22 @@ pub fn simplify_chain(
             results[i] = Some(certify(&history, k, None, Ask::Tight)?.certified().0);
         }
         let (mut from, mut certified, mut probed) = (0, None, Vec::new());
+        // The finest error row relays the coarser rows' probes (module
+        // `relay`): they lie far from every certified state.
+        let finest = std::cell::OnceCell::new();
+        let mut relay = None;
         for (i, max_error) in errors {
             let search = Search {
                 from,
                 certified,
                 max_error,
+                relay: relay.as_ref(),
             };
             let (r, k) = to_error(&mut history, search, &mut probed, progress, &mut certify)?;
+            if relay.is_none() {
+                let m: &Simplified = finest.get_or_init(|| r.0.clone());
+                relay = Relay::new(mesh, &m.mesh, &m.certificate);
+            }
             results[i] = Some(r.0.clone());
             (from, certified) = (k, Some(r));
         }
@@ -242,11 +255,13 @@ pub fn simplify_chain(
 
 /// Where an error search starts: state `from` of the collapse, with its
 /// certificate where a smaller error's search made it (a chain's previous
-/// row, within every smaller error).
-struct Search {
+/// row, within every smaller error), and the finer state that relays its
+/// probes (a chain's finest row).
+struct Search<'r> {
     from: usize,
     certified: Option<Certified>,
     max_error: f32,
+    relay: Option<&'r Relay<'r>>,
 }
 
 /// The smallest triangle count whose certified bound is within `max_error`:
@@ -274,6 +289,7 @@ fn to_error(
         from,
         certified,
         max_error,
+        relay,
     } = search;
     let n = history.count(from);
     // The good state's certificate (within `max_error` once `good`; tight
@@ -314,7 +330,7 @@ fn to_error(
             (Some((_, t)), _) => Some(t),
             _ => failed.as_ref().map(|f| &f.1),
         };
-        match certify(history, k, nearer, Ask::Within(max_error))? {
+        match certify(history, k, nearer, Ask::Within(max_error, relay))? {
             Verdict::Certified((r, trace)) if r.error_bound() <= max_error => {
                 probed.push((probe, r.error_bound()));
                 good_n = r.mesh.triangles.len().min(probe);
@@ -351,6 +367,54 @@ mod tests {
     use super::*;
     use crate::builtins::torus;
     use crate::distance::{SamplingOptions, hausdorff_mesh_mesh};
+
+    /// A chain's coarser error rows, relayed through its finest (module
+    /// `relay`), meet their errors with certificates that hold against
+    /// sampling and are as tight as a fresh certificate of the same mesh
+    /// (within its tolerance);
+    /// the same on one thread as on many.
+    #[test]
+    fn relayed_error_rows_are_sound_and_tight() {
+        let mesh = torus(1.0, 0.35, 96, 40);
+        let diag = mesh.bounds().diagonal();
+        let errors = [0.002, 0.008, 0.016, 0.032];
+        let targets = errors.map(Target::RelativeError);
+        let run = || {
+            simplify_chain(
+                &mesh,
+                &targets,
+                CollapseOptions::default(),
+                false,
+                &Progress::new(),
+            )
+            .unwrap()
+        };
+        let rows = run();
+        let one_thread = rayon::ThreadPoolBuilder::new()
+            .num_threads(1)
+            .build()
+            .unwrap();
+        let again = one_thread.install(run);
+        // The finest row's ρ is under half of each coarser error: it relays them.
+        assert!(rows[0].certificate.reverse < 0.5 * errors[1] * diag);
+        for ((row, e), same) in rows.iter().zip(errors).zip(&again) {
+            assert_eq!(
+                (&row.mesh, &row.certificate),
+                (&same.mesh, &same.certificate)
+            );
+            let b = row.error_bound();
+            assert!(b <= e * diag, "{b} over {e}");
+            let fresh = certify(&mesh, &row.mesh, &BoundOptions::for_diagonal(diag)).error_bound();
+            // Tighter where a probe refined past the tolerance.
+            assert!(b <= 1.05 * fresh, "{e}: {b} vs fresh {fresh}");
+            let measured = hausdorff_mesh_mesh(&mesh, &row.mesh, &SamplingOptions::default());
+            assert!(measured.two_sided() <= b, "{e}: {b} < {measured:?}");
+        }
+        assert!(
+            rows.windows(2)
+                .all(|w| w[0].mesh.triangles.len() > w[1].mesh.triangles.len())
+        );
+    }
 
     /// A watched build publishes what it has collapsed so far; an unwatched one
     /// publishes nothing.
