@@ -31,8 +31,8 @@ use glam::Vec3;
 use rayon::prelude::*;
 
 use super::projection::Projection;
-use super::recertify::{Recertify, Trace};
-use super::relay::Relay;
+use super::recertify::{Recertify, RelayCarry, Trace, carry_relayed};
+use super::relay::{Beta, Relay};
 use crate::distance::MeshDistance;
 use crate::geom::{Aabb, TriMesh};
 use crate::progress::{Cancelled, Progress};
@@ -555,8 +555,15 @@ pub fn certify_against(
     if let Some(c) = empty(original.mesh, simplified) {
         return Ok(c);
     }
-    match certify_sides(original, simplified, None, opts, Ask::Tight, progress) {
-        Ok((rev, fwd, _)) => Ok(certificate(&rev, &fwd)),
+    match certify_sides(
+        original,
+        simplified,
+        Earlier::default(),
+        opts,
+        Ask::Tight,
+        progress,
+    ) {
+        Ok((rev, fwd, ..)) => Ok(certificate(&rev, &fwd)),
         Err(Stop::Cancelled) => Err(Cancelled),
         Err(Stop::Over(_)) => unreachable!("no distance exceeds infinity"),
     }
@@ -626,7 +633,7 @@ impl<'r> Ask<'r> {
 #[derive(Debug, Clone, PartialEq)]
 pub enum Traced {
     /// Its certificate, and the trace that certifies other states.
-    Certified(Certificate, Trace),
+    Certified(Certificate, Box<Trace>),
     /// Over the limit it was asked about ([`Ask::Within`]): an exact
     /// distance beyond it was found (the certificate would exceed it too, so
     /// an error search needs no more); the largest such distance where S's
@@ -655,19 +662,36 @@ pub fn certify_traced(
             return Ok(Traced::Over(c.error_bound()));
         }
         let rev = vec![(0.0, 0.0, 0); ids.len()];
-        let trace = Trace::new(original, ids, simplified, &rev, Vec::new(), Vec::new());
-        return Ok(Traced::Certified(c, trace));
+        let trace = Trace::new(
+            original,
+            ids,
+            simplified,
+            &rev,
+            Vec::new(),
+            Vec::new(),
+            Vec::new(),
+        );
+        return Ok(Traced::Certified(c, Box::new(trace)));
     }
-    // A relayed probe carries nothing: the relay bounds what would carry
-    // for less than finding what carries (the changes' grid, a pass over
-    // the original's triangles).
-    let earlier = earlier.filter(|_| ask.relay().is_none());
-    let recertify = earlier.and_then(|e| Recertify::new(e, original, simplified, ids));
-    match certify_sides(original, simplified, recertify, opts, ask, progress) {
-        Ok((rev, fwd, at_vertex)) => {
+    // A relayed probe carries only S → O bounds and β (module `relay`): the
+    // relay bounds the original's triangles for less than finding which of
+    // their bounds carry (a pass over them).
+    let (recertify, relayed) = match ask.relay() {
+        Some(relay) => {
+            let carry = |e| carry_relayed(e, original, simplified, ids, relay.boxes());
+            (None, earlier.and_then(carry))
+        }
+        None => {
+            let carry = |e| Recertify::new(e, original, simplified, ids);
+            (earlier.and_then(carry), None)
+        }
+    };
+    let earlier = Earlier { recertify, relayed };
+    match certify_sides(original, simplified, earlier, opts, ask, progress) {
+        Ok((rev, fwd, at_vertex, beta)) => {
             let certificate = certificate(&rev, &fwd);
-            let trace = Trace::new(original, ids, simplified, &rev, fwd, at_vertex);
-            Ok(Traced::Certified(certificate, trace))
+            let trace = Trace::new(original, ids, simplified, &rev, fwd, at_vertex, beta);
+            Ok(Traced::Certified(certificate, Box::new(trace)))
         }
         Err(Stop::Over(lower)) => Ok(Traced::Over(lower)),
         Err(Stop::Cancelled) => Err(Cancelled),
@@ -687,16 +711,31 @@ impl From<Cancelled> for Stop {
     }
 }
 
-/// Both directions' per-triangle bounds, and the original's vertices' exact
-/// distances and nearest triangles of S.
+/// Both directions' bounds, the original's vertices' nearest triangles of
+/// S, and a relayed certificate's β (what a trace keeps).
+type Sides = (SideBounds, SideBounds, Vec<Nearest>, Vec<Option<Beta>>);
+
+/// What another state's trace carries to a certificate: for a direct one,
+/// what `recertify` finds; for a relayed one, S → O bounds by id and β.
+#[derive(Default)]
+struct Earlier {
+    recertify: Option<Recertify>,
+    relayed: Option<RelayCarry>,
+}
+
+/// Both directions' per-triangle bounds, the original's vertices' exact
+/// distances and nearest triangles of S, and a relayed certificate's β.
 fn certify_sides(
     original: &Original,
     simplified: &TriMesh,
-    recertify: Option<Recertify>,
+    Earlier {
+        recertify,
+        relayed: by_relay,
+    }: Earlier,
     opts: &BoundOptions,
     ask: Ask,
     progress: &Progress,
-) -> Result<(SideBounds, SideBounds, Vec<Nearest>), Stop> {
+) -> Result<Sides, Stop> {
     let (over, aim) = (ask.over(), ask.aim());
     let Original {
         mesh: original,
@@ -736,11 +775,14 @@ fn certify_sides(
     // What carries, or what a finer certified state bounds within the
     // limit (module `relay`; a relayed probe carries nothing), is not
     // measured again.
-    let relayed;
+    let (relayed, beta);
     if let Some(relay) = ask.relay() {
         let corner = |t: usize| rev.at(t).iter().fold(0.0, |m, a| a.0.max(m));
-        relayed = relay.bounds((simplified, &to_s), corner, opts, aim);
+        let (r, f, b) = relay.bounds((simplified, &to_s), corner, opts, aim, by_relay.as_ref());
+        (relayed, beta) = ((r, f), b);
         (rev_known, fwd_known) = (Some(relayed.0.as_slice()), Some(relayed.1.as_slice()));
+    } else {
+        beta = Vec::new();
     }
     // Only the vertices of the original's triangles still open are searched
     // (a triangle's direct bound needs its corners'; those of a triangle
@@ -813,7 +855,7 @@ fn certify_sides(
     rev.refine(&mut reverse, &opts, (enough_above(found), aim), &track);
     fwd.refine(&mut forward, &opts, (enough_above(found), aim), &track);
     progress.check()?;
-    Ok((reverse, forward, fwd.at_vertex))
+    Ok((reverse, forward, fwd.at_vertex, beta))
 }
 
 /// A triangle's bound is the larger of its S → O bound and the O → S

@@ -215,7 +215,7 @@ pub fn simplify_chain(
                         certificate,
                         collapses: k,
                     };
-                    Verdict::Certified((r, trace))
+                    Verdict::Certified((r, *trace))
                 }
                 Traced::Over(lower) => Verdict::Over(lower),
             })

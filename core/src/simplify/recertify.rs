@@ -23,6 +23,7 @@ use glam::Vec3;
 use rayon::prelude::*;
 
 use super::bound::{Bounds, Nearest, Original};
+use super::relay::Beta;
 use crate::geom::{Aabb, TriMesh};
 
 /// What a certificate keeps for certifying other states of its collapse.
@@ -41,6 +42,8 @@ pub struct Trace {
     forward: Vec<Bounds>,
     /// Per original vertex: exact distance to S and its nearest triangle.
     at_vertex: Vec<Nearest>,
+    /// A relayed certificate's β per triangle of M (module `relay`).
+    beta: Vec<Option<Beta>>,
 }
 
 impl Trace {
@@ -51,6 +54,7 @@ impl Trace {
         reverse: &[Bounds],
         forward: Vec<Bounds>,
         at_vertex: Vec<Nearest>,
+        beta: Vec<Option<Beta>>,
     ) -> Self {
         Trace {
             original: original.bounds(),
@@ -61,6 +65,7 @@ impl Trace {
             reverse: reverse.iter().map(|b| (b.0, b.1)).collect(),
             forward,
             at_vertex,
+            beta,
         }
     }
 }
@@ -224,16 +229,20 @@ fn grown(b: Aabb, d: f32) -> Aabb {
     }
 }
 
-impl Recertify {
+/// Two states of one collapse matched by id: which of S_A's triangles
+/// stayed (their index in S_B), the S → O bounds S_B keeps by them, and the
+/// cells under what changed.
+struct Matched {
+    stayed: Vec<Option<u32>>,
+    reverse: Vec<Option<Bounds>>,
+    changes: Marks,
+}
+
+impl Matched {
     /// `None` where `earlier` is of another original.
-    pub fn new(earlier: &Trace, original: &Original, later: &TriMesh, ids: &[u32]) -> Option<Self> {
+    fn new(earlier: &Trace, original: &Original, later: &TriMesh, ids: &[u32]) -> Option<Self> {
         let bounds = original.bounds();
-        let corners = original.distance().corners();
-        let original = original.mesh();
-        if earlier.forward.len() != original.triangles.len()
-            || earlier.at_vertex.len() != original.positions.len()
-            || earlier.original != bounds
-        {
+        if earlier.original != bounds {
             return None;
         }
         // Both id lists ascend: one merge finds what stayed, went and came.
@@ -264,15 +273,78 @@ impl Recertify {
                 }
             }
         }
-        let index = |i: u32| stayed.get(i as usize).copied().flatten();
+        Some(Matched {
+            stayed,
+            reverse,
+            changes,
+        })
+    }
+
+    /// S_B's index of S_A's triangle `i`, where it stayed.
+    fn index(&self, i: u32) -> Option<u32> {
+        self.stayed.get(i as usize).copied().flatten()
+    }
+
+    /// Whether a bound `u` that held for a box against S_A holds against
+    /// S_B: no changed triangle comes within it (module doc).
+    fn holds(&self, b: Aabb, u: f32) -> bool {
+        u.is_finite() && !self.changes.touches(&grown(b, u))
+    }
+}
+
+/// S → O bounds per triangle of S, and β per triangle of M.
+pub(super) type RelayCarry = (Vec<Option<Bounds>>, Vec<Option<Beta>>);
+
+/// What a relayed probe (module `relay`) carries from another state's
+/// trace: S → O bounds by id, and the relay's β of each triangle of M
+/// (`m_boxes`) where nothing changed within it (the argument of the module
+/// doc, for M's triangles instead of the original's). `None` where
+/// `earlier` is of another original.
+pub(super) fn carry_relayed(
+    earlier: &Trace,
+    original: &Original,
+    later: &TriMesh,
+    ids: &[u32],
+    m_boxes: &[Aabb],
+) -> Option<RelayCarry> {
+    let matched = Matched::new(earlier, original, later, ids)?;
+    let beta = if earlier.beta.len() == m_boxes.len() {
+        (earlier.beta.par_iter().zip(m_boxes))
+            .map(|(b, &m)| {
+                let (u, owner) = (*b)?;
+                matched
+                    .holds(m, u)
+                    .then(|| matched.index(owner).map(|k| (u, k)))
+                    .flatten()
+            })
+            .collect()
+    } else {
+        vec![None; m_boxes.len()]
+    };
+    Some((matched.reverse, beta))
+}
+
+impl Recertify {
+    /// `None` where `earlier` is of another original.
+    pub fn new(earlier: &Trace, original: &Original, later: &TriMesh, ids: &[u32]) -> Option<Self> {
+        let corners = original.distance().corners();
+        let mesh = original.mesh();
+        if earlier.forward.len() != mesh.triangles.len()
+            || earlier.at_vertex.len() != mesh.positions.len()
+        {
+            return None;
+        }
+        let matched = Matched::new(earlier, original, later, ids)?;
+        let original = mesh;
         let forward: Vec<Option<Bounds>> = earlier
             .forward
             .par_iter()
             .enumerate()
             .map(|(t, &(u, l, owner))| {
-                let owner = index(owner)?;
-                let reach = grown(triangle_box(&corners[t]), u);
-                (u.is_finite() && !changes.touches(&reach)).then_some((u, l, owner))
+                let owner = matched.index(owner)?;
+                matched
+                    .holds(triangle_box(&corners[t]), u)
+                    .then_some((u, l, owner))
             })
             .collect();
         let mut exact = vec![false; original.positions.len()];
@@ -296,14 +368,14 @@ impl Recertify {
             .zip(&exact)
             .map(|(&(d, near), &exact)| {
                 if exact {
-                    index(near).map(|k| (d, k))
+                    matched.index(near).map(|k| (d, k))
                 } else {
                     None
                 }
             })
             .collect();
         Some(Recertify {
-            reverse,
+            reverse: matched.reverse,
             forward,
             at_vertex,
         })
@@ -344,7 +416,7 @@ mod tests {
             Ask::Tight,
             &Progress::new(),
         ) {
-            Ok(Traced::Certified(c, t)) => (c, t),
+            Ok(Traced::Certified(c, t)) => (c, *t),
             other => panic!("{other:?}"),
         }
     }

@@ -22,8 +22,16 @@ use super::bound::{
     BoundOptions, Bounds, Certificate, Nearest, Original, ROUNDING, max_distance_bound,
     nearest_points,
 };
+use super::recertify::RelayCarry;
 use crate::distance::MeshDistance;
-use crate::geom::TriMesh;
+use crate::geom::{Aabb, TriMesh};
+
+/// β(T) of a triangle T of M, and the triangle of S that covers it best.
+pub(super) type Beta = (f32, u32);
+
+/// What [`Relay::bounds`] gives: S → O and O → S bounds (`None`: to be
+/// measured directly), and β per triangle of M.
+pub(super) type Relayed = (Vec<Option<Bounds>>, Vec<Option<Bounds>>, Vec<Option<Beta>>);
 
 /// Splits a relayed bound may take: a triangle the relay cannot bound
 /// quickly is measured directly.
@@ -39,6 +47,8 @@ pub struct Relay<'m> {
     /// Per triangle of M: the largest c(o) of the original triangles
     /// attributed to it (negative: none).
     widest: Vec<f32>,
+    /// Per triangle of M: its box (what β(T) carries by, module `recertify`).
+    boxes: Vec<Aabb>,
 }
 
 impl<'m> Relay<'m> {
@@ -65,11 +75,15 @@ impl<'m> Relay<'m> {
         for &(t, c) in &through {
             widest[t as usize] = widest[t as usize].max(c);
         }
+        let boxes = (0..m.mesh().triangles.len())
+            .map(|t| Aabb::from_points(&m.mesh().triangle(t)))
+            .collect();
         Some(Relay {
             m,
             rho: certificate.reverse,
             through,
             widest,
+            boxes,
         })
     }
 
@@ -79,16 +93,24 @@ impl<'m> Relay<'m> {
         self.rho < 0.5 * limit
     }
 
-    /// The relayed bounds within `aim` of the triangles of S (`s`, searched
-    /// by `to_s`; `corner(t)` its triangle t's largest exact corner distance
-    /// to O) and of the original's: S → O, O → S.
+    /// Each triangle of M's box.
+    pub(super) fn boxes(&self) -> &[Aabb] {
+        &self.boxes
+    }
+
+    /// The bounds of the triangles of S (`s`, searched by `to_s`;
+    /// `corner(t)` its triangle t's largest exact corner distance to O) and
+    /// of the original's that are relayed within `aim` or carried from
+    /// another relayed state (`carried`: S → O bounds, β by triangle of M),
+    /// and every β, for this state's trace: S → O, O → S, β.
     pub(super) fn bounds(
         &self,
         (s, to_s): (&TriMesh, &MeshDistance),
         corner: impl Fn(usize) -> f32 + Sync,
         opts: &BoundOptions,
         aim: f32,
-    ) -> (Vec<Option<Bounds>>, Vec<Option<Bounds>>) {
+        carried: Option<&RelayCarry>,
+    ) -> Relayed {
         let quick = BoundOptions {
             max_splits: SPLITS,
             ..*opts
@@ -101,6 +123,9 @@ impl<'m> Relay<'m> {
             .into_par_iter()
             .map(|t| {
                 let c = cap(self.rho);
+                if let Some(b) = carried.and_then(|k| k.0[t]) {
+                    return Some(b);
+                }
                 if c <= 0.0 {
                     return None;
                 }
@@ -112,12 +137,22 @@ impl<'m> Relay<'m> {
             .collect();
         // β(T) for M's triangles some original triangle is attributed to.
         let m = self.m.mesh();
-        let at_s: Vec<Nearest> = nearest_points(to_s, &m.positions, None, None, None);
-        let beta: Vec<Option<(f32, u32)>> = (0..m.triangles.len())
+        let open = |t: usize| self.widest[t] >= 0.0 && carried.is_none_or(|k| k.1[t].is_none());
+        let mut need = vec![false; m.positions.len()];
+        for t in (0..m.triangles.len()).filter(|&t| open(t)) {
+            for v in m.triangles[t] {
+                need[v as usize] = true;
+            }
+        }
+        let at_s: Vec<Nearest> = nearest_points(to_s, &m.positions, None, Some(&need), None);
+        let beta: Vec<Option<Beta>> = (0..m.triangles.len())
             .into_par_iter()
             .map(|t| {
                 if self.widest[t] < 0.0 {
                     return None;
+                }
+                if let Some(b) = carried.and_then(|k| k.1[t]) {
+                    return Some(b);
                 }
                 let c = cap(self.widest[t]).max(0.0);
                 let at = m.triangles[t].map(|v| at_s[v as usize]);
@@ -135,7 +170,7 @@ impl<'m> Relay<'m> {
                 (u <= aim).then_some((u, 0.0, owner))
             })
             .collect();
-        (reverse, forward)
+        (reverse, forward, beta)
     }
 }
 
@@ -146,6 +181,7 @@ mod tests {
     use super::*;
     use crate::distance::{SamplingOptions, hausdorff_mesh_mesh};
     use crate::progress::Progress;
+    use crate::simplify::recertify::carry_relayed;
     use crate::simplify::{
         Ask, CollapseOptions, EdgeCollapser, Traced, certify_against, certify_traced,
     };
@@ -192,7 +228,7 @@ mod tests {
                 .map(|&p| to_o.distance(p))
                 .fold(0.0, f32::max)
         };
-        let (reverse, forward) = relay.bounds((&s, &to_s), corner, &opts, aim);
+        let (reverse, forward, _) = relay.bounds((&s, &to_s), corner, &opts, aim, None);
         let (r, f) = (
             reverse.iter().flatten().count(),
             forward.iter().flatten().count(),
@@ -224,6 +260,56 @@ mod tests {
                         "O triangle {t}: {} > {u}",
                         to_s.distance(p)
                     );
+                }
+            }
+        }
+    }
+
+    /// A relayed state's trace carries its β to a nearby state of the same
+    /// collapse, more or fewer collapses on: what carries holds against the
+    /// later state at sampled points of M's triangles, and most of it
+    /// carries; the S → O bounds carried by id hold too.
+    #[test]
+    fn carried_beta_holds_for_a_nearby_state() {
+        let o = crate::builtins::torus(1.0, 0.35, 96, 40);
+        let original = Original::new(&o);
+        let opts = BoundOptions::for_diagonal(o.bounds().diagonal());
+        let n = o.triangles.len();
+        let (m, _) = state(&o, n / 5);
+        let certificate = certify_against(&original, &m, &opts, &Progress::new()).unwrap();
+        let relay = Relay::new(&o, &m, &certificate).unwrap();
+        let count = n / 40;
+        let (s, ids) = state(&o, count);
+        let b = certify_against(&original, &s, &opts, &Progress::new())
+            .unwrap()
+            .error_bound();
+        let ask = Ask::Within(2.0 * b, Some(&relay));
+        let Ok(Traced::Certified(_, trace)) =
+            certify_traced(&original, &s, &ids, None, &opts, ask, &Progress::new())
+        else {
+            panic!("a limit twice the bound is met")
+        };
+        for later in [count + count / 25, count - count / 25] {
+            let (s, ids) = state(&o, later);
+            let (reverse, beta) =
+                carry_relayed(&trace, &original, &s, &ids, relay.boxes()).unwrap();
+            let carried = beta.iter().flatten().count();
+            let open = relay.widest.iter().filter(|w| **w >= 0.0).count();
+            assert!(2 * carried > open, "{later}: {carried} of {open} carried");
+            let to_s = MeshDistance::new(&s);
+            for (t, b) in beta.iter().enumerate() {
+                if let Some((u, owner)) = *b {
+                    assert!((owner as usize) < s.triangles.len());
+                    for p in samples(m.triangle(t)) {
+                        assert!(to_s.distance(p) <= u, "T {t}: {} > {u}", to_s.distance(p));
+                    }
+                }
+            }
+            for (t, b) in reverse.iter().enumerate() {
+                if let Some((u, _, _)) = *b {
+                    for p in samples(s.triangle(t)) {
+                        assert!(original.distance().distance(p) <= u);
+                    }
                 }
             }
         }
