@@ -181,6 +181,7 @@ mod tests {
     use super::*;
     use crate::distance::{SamplingOptions, hausdorff_mesh_mesh};
     use crate::progress::Progress;
+    use crate::simplify::Certificate;
     use crate::simplify::recertify::carry_relayed;
     use crate::simplify::{
         Ask, CollapseOptions, EdgeCollapser, Traced, certify_against, certify_traced,
@@ -191,6 +192,18 @@ mod tests {
         collapser.run(count, |_, _| true);
         collapser.mesh()
     }
+
+    /// A torus (`around` × `across` quads), the state of its collapse at
+    /// 1/`finer` of its triangles (M) with M's certificate, and the options.
+    fn torus_and_finer(around: u32, across: u32, finer: usize) -> Fixture {
+        let o = crate::builtins::torus(1.0, 0.35, around, across);
+        let opts = BoundOptions::for_diagonal(o.bounds().diagonal());
+        let (m, _) = state(&o, o.triangles.len() / finer);
+        let certificate = certify_against(&Original::new(&o), &m, &opts, &Progress::new()).unwrap();
+        (o, m, certificate, opts)
+    }
+
+    type Fixture = (TriMesh, TriMesh, Certificate, BoundOptions);
 
     /// Points of a triangle on a barycentric grid (corners, edges, inside).
     fn samples(p: [Vec3; 3]) -> impl Iterator<Item = Vec3> {
@@ -209,12 +222,9 @@ mod tests {
     /// get one (else the relay spares nothing).
     #[test]
     fn relayed_bounds_hold_and_cover_most_triangles() {
-        let o = crate::builtins::torus(1.0, 0.35, 120, 48);
+        let (o, m, certificate, opts) = torus_and_finer(120, 48, 6);
         let original = Original::new(&o);
-        let opts = BoundOptions::for_diagonal(o.bounds().diagonal());
         let n = o.triangles.len();
-        let (m, _) = state(&o, n / 6);
-        let certificate = certify_against(&original, &m, &opts, &Progress::new()).unwrap();
         let relay = Relay::new(&o, &m, &certificate).unwrap();
         let (s, _) = state(&o, n / 60);
         let direct = certify_against(&original, &s, &opts, &Progress::new()).unwrap();
@@ -271,12 +281,9 @@ mod tests {
     /// carries; the S → O bounds carried by id hold too.
     #[test]
     fn carried_beta_holds_for_a_nearby_state() {
-        let o = crate::builtins::torus(1.0, 0.35, 96, 40);
+        let (o, m, certificate, opts) = torus_and_finer(96, 40, 5);
         let original = Original::new(&o);
-        let opts = BoundOptions::for_diagonal(o.bounds().diagonal());
         let n = o.triangles.len();
-        let (m, _) = state(&o, n / 5);
-        let certificate = certify_against(&original, &m, &opts, &Progress::new()).unwrap();
         let relay = Relay::new(&o, &m, &certificate).unwrap();
         let count = n / 40;
         let (s, ids) = state(&o, count);
@@ -321,12 +328,9 @@ mod tests {
     /// bound, and every verdict is the same on one thread as on many.
     #[test]
     fn relayed_verdicts_agree_with_direct_ones() {
-        let o = crate::builtins::torus(1.0, 0.35, 96, 40);
+        let (o, m, certificate, opts) = torus_and_finer(96, 40, 5);
         let original = Original::new(&o);
-        let opts = BoundOptions::for_diagonal(o.bounds().diagonal());
         let n = o.triangles.len();
-        let (m, _) = state(&o, n / 5);
-        let certificate = certify_against(&original, &m, &opts, &Progress::new()).unwrap();
         let relay = Relay::new(&o, &m, &certificate).unwrap();
         let one_thread = rayon::ThreadPoolBuilder::new()
             .num_threads(1)
