@@ -230,7 +230,8 @@ pub fn simplify_chain(
         // `relay`): they lie far from every certified state.
         let finest = std::cell::OnceCell::new();
         let mut relay = None;
-        for (i, max_error) in errors {
+        let coarser = errors.len().saturating_sub(1);
+        for (row, (i, max_error)) in errors.into_iter().enumerate() {
             let search = Search {
                 from,
                 certified,
@@ -238,7 +239,7 @@ pub fn simplify_chain(
                 relay: relay.as_ref(),
             };
             let (r, k) = to_error(&mut history, search, &mut probed, progress, &mut certify)?;
-            if relay.is_none() {
+            if relay.is_none() && row < coarser {
                 let m: &Simplified = finest.get_or_init(|| r.0.clone());
                 relay = Relay::new(mesh, &m.mesh, &m.certificate);
             }
