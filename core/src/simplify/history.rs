@@ -9,6 +9,8 @@
 //! makes a new vertex). So state k (after k collapses) is the triangles born
 //! at or before k and not yet dead, over the collapser's arrays.
 
+use rayon::prelude::*;
+
 use super::collapse::EdgeCollapser;
 use crate::geom::TriMesh;
 use crate::progress::{Cancelled, Progress};
@@ -90,8 +92,12 @@ impl History {
     pub fn mesh_at(&self, k: usize) -> (TriMesh, Vec<u32>) {
         debug_assert!(k < self.counts.len(), "state {k} not reached");
         let k = k as u32;
-        let ids: Vec<u32> = (0..self.born.len() as u32)
-            .filter(|&t| self.born[t as usize] <= k && k < self.died[t as usize])
+        // Every triangle ever made is tested (3.5M on the dragon): in
+        // parallel, collected in order.
+        let (born, died) = (&self.born, &self.died);
+        let ids: Vec<u32> = (0..born.len() as u32)
+            .into_par_iter()
+            .filter(|&t| born[t as usize] <= k && k < died[t as usize])
             .collect();
         (self.collapser.arrays().gather(ids.iter().copied()), ids)
     }
