@@ -12,9 +12,12 @@
 //! They are looser by ρ and c(o), so they only answer whether a triangle is
 //! within an error search's limit (`Ask::Within`); a triangle they leave
 //! above it is measured directly, so a probe's verdict is as decisive as a
-//! direct one's. A coarser row's probes, far from every certified state,
-//! carry little from another certificate (module `recertify`): this is
-//! what spares them most of the pass.
+//! direct one's. A coarser row's probes lie far from every certified state
+//! and carry little of the original's bounds (module `recertify`): the
+//! relay spares them most of the pass. A relayed probe carries S → O bounds
+//! by id and β where nothing changed within reach of M's triangle from the
+//! nearer trace (recertify's argument on M's triangles), and relays the
+//! original's triangles again, for less than finding which of theirs carry.
 
 use rayon::prelude::*;
 
