@@ -351,6 +351,18 @@ pub(super) fn nearest_points(
     at
 }
 
+/// Per vertex of `mesh`: whether a triangle `open` names has it (the points
+/// [`nearest_points`] needs for those triangles' bounds).
+pub(super) fn corners_of(mesh: &TriMesh, open: impl Fn(usize) -> bool) -> Vec<bool> {
+    let mut need = vec![false; mesh.positions.len()];
+    for t in (0..mesh.triangles.len()).filter(|&t| open(t)) {
+        for v in mesh.triangles[t] {
+            need[v as usize] = true;
+        }
+    }
+    need
+}
+
 /// A triangle's bound, lower bound and best covering triangle of the other surface.
 pub(super) type Bounds = (f32, f32, u32);
 /// A point's exact distance to a surface and its nearest triangle.
@@ -773,8 +785,7 @@ fn certify_sides(
     };
     let (mut rev_known, mut fwd_known) = (known(|r| &r.reverse), known(|r| &r.forward));
     // What carries, or what a finer certified state bounds within the
-    // limit (module `relay`; a relayed probe carries nothing), is not
-    // measured again.
+    // limit (module `relay`), is not measured again.
     let (relayed, beta);
     if let Some(relay) = ask.relay() {
         let corner = |t: usize| rev.at(t).iter().fold(0.0, |m, a| a.0.max(m));
@@ -787,15 +798,7 @@ fn certify_sides(
     // Only the vertices of the original's triangles still open are searched
     // (a triangle's direct bound needs its corners'; those of a triangle
     // that carried or relayed are searched only if it is refined).
-    let need = fwd_known.map(|known| {
-        let mut need = vec![false; original.positions.len()];
-        for (t, _) in known.iter().enumerate().filter(|k| k.1.is_none()) {
-            for v in original.triangles[t] {
-                need[v as usize] = true;
-            }
-        }
-        need
-    });
+    let need = fwd_known.map(|known| corners_of(original, |t| known[t].is_none()));
     let beyond = AtomicBool::new(false);
     let fwd_at = nearest_points(
         &to_s,

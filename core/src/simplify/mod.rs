@@ -272,8 +272,8 @@ struct Search<'r> {
 /// `max_error` (`Ask::Within`): a probe that fails stops at the first exact
 /// distance over it, one that holds is refined no further than it, so the
 /// result is certified again, tight, from its own trace (everything
-/// carries: only what is above the tolerance is refined). `probed` holds the (count, bound) of every
-/// probe so far (a failed one's: a lower bound of it) and gains this
+/// carries: only what is above the tolerance is refined). `probed` holds
+/// the (count, bound) of every probe so far (a failed one's: a lower bound of it) and gains this
 /// search's: a count below the start that a
 /// smaller error's search found over this error starts the bisection without
 /// halving (a chain's rows double their errors, and the halving's first
@@ -372,8 +372,7 @@ mod tests {
     /// A chain's coarser error rows, relayed through its finest (module
     /// `relay`), meet their errors with certificates that hold against
     /// sampling and are as tight as a fresh certificate of the same mesh
-    /// (within its tolerance);
-    /// the same on one thread as on many.
+    /// (within its tolerance); the same on one thread as on many.
     #[test]
     fn relayed_error_rows_are_sound_and_tight() {
         let mesh = torus(1.0, 0.35, 96, 40);

@@ -22,7 +22,7 @@
 use rayon::prelude::*;
 
 use super::bound::{
-    BoundOptions, Bounds, Certificate, Nearest, Original, ROUNDING, max_distance_bound,
+    BoundOptions, Bounds, Certificate, Nearest, Original, ROUNDING, corners_of, max_distance_bound,
     nearest_points,
 };
 use super::recertify::RelayCarry;
@@ -141,12 +141,7 @@ impl<'m> Relay<'m> {
         // β(T) for M's triangles some original triangle is attributed to.
         let m = self.m.mesh();
         let open = |t: usize| self.widest[t] >= 0.0 && carried.is_none_or(|k| k.1[t].is_none());
-        let mut need = vec![false; m.positions.len()];
-        for t in (0..m.triangles.len()).filter(|&t| open(t)) {
-            for v in m.triangles[t] {
-                need[v as usize] = true;
-            }
-        }
+        let need = corners_of(m, open);
         let at_s: Vec<Nearest> = nearest_points(to_s, &m.positions, None, Some(&need), None);
         let beta: Vec<Option<Beta>> = (0..m.triangles.len())
             .into_par_iter()
