@@ -130,7 +130,7 @@ pub fn reopen(bytes: &[u8]) -> Result<(Header, Box<dyn Hierarchy>), HierarchyFil
             if !ms.is_consistent() {
                 return Err(HierarchyFileError::Corrupt {
                     what: "multiscale",
-                    why: "points, radii and operators disagree in size".into(),
+                    why: "points, radii and operators disagree in size or are not finite".into(),
                 });
             }
             let texel = header

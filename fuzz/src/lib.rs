@@ -8,5 +8,6 @@ pub fn setup() {
     limits::set(Limits {
         max_decompressed: 64 << 20,
         memory_budget: 256 << 20,
+        ratio_limited: true,
     });
 }

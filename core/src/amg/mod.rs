@@ -133,8 +133,8 @@ impl Multiscale {
 }
 
 /// Writes the stiffness matrix A as MatrixMarket (for cross-checks with PyAMG).
-pub fn write_matrix_market(ms: &Multiscale, path: &std::path::Path) -> std::io::Result<()> {
-    sprs::io::write_matrix_market(path, ms.stiffness())
+pub fn write_matrix_market(ms: &Multiscale, out: &mut impl std::io::Write) -> std::io::Result<()> {
+    sprs::io::write_matrix_market_to_bufwrite(out, ms.stiffness())
 }
 
 /// The point set of a model: a point set as is, or a mesh's vertices with
@@ -339,7 +339,11 @@ impl Multiscale {
         let n = self.points.positions.len();
         let ops = &self.coarsening.operators;
         let pro = &self.coarsening.prolongations;
+        let finite = |v: &[f64]| v.iter().all(|x| x.is_finite());
         n > 0
+            && self.points.positions.iter().all(|p| p.is_finite())
+            && self.radii.iter().all(|r| r.is_finite() && *r >= 0.0)
+            && ops.iter().chain(pro).all(|a| finite(a.data()))
             && self.radii.len() == n
             && self.classifier.len() == n
             && ops.first().is_some_and(|a| a.rows() == n)

@@ -101,6 +101,30 @@ pub fn decode_srgb(v: u8) -> f32 {
     }
 }
 
+/// At most how many bytes the textures of `level`'s primitives take with
+/// texels of side `texel`: each domain's texture is no wider or taller
+/// than its members' bounding-box diagonal (plus the padding, at most that
+/// again), so a texel size asked of a CLI or a saved file is checked against
+/// the memory budget before any texture is made (`--texel 1e-9` grew past
+/// 2.4 GB).
+pub fn texture_bytes(ms: &Multiscale, level: usize, texel: f32) -> u64 {
+    let positions = &ms.points.positions;
+    ms.domains(level)
+        .iter()
+        .map(|members| {
+            let (mut lo, mut hi) = (glam::Vec3::INFINITY, glam::Vec3::NEG_INFINITY);
+            for &(m, _) in members {
+                let p = positions[m as usize];
+                lo = lo.min(p);
+                hi = hi.max(p);
+            }
+            let side = 2.0 * f64::from((hi - lo).length());
+            let texels = ((side / f64::from(texel)).ceil() as u64).clamp(1, u64::from(MAX_TEXTURE));
+            texels * texels * 4
+        })
+        .sum()
+}
+
 /// The primitives of `level` with texels of side `texel` (object units).
 pub fn primitives(
     ms: &Multiscale,

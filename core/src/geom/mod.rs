@@ -222,8 +222,25 @@ impl TriMesh {
 
     /// Appends `other`, offsetting its indices; its parts are renumbered after ours.
     pub fn append(&mut self, other: &TriMesh) {
+        self.append_after(other, self.part_count());
+    }
+
+    /// `pieces` one after the other, as [`TriMesh::append`] would join them,
+    /// in time linear in their size (the part count is kept as it grows, not
+    /// recounted per piece).
+    pub fn concat(pieces: &[TriMesh]) -> TriMesh {
+        let mut out = TriMesh::default();
+        let mut parts = 0;
+        for piece in pieces {
+            out.append_after(piece, parts);
+            parts += piece.part_count();
+        }
+        out
+    }
+
+    /// [`TriMesh::append`] with our part count given.
+    fn append_after(&mut self, other: &TriMesh, part_base: u32) {
         let base = self.positions.len() as u32;
-        let part_base = self.part_count();
         let n_self_v = self.positions.len();
         let n_self_t = self.triangles.len();
         if self.wedges.is_some() || other.wedges.is_some() {

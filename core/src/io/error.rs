@@ -78,6 +78,10 @@ pub enum LoadError {
     Empty { file: PathBuf, why: String },
     #[error("{name}: unknown built-in model (see `lodstudio info --builtins`)")]
     UnknownBuiltin { name: String },
+    /// Refused before parsing: not a regular file, over the budget, or a
+    /// reference outside the asset folder (the message names it).
+    #[error("{0}")]
+    Refused(String),
     #[error("loading cancelled")]
     Cancelled,
 }

@@ -8,9 +8,11 @@
 //! readers assume valid data), so hostile files give an error instead of a panic.
 
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 
 use glam::{Mat3, Mat4, Vec2, Vec3};
 
+use super::confine;
 use super::error::{ParseError, ParseResult};
 use crate::geom::{AlphaMode, Image, Material, Materials, TriMesh, VertexAttributes};
 
@@ -151,12 +153,23 @@ fn lod_ids(data: &[u8], node: usize) -> ParseResult<Vec<usize>> {
     })
 }
 
+/// Most node instances a scene graph may expand to: a graph of nodes that
+/// list each other as children more than once (a DAG) multiplies its
+/// instances with every level (28 levels of two: 2^28 from 1.3 KB), so the
+/// expansion is counted and refused past this, whatever the triangles.
+pub const MAX_INSTANCES: usize = 1 << 20;
+
 /// The meshes of `roots` and their descendants, node transforms applied.
+/// Each mesh's material and each image is read once however many nodes and
+/// primitives use it; the instances are concatenated once at the end, so
+/// the cost is linear in the instances (appending one by one recounted the
+/// parts each time).
 fn read_nodes(g: &gltf::Gltf, base: Option<&Path>, roots: Vec<gltf::Node>) -> ParseResult<TriMesh> {
-    check_buffer_files(&g.document, base)?;
-    let buffers = gltf::import_buffers(&g.document, base, g.blob.clone())
-        .map_err(|e| ParseError::file(format!("expected readable glTF buffers ({e})")))?;
-    let mut mesh = TriMesh::default();
+    let buffers = load_buffers(&g.document, base, g.blob.clone())?;
+    let mut images = ImageCache::new(&g.document, base);
+    let mut materials_read: Vec<Option<Material>> = vec![None; g.document.materials().len() + 1];
+    let mut pieces: Vec<TriMesh> = Vec::new();
+    let (mut instances, mut triangles) = (0usize, 0u64);
     let mut stack: Vec<(gltf::Node, Mat4, usize)> =
         roots.into_iter().map(|n| (n, Mat4::IDENTITY, 0)).collect();
     while let Some((node, parent, depth)) = stack.pop() {
@@ -167,6 +180,16 @@ fn read_nodes(g: &gltf::Gltf, base: Option<&Path>, roots: Vec<gltf::Node>) -> Pa
                 "expected an acyclic node hierarchy",
             ));
         }
+        instances += 1;
+        if instances > MAX_INSTANCES {
+            return Err(ParseError::item(
+                format!("node {}", node.index()),
+                format!(
+                    "expected at most {MAX_INSTANCES} node instances, but the node graph \
+                     expands to more (nodes listed as children of several parents)"
+                ),
+            ));
+        }
         let world = parent * Mat4::from_cols_array_2d(&node.transform().matrix());
         if !world.is_finite() {
             return Err(ParseError::item(
@@ -175,6 +198,12 @@ fn read_nodes(g: &gltf::Gltf, base: Option<&Path>, roots: Vec<gltf::Node>) -> Pa
             ));
         }
         if let Some(m) = node.mesh() {
+            // What the instances would hold, before they are made.
+            triangles = triangles.saturating_add(mesh_triangles(&m));
+            super::limits::check_budget(
+                &format!("{triangles} triangles of instanced meshes"),
+                triangles.saturating_mul(INSTANCE_BYTES_PER_TRIANGLE),
+            )?;
             let mut instance = TriMesh::default();
             // Primitives of one material make one part, whatever their count.
             let mut keys: Vec<Option<usize>> = Vec::new();
@@ -186,7 +215,15 @@ fn read_nodes(g: &gltf::Gltf, base: Option<&Path>, roots: Vec<gltf::Node>) -> Pa
                     let part = match keys.iter().position(|k| *k == key) {
                         Some(p) => p,
                         None => {
-                            let mut material = read_material(&prim.material(), &buffers, base)?;
+                            let slot = key.unwrap_or(materials_read.len() - 1);
+                            let mut material = match &materials_read[slot] {
+                                Some(m) => m.clone(),
+                                None => {
+                                    let m = read_material(&prim.material(), &buffers, &mut images)?;
+                                    materials_read[slot] = Some(m.clone());
+                                    m
+                                }
+                            };
                             material.vertex_attributes = VertexAttributes {
                                 colors: prim.get(&gltf::Semantic::Colors(0)).is_some(),
                                 uvs: prim.get(&gltf::Semantic::TexCoords(0)).is_some(),
@@ -204,49 +241,91 @@ fn read_nodes(g: &gltf::Gltf, base: Option<&Path>, roots: Vec<gltf::Node>) -> Pa
             instance.parts = (keys.len() > 1).then_some(parts);
             instance.materials = Some(materials);
             if !instance.triangles.is_empty() {
-                mesh.append(&instance);
+                pieces.push(instance);
             }
         }
         for child in node.children() {
             stack.push((child, world, depth + 1));
         }
     }
-    Ok(mesh)
+    Ok(TriMesh::concat(&pieces))
 }
 
-/// Buffers in files must be regular files within the memory budget: the
-/// crate reads them whole (a buffer at `/dev/zero` would never end).
-fn check_buffer_files(document: &gltf::Document, base: Option<&Path>) -> ParseResult<()> {
-    let Some(base) = base else {
-        return Ok(()); // the crate refuses external buffers without a base
-    };
+/// What one triangle of an instance costs once read: three vertices
+/// (position, normal, colour, UV: 44 bytes each), its indices and part.
+const INSTANCE_BYTES_PER_TRIANGLE: u64 = 3 * 44 + 16;
+
+/// Triangles a mesh's primitives declare (indices, else vertices, over 3).
+fn mesh_triangles(mesh: &gltf::Mesh) -> u64 {
+    mesh.primitives()
+        .map(|p| {
+            let count = p
+                .indices()
+                .or_else(|| p.get(&gltf::Semantic::Positions))
+                .map_or(0, |a| a.count());
+            count as u64 / 3 + 1
+        })
+        .sum()
+}
+
+/// The buffers' bytes: the GLB's binary chunk, `data:` URIs, and files
+/// inside the asset folder (`confine`), each within the memory budget and
+/// padded to 4 bytes as the gltf crate's readers expect.
+fn load_buffers(
+    document: &gltf::Document,
+    base: Option<&Path>,
+    mut blob: Option<Vec<u8>>,
+) -> ParseResult<Vec<gltf::buffer::Data>> {
+    let mut out = Vec::with_capacity(document.buffers().len());
     for buffer in document.buffers() {
-        let gltf::buffer::Source::Uri(uri) = buffer.source() else {
-            continue;
+        let what = format!("buffer {}", buffer.index());
+        let mut data = match buffer.source() {
+            gltf::buffer::Source::Bin => blob
+                .take()
+                .ok_or_else(|| ParseError::item(&what, "expected the GLB's binary chunk"))?,
+            gltf::buffer::Source::Uri(uri) => read_uri(uri, base, &what)?,
         };
-        let what = || format!("buffer {}", buffer.index());
-        let path = match uri
-            .strip_prefix("file://")
-            .or_else(|| uri.strip_prefix("file:"))
-        {
-            Some(rest) => base.join(rest),
-            None if uri.contains(':') => continue,
-            None => match urlencoding::decode(uri) {
-                Ok(relative) => base.join(&*relative),
-                Err(_) => continue, // refused by `parse`
-            },
-        };
-        match std::fs::metadata(&path) {
-            Ok(m) if m.is_file() => super::limits::check_budget(&what(), m.len())?,
-            _ => {
-                return Err(ParseError::item(
-                    what(),
-                    format!("expected {uri:?} to be a regular file"),
-                ));
-            }
+        while data.len() % 4 != 0 {
+            data.push(0);
+        }
+        if data.len() < buffer.length() {
+            return Err(ParseError::item(
+                what,
+                format!("expected {} bytes, found {}", buffer.length(), data.len()),
+            ));
+        }
+        out.push(gltf::buffer::Data(data));
+    }
+    Ok(out)
+}
+
+/// The bytes a URI names, through the asset-folder policy (`confine`): a
+/// `data:` URI decoded, or a regular file inside the folder within the
+/// memory budget. A GLB read from memory has no folder, so files are refused.
+fn read_uri(uri: &str, base: Option<&Path>, what: &str) -> ParseResult<Vec<u8>> {
+    let refused = |e: confine::Refused| ParseError::file(e.message().to_string());
+    let target = match base {
+        Some(folder) => confine::resolve_uri(folder, uri, what).map_err(refused)?,
+        None if uri.starts_with("data:") => confine::Target::Data,
+        None => {
+            return Err(ParseError::file(format!(
+                "{what}: uri {} names a file, but this glTF was read from memory",
+                confine::excerpt(uri)
+            )));
+        }
+    };
+    match target {
+        confine::Target::Data => {
+            gltf::buffer::Data::from_source(gltf::buffer::Source::Uri(uri), None)
+                .map(|d| d.0)
+                .map_err(|e| {
+                    ParseError::file(format!("{what}: expected a readable data URI ({e})"))
+                })
+        }
+        confine::Target::File(path) => {
+            confine::read_regular(&path, super::limits::current().memory_budget).map_err(refused)
         }
     }
-    Ok(())
 }
 
 /// Checks that every element of the accessor lies inside its buffer view and buffer.
@@ -411,52 +490,22 @@ fn read_primitive(
 }
 
 /// The material of a primitive, its base-colour texture's image included (bytes
-/// as stored: a buffer view, a data URI or a file next to the glTF).
+/// as stored: a buffer view, a data URI or a file in the asset folder).
 fn read_material(
     m: &gltf::Material,
     buffers: &[gltf::buffer::Data],
-    base: Option<&Path>,
+    images: &mut ImageCache,
 ) -> ParseResult<Material> {
     let pbr = m.pbr_metallic_roughness();
-    let what = || {
-        format!(
-            "material {}",
-            m.index().map_or("default".into(), |i| i.to_string())
-        )
-    };
     let texture = match pbr.base_color_texture() {
         // Only TEXCOORD_0 is carried, so textures on other sets are left out.
         Some(info) if info.tex_coord() == 0 => {
             let tex = info.texture();
-            let (bytes, mime_type) = match tex.source().source() {
-                gltf::image::Source::View { view, mime_type } => {
-                    let data = buffers
-                        .get(view.buffer().index())
-                        .map_or(&[][..], |d| &d.0[..]);
-                    let bytes = view
-                        .offset()
-                        .checked_add(view.length())
-                        .and_then(|end| data.get(view.offset()..end))
-                        .ok_or_else(|| {
-                            ParseError::item(what(), "expected its image inside its buffer")
-                        })?;
-                    (bytes.to_vec(), mime_type.to_string())
-                }
-                gltf::image::Source::Uri { uri, mime_type } => {
-                    let bytes =
-                        read_image_uri(uri, base).map_err(|e| ParseError::item(what(), e))?;
-                    let png = bytes.starts_with(b"\x89PNG");
-                    let mime = mime_type.map_or(
-                        if png { "image/png" } else { "image/jpeg" }.to_string(),
-                        str::to_string,
-                    );
-                    (bytes, mime)
-                }
-            };
+            let (bytes, mime_type) = images.get(&tex.source(), buffers)?;
             let sampler = tex.sampler();
             Some(Image {
                 mime_type,
-                bytes: bytes.into(),
+                bytes,
                 mag_filter: sampler.mag_filter().map(|f| f.as_gl_enum()),
                 min_filter: sampler.min_filter().map(|f| f.as_gl_enum()),
                 wrap_s: sampler.wrap_s().as_gl_enum(),
@@ -482,34 +531,65 @@ fn read_material(
     })
 }
 
-/// The largest image file a glTF may reference (a hostile file could name a
-/// device or a huge file).
-const MAX_IMAGE_BYTES: u64 = 256 << 20;
+/// Each image's bytes, read once however many materials name it (60
+/// materials naming one 200 MB file held it 60 times), its declared size
+/// checked against the memory budget before anything decodes it.
+struct ImageCache<'a> {
+    base: Option<&'a Path>,
+    read: Vec<Option<(Arc<[u8]>, String)>>,
+}
 
-/// The bytes of an image URI: a data URI, or a regular file beside the glTF.
-fn read_image_uri(uri: &str, base: Option<&Path>) -> Result<Vec<u8>, String> {
-    if uri.starts_with("data:") {
-        // The decoder pads buffers to 4 bytes; an image keeps its exact length.
-        let payload = uri.rsplit(',').next().unwrap_or("").trim_end_matches('=');
-        let exact = payload.len() * 3 / 4;
-        return gltf::buffer::Data::from_source(gltf::buffer::Source::Uri(uri), None)
-            .map(|d| d.0[..exact.min(d.0.len())].to_vec())
-            .map_err(|e| format!("expected a readable data URI ({e})"));
-    }
-    let Some(base) = base.filter(|_| !uri.contains(':')) else {
-        return Err(format!(
-            "expected a data URI or a file beside the glTF, found {uri:?}"
-        ));
-    };
-    let path = base.join(uri);
-    match std::fs::metadata(&path) {
-        Ok(m) if m.is_file() && m.len() <= MAX_IMAGE_BYTES => {
-            std::fs::read(&path).map_err(|e| format!("expected a readable image {uri:?} ({e})"))
+impl<'a> ImageCache<'a> {
+    fn new(document: &gltf::Document, base: Option<&'a Path>) -> Self {
+        ImageCache {
+            base,
+            read: vec![None; document.images().len()],
         }
-        Ok(_) => Err(format!(
-            "expected {uri:?} to be an image file of at most 256 MiB"
-        )),
-        Err(e) => Err(format!("expected the image file {uri:?} ({e})")),
+    }
+
+    /// The image's bytes as stored and its MIME type.
+    fn get(
+        &mut self,
+        image: &gltf::Image,
+        buffers: &[gltf::buffer::Data],
+    ) -> ParseResult<(Arc<[u8]>, String)> {
+        let what = format!("image {}", image.index());
+        if let Some(Some(hit)) = self.read.get(image.index()) {
+            return Ok(hit.clone());
+        }
+        let (bytes, mime) = match image.source() {
+            gltf::image::Source::View { view, mime_type } => {
+                let data = buffers
+                    .get(view.buffer().index())
+                    .map_or(&[][..], |d| &d.0[..]);
+                let bytes = view
+                    .offset()
+                    .checked_add(view.length())
+                    .and_then(|end| data.get(view.offset()..end))
+                    .ok_or_else(|| ParseError::item(&what, "expected it inside its buffer"))?;
+                (bytes.to_vec(), mime_type.to_string())
+            }
+            gltf::image::Source::Uri { uri, mime_type } => {
+                let mut bytes = read_uri(uri, self.base, &what)?;
+                if uri.starts_with("data:") {
+                    // The decoder pads to 4 bytes; an image keeps its exact length.
+                    let payload = uri.rsplit(',').next().unwrap_or("").trim_end_matches('=');
+                    bytes.truncate(payload.len() * 3 / 4);
+                }
+                let png = bytes.starts_with(b"\x89PNG");
+                let mime = mime_type.map_or(
+                    if png { "image/png" } else { "image/jpeg" }.to_string(),
+                    str::to_string,
+                );
+                (bytes, mime)
+            }
+        };
+        super::image::check_declared_size(&bytes).map_err(|e| ParseError::item(&what, e))?;
+        let entry = (Arc::<[u8]>::from(bytes), mime);
+        if let Some(slot) = self.read.get_mut(image.index()) {
+            *slot = Some(entry.clone());
+        }
+        Ok(entry)
     }
 }
 
@@ -533,41 +613,36 @@ pub fn split_glb(glb: &[u8], bin_name: &str) -> Option<(Vec<u8>, Vec<u8>)> {
     Some((serde_json::to_vec_pretty(&doc).ok()?, bin))
 }
 
-/// The files beside a glTF that it names (external buffers and images, in
-/// document order, each once): what a glTF's content is made of besides its
-/// own bytes (batch caches hash them). Unreadable documents name none.
-pub fn referenced_files(path: &Path, bytes: &[u8]) -> Vec<PathBuf> {
+/// The files a glTF names (external buffers and images, in document order,
+/// each once, canonical): what its content is made of besides its own bytes
+/// (batch caches hash them). Each goes through the asset-folder policy, so a
+/// reference outside it is an error here as when the model loads, and is
+/// never read. Unreadable documents name none (they fail when loaded).
+///
+/// # Errors
+/// The first reference the policy refuses.
+pub fn referenced_files(path: &Path, bytes: &[u8]) -> Result<Vec<PathBuf>, confine::Refused> {
     let Ok(gltf) = gltf::Gltf::from_slice_without_validation(bytes) else {
-        return Vec::new();
+        return Ok(Vec::new());
     };
-    let base = path.parent().unwrap_or(Path::new("."));
+    let folder = path.parent().unwrap_or(Path::new("."));
     let buffers = gltf.document.buffers().filter_map(|b| match b.source() {
-        gltf::buffer::Source::Uri(uri) => Some(uri),
+        gltf::buffer::Source::Uri(uri) => Some((format!("buffer {}", b.index()), uri)),
         gltf::buffer::Source::Bin => None,
     });
     let images = gltf.document.images().filter_map(|i| match i.source() {
-        gltf::image::Source::Uri { uri, .. } => Some(uri),
+        gltf::image::Source::Uri { uri, .. } => Some((format!("image {}", i.index()), uri)),
         gltf::image::Source::View { .. } => None,
     });
     let mut out: Vec<PathBuf> = Vec::new();
-    for uri in buffers.chain(images) {
-        let relative = uri
-            .strip_prefix("file://")
-            .or_else(|| uri.strip_prefix("file:"))
-            .map(str::to_owned)
-            .or_else(|| {
-                (!uri.contains(':'))
-                    .then(|| urlencoding::decode(uri).ok().map(|d| d.into_owned()))
-                    .flatten()
-            });
-        if let Some(r) = relative {
-            let p = base.join(r);
-            if !out.contains(&p) {
-                out.push(p);
-            }
+    for (what, uri) in buffers.chain(images) {
+        if let confine::Target::File(p) = confine::resolve_uri(folder, uri, &what)?
+            && !out.contains(&p)
+        {
+            out.push(p);
         }
     }
-    out
+    Ok(out)
 }
 
 #[cfg(test)]
@@ -611,28 +686,112 @@ mod tests {
         assert!(read_lod(&single, None, 1).is_err());
     }
 
-    #[test]
-    fn image_uris_are_data_or_files_beside_the_gltf() {
-        let here = Path::new(env!("CARGO_MANIFEST_DIR"));
-        assert_eq!(
-            read_image_uri("data:image/png;base64,AAEC", None),
-            Ok(vec![0, 1, 2])
-        );
-        assert_eq!(
-            read_image_uri("Cargo.toml", Some(here)).ok(),
-            std::fs::read(here.join("Cargo.toml")).ok()
-        );
-        for bad in [
-            "/dev/zero",
-            "src",
-            "http://example.invalid/a.png",
-            "missing.png",
-        ] {
-            assert!(read_image_uri(bad, Some(here)).is_err(), "{bad}");
+    /// A one-triangle glTF whose buffer and image are the URIs given.
+    fn gltf_naming(buffer: &str, image: Option<&str>) -> Vec<u8> {
+        let mut doc = serde_json::json!({
+            "asset": {"version": "2.0"},
+            "buffers": [{"uri": buffer, "byteLength": 36}],
+            "bufferViews": [{"buffer": 0, "byteLength": 36}],
+            "accessors": [{"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3",
+                "min": [0, 0, 0], "max": [1, 1, 0]}],
+            "meshes": [{"primitives": [{"attributes": {"POSITION": 0}, "material": 0}]}],
+            "materials": [{}],
+            "nodes": [{"mesh": 0}],
+            "scenes": [{"nodes": [0]}],
+        });
+        if let Some(uri) = image {
+            doc["images"] = serde_json::json!([{"uri": uri}]);
+            doc["textures"] = serde_json::json!([{"source": 0}]);
+            doc["materials"][0]["pbrMetallicRoughness"] =
+                serde_json::json!({"baseColorTexture": {"index": 0}});
         }
-        assert!(
-            read_image_uri("Cargo.toml", None).is_err(),
-            "no folder for a GLB in memory"
+        serde_json::to_vec(&doc).unwrap()
+    }
+
+    fn triangle_bytes() -> Vec<u8> {
+        [0f32, 0., 0., 1., 0., 0., 0., 1., 0.]
+            .iter()
+            .flat_map(|v| v.to_le_bytes())
+            .collect()
+    }
+
+    #[test]
+    fn buffers_and_images_are_read_only_inside_the_asset_folder() {
+        let dir = tempfile::tempdir().unwrap();
+        let model = dir.path().join("model");
+        std::fs::create_dir_all(model.join("sub")).unwrap();
+        std::fs::write(model.join("sub/tri.bin"), triangle_bytes()).unwrap();
+        std::fs::write(dir.path().join("secret.bin"), triangle_bytes()).unwrap();
+        std::fs::write(model.join("img.png"), b"\x89PNG not decoded here").unwrap();
+        let read_at = |json: &[u8]| read(json, Some(&model));
+        let ok = read_at(&gltf_naming("sub/tri.bin", Some("img.png"))).unwrap();
+        assert_eq!(ok.triangles.len(), 1);
+        let image = ok.materials.unwrap().table[0]
+            .base_color_texture
+            .clone()
+            .unwrap();
+        assert_eq!(&image.bytes[..], b"\x89PNG not decoded here");
+        let inline = format!(
+            "data:application/octet-stream;base64,{}",
+            "AAAAAAAAAAAAAAAAAACAPwAAAAAAAAAAAAAAAAAAgD8AAAAA"
         );
+        assert_eq!(
+            read_at(&gltf_naming(&inline, None))
+                .unwrap()
+                .triangles
+                .len(),
+            1
+        );
+        let secret = dir.path().join("secret.bin");
+        let secret = secret.to_str().unwrap();
+        for (buffer, image, item) in [
+            ("../secret.bin", None, "buffer 0"),
+            (secret, None, "buffer 0"),
+            (&format!("file://{secret}"), None, "buffer 0"),
+            ("sub/tri.bin", Some("/etc/passwd"), "image 0"),
+            ("sub/tri.bin", Some("../secret.bin"), "image 0"),
+        ] {
+            let e = read_at(&gltf_naming(buffer, image)).unwrap_err().expected;
+            assert!(
+                e.starts_with(item) && e.contains("outside the asset folder"),
+                "{e}"
+            );
+            let named = referenced_files(&model.join("m.gltf"), &gltf_naming(buffer, image));
+            assert!(named.is_err(), "{buffer} {image:?}");
+        }
+        assert_eq!(
+            referenced_files(
+                &model.join("m.gltf"),
+                &gltf_naming("sub/tri.bin", Some("img.png"))
+            ),
+            Ok(vec![
+                model.join("sub/tri.bin").canonicalize().unwrap(),
+                model.join("img.png").canonicalize().unwrap()
+            ])
+        );
+        // A GLB read from memory has no folder: no file is read for it.
+        let e = read(&gltf_naming("sub/tri.bin", None), None)
+            .unwrap_err()
+            .expected;
+        assert!(e.contains("read from memory"), "{e}");
+    }
+
+    #[test]
+    fn a_node_graph_that_multiplies_its_instances_is_refused() {
+        // 28 levels of nodes, each listing the next twice: 2^28 instances.
+        let mut doc: serde_json::Value =
+            serde_json::from_slice(&gltf_naming("tri.bin", None)).unwrap();
+        let mut nodes = vec![serde_json::json!({"mesh": 0})];
+        for level in 1..28 {
+            nodes.push(serde_json::json!({"children": [level - 1, level - 1]}));
+        }
+        doc["nodes"] = nodes.into();
+        doc["scenes"] = serde_json::json!([{"nodes": [27]}]);
+        let dir = tempfile::tempdir().unwrap();
+        std::fs::write(dir.path().join("tri.bin"), triangle_bytes()).unwrap();
+        let start = std::time::Instant::now();
+        let e = read(&serde_json::to_vec(&doc).unwrap(), Some(dir.path())).unwrap_err();
+        assert!(e.expected.contains("node instances"), "{}", e.expected);
+        assert!(start.elapsed().as_secs() < 20);
     }
 }

@@ -600,26 +600,39 @@ fn glb_container(mut json: Vec<u8>, bin: Vec<u8>) -> Vec<u8> {
 /// chains: `lodstudio export` and the studio's chain export); returns the
 /// bytes written.
 pub fn write_file(output: &std::path::Path, glb: &[u8]) -> Result<usize, String> {
-    let fail =
-        |p: &std::path::Path, e: std::io::Error| format!("{}: cannot write: {e}", p.display());
+    let files = encode_file(output, glb)?;
+    for (path, bytes) in &files {
+        super::write_atomic(path, bytes)
+            .map_err(|e| format!("{}: cannot write: {e}", path.display()))?;
+    }
+    Ok(files.iter().map(|(_, b)| b.len()).sum())
+}
+
+/// The files a GLB becomes at `output`: itself, or for `.gltf` the JSON and
+/// its `.bin` beside it (the `.bin` first, so the JSON never names a
+/// buffer that is not there yet).
+///
+/// # Errors
+/// `glb` is no GLB container (an internal error).
+pub fn encode_file(
+    output: &std::path::Path,
+    glb: &[u8],
+) -> Result<Vec<(std::path::PathBuf, Vec<u8>)>, String> {
     let gltf = output
         .extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("gltf"));
-    if gltf {
-        let bin_path = output.with_extension("bin");
-        let bin_name = bin_path
-            .file_name()
-            .unwrap_or_default()
-            .to_string_lossy()
-            .into_owned();
-        let (json, bin) = super::gltf::split_glb(glb, &bin_name)
-            .ok_or_else(|| "internal: the GLB writer made no container".to_string())?;
-        super::write_atomic(&bin_path, &bin).map_err(|e| fail(&bin_path, e))?;
-        super::write_atomic(output, &json).map_err(|e| fail(output, e))?;
-        return Ok(json.len() + bin.len());
+    if !gltf {
+        return Ok(vec![(output.to_path_buf(), glb.to_vec())]);
     }
-    super::write_atomic(output, glb).map_err(|e| fail(output, e))?;
-    Ok(glb.len())
+    let bin_path = output.with_extension("bin");
+    let bin_name = bin_path
+        .file_name()
+        .unwrap_or_default()
+        .to_string_lossy()
+        .into_owned();
+    let (json, bin) = super::gltf::split_glb(glb, &bin_name)
+        .ok_or_else(|| "internal: the GLB writer made no container".to_string())?;
+    Ok(vec![(bin_path, bin), (output.to_path_buf(), json)])
 }
 
 #[cfg(test)]

@@ -36,6 +36,45 @@ pub fn encode_png(tex: &Texture) -> Vec<u8> {
     out
 }
 
+/// The width and height an encoded image declares in its header (PNG's
+/// IHDR, a JPEG's start-of-frame), read without decoding anything.
+pub fn declared_size(bytes: &[u8]) -> Option<(u32, u32)> {
+    let be32 = |at: usize| Some(u32::from_be_bytes(bytes.get(at..at + 4)?.try_into().ok()?));
+    let be16 = |at: usize| Some(u16::from_be_bytes(bytes.get(at..at + 2)?.try_into().ok()?) as u32);
+    if bytes.starts_with(b"\x89PNG\r\n\x1a\n") && bytes.get(12..16) == Some(b"IHDR") {
+        return Some((be32(16)?, be32(20)?));
+    }
+    if !bytes.starts_with(&[0xff, 0xd8]) {
+        return None;
+    }
+    // JPEG: walk the marker segments to the first start-of-frame.
+    let mut at = 2;
+    while bytes.get(at) == Some(&0xff) {
+        let marker = *bytes.get(at + 1)?;
+        let len = be16(at + 2)? as usize;
+        let sof = matches!(marker, 0xc0..=0xcf) && !matches!(marker, 0xc4 | 0xc8 | 0xcc);
+        if sof {
+            return Some((be16(at + 7)?, be16(at + 5)?));
+        }
+        at = at.checked_add(2 + len)?;
+    }
+    None
+}
+
+/// Refuses an image whose declared size would not fit the memory budget
+/// once decoded to RGBA8 (a 60000×60000 PNG is a few KB on disk and 13 GB
+/// decoded): checked from the header, before any decoder runs.
+pub fn check_declared_size(bytes: &[u8]) -> Result<(), String> {
+    let Some((w, h)) = declared_size(bytes) else {
+        return Ok(()); // not decoded by lodstudio; carried as stored
+    };
+    super::limits::check_budget(
+        &format!("decoding its {w}×{h} texels"),
+        u64::from(w) * u64::from(h) * 4,
+    )
+    .map_err(|e| e.expected)
+}
+
 /// Decodes `image` to RGBA8.
 ///
 /// # Errors
@@ -58,6 +97,7 @@ pub fn decode_rgba(image: &Image) -> Result<Rgba, String> {
     if width == 0 || height == 0 || width > MAX_SIDE || height > MAX_SIDE {
         return Err(format!("PNG of {width}×{height} texels is not shown"));
     }
+    check_declared_size(&image.bytes)?;
     let size = reader
         .output_buffer_size()
         .ok_or_else(|| "PNG: image too large".to_string())?;
@@ -137,5 +177,28 @@ mod tests {
         png_bytes.truncate(png_bytes.len() / 2);
         assert!(decode_rgba(&image(png_bytes, "image/png")).is_err());
         assert!(decode_rgba(&image(b"not a png".to_vec(), "image/png")).is_err());
+    }
+
+    #[test]
+    fn a_declared_size_is_read_from_the_header_and_checked_against_the_budget() {
+        // A PNG signature and IHDR declaring 60000×60000 texels: 13.4 GB decoded.
+        let mut bomb = b"\x89PNG\r\n\x1a\n\0\0\0\x0dIHDR".to_vec();
+        bomb.extend(60_000u32.to_be_bytes());
+        bomb.extend(60_000u32.to_be_bytes());
+        bomb.extend([8, 6, 0, 0, 0]);
+        assert_eq!(declared_size(&bomb), Some((60_000, 60_000)));
+        let e = check_declared_size(&bomb).unwrap_err();
+        assert!(
+            e.contains("60000×60000") && e.contains("over the budget"),
+            "{e}"
+        );
+        assert!(decode_rgba(&image(bomb, "image/png")).is_err());
+        // A JPEG's start of frame (baseline, 640 wide, 480 high) after an APP0.
+        let jpeg = [
+            0xff, 0xd8, 0xff, 0xe0, 0, 4, 0, 0, 0xff, 0xc0, 0, 11, 8, 0x01, 0xe0, 0x02, 0x80,
+        ];
+        assert_eq!(declared_size(&jpeg), Some((640, 480)));
+        assert_eq!(declared_size(b"GIF89a"), None);
+        assert!(check_declared_size(&jpeg).is_ok());
     }
 }

@@ -16,6 +16,13 @@ pub const MAX_DECOMPRESSED_ENV: &str = "LODSTUDIO_MAX_DECOMPRESSED";
 /// Environment variable overriding the memory budget (a size such as `8G`).
 pub const MAX_MEMORY_ENV: &str = "LODSTUDIO_MAX_MEMORY";
 
+/// A gzip stream may inflate to at most this many times its own size
+/// (above [`RATIO_FLOOR`]), besides the absolute cap: a 2 MB bomb of 2 GB
+/// is refused, where a model (2–10×) never comes near it.
+pub const MAX_RATIO: u64 = 100;
+/// What any gzip stream may inflate to whatever its ratio.
+pub const RATIO_FLOOR: u64 = 256 << 20;
+
 /// Assumed when the machine's memory cannot be read.
 const FALLBACK_MEMORY: u64 = 8 << 30;
 
@@ -26,6 +33,9 @@ pub struct Limits {
     pub max_decompressed: u64,
     /// Most bytes a reader may reserve for what one file's headers announce.
     pub memory_budget: u64,
+    /// Whether a gzip stream is also held to [`MAX_RATIO`] times its size
+    /// (the default; a cap the user names is taken as it is).
+    pub ratio_limited: bool,
 }
 
 impl Limits {
@@ -37,6 +47,7 @@ impl Limits {
         Limits {
             max_decompressed: total / 4,
             memory_budget: total / 2,
+            ratio_limited: true,
         }
     }
 
@@ -45,6 +56,7 @@ impl Limits {
         let mut limits = Limits::machine();
         if let Some(v) = env_size(MAX_DECOMPRESSED_ENV)? {
             limits.max_decompressed = v;
+            limits.ratio_limited = false;
         }
         if let Some(v) = env_size(MAX_MEMORY_ENV)? {
             limits.memory_budget = v;
@@ -71,11 +83,13 @@ fn machine_memory() -> Option<u64> {
 /// 0: not set yet (the environment's or the machine's limits on first use).
 static MAX_DECOMPRESSED: AtomicU64 = AtomicU64::new(0);
 static MEMORY_BUDGET: AtomicU64 = AtomicU64::new(0);
+static RATIO_LIMITED: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(true);
 
 /// Puts `limits` in force for the rest of the process.
 pub fn set(limits: Limits) {
     MAX_DECOMPRESSED.store(limits.max_decompressed.max(1), Ordering::Relaxed);
     MEMORY_BUDGET.store(limits.memory_budget.max(1), Ordering::Relaxed);
+    RATIO_LIMITED.store(limits.ratio_limited, Ordering::Relaxed);
 }
 
 /// The limits in force: those [`set`], else the environment's (a bad value
@@ -89,6 +103,7 @@ pub fn current() -> Limits {
         return Limits {
             max_decompressed: d,
             memory_budget: m,
+            ratio_limited: RATIO_LIMITED.load(Ordering::Relaxed),
         };
     }
     let limits = Limits::from_env().unwrap_or_else(|_| Limits::machine());

@@ -4,6 +4,7 @@
 //! Readers work on bytes and never trust a header count: every count is checked
 //! against the bytes that remain before anything is allocated from it.
 
+pub mod confine;
 pub mod cut_writer;
 mod error;
 pub mod gltf;
@@ -84,13 +85,13 @@ pub fn load(path: &Path, opts: &LoadOptions, progress: &Progress) -> Result<Load
     load_bytes(path, &bytes, opts, progress)
 }
 
-/// A file's bytes, read under the stage "reading file".
+/// A file's bytes, read under the stage "reading file": a regular file
+/// within the memory budget (a FIFO, a device or a folder is refused at
+/// once, `confine::read_regular`).
 pub fn read_file(path: &Path, progress: &Progress) -> Result<Vec<u8>, LoadError> {
     progress.stage("reading file");
-    std::fs::read(path).map_err(|source| LoadError::Io {
-        file: path.to_path_buf(),
-        source,
-    })
+    confine::read_regular(path, limits::current().memory_budget)
+        .map_err(|e| LoadError::Refused(e.message().to_string()))
 }
 
 /// Loads from bytes already in memory; `path` names the file in errors, gives
@@ -231,7 +232,7 @@ const GZIP_HEAD: u64 = 64 << 10;
 fn inflate_model(path: &Path, data: &[u8], raw_given: bool) -> Result<Vec<u8>, LoadError> {
     use std::io::Read;
     let malformed = |e: ParseError| LoadError::malformed(path, e);
-    let cap = limits::current().max_decompressed;
+    let cap = decompression_cap(data.len() as u64);
     let mut dec = flate2::read::MultiGzDecoder::new(data);
     let mut out = Vec::new();
     (&mut dec)
@@ -261,14 +262,32 @@ fn bad_gzip(e: std::io::Error) -> ParseError {
     ParseError::file(format!("expected a valid gzip stream ({e})"))
 }
 
+/// How far `compressed` bytes may inflate: the absolute cap, and no more
+/// than [`limits::MAX_RATIO`] times their size (models and volumes compress
+/// 2–10×; deflate's extreme is about 1000×, a bomb's ratio) above a floor
+/// that no real file of that size would need.
+pub fn decompression_cap(compressed: u64) -> u64 {
+    let limits = limits::current();
+    if !limits.ratio_limited {
+        return limits.max_decompressed;
+    }
+    let proportionate = compressed
+        .saturating_mul(limits::MAX_RATIO)
+        .max(limits::RATIO_FLOOR);
+    limits.max_decompressed.min(proportionate)
+}
+
 fn check_cap(len: u64, cap: u64) -> ParseResult<()> {
     if len <= cap {
         return Ok(());
     }
     Err(ParseError::file(format!(
-        "expected at most {} after decompression, the cap (raise it with \
-         --max-decompressed or {})",
+        "expected at most {} after decompression, the cap ({}× the compressed size \
+         above {}, at most {}; raise it with --max-decompressed or {})",
         limits::format_size(cap),
+        limits::MAX_RATIO,
+        limits::format_size(limits::RATIO_FLOOR),
+        limits::format_size(limits::current().max_decompressed),
         limits::MAX_DECOMPRESSED_ENV
     )))
 }
@@ -277,7 +296,7 @@ fn check_cap(len: u64, cap: u64) -> ParseResult<()> {
 /// refusing to produce more than the decompression cap or `limit`.
 pub fn gunzip(data: &[u8], limit: u64) -> ParseResult<Vec<u8>> {
     use std::io::Read;
-    let cap = limit.min(limits::current().max_decompressed);
+    let cap = limit.min(decompression_cap(data.len() as u64));
     let mut out = Vec::new();
     flate2::read::MultiGzDecoder::new(data)
         .take(cap + 1)
@@ -426,6 +445,15 @@ pub fn process_token() -> &'static str {
 
 /// Writes `bytes` to `path` atomically: a temporary file in the same folder, then rename.
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
+    let tmp = write_temporary(path, bytes)?;
+    std::fs::rename(&tmp, path).inspect_err(|_| {
+        let _ = std::fs::remove_file(&tmp);
+    })
+}
+
+/// Writes `bytes` to a new temporary file beside `path` (synced, named
+/// `.NAME.tmpTOKEN-N`), for a rename into place; removed again on failure.
+pub fn write_temporary(path: &Path, bytes: &[u8]) -> std::io::Result<PathBuf> {
     use std::io::Write;
     let dir = path
         .parent()
@@ -440,13 +468,15 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
     let n = WRITES.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
     let tmp: PathBuf = dir.join(format!(".{name}.tmp{}-{n}", process_token()));
     let result = (|| {
-        let mut f = std::fs::File::create(&tmp)?;
+        let mut f = std::fs::File::create_new(&tmp)?;
         f.write_all(bytes)?;
-        f.sync_all()?;
-        std::fs::rename(&tmp, path)
+        f.sync_all()
     })();
-    if result.is_err() {
-        let _ = std::fs::remove_file(&tmp);
+    match result {
+        Ok(()) => Ok(tmp),
+        Err(e) => {
+            let _ = std::fs::remove_file(&tmp);
+            Err(e)
+        }
     }
-    result
 }

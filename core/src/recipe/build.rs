@@ -300,6 +300,8 @@ fn mesh_hierarchy(
             use crate::voxel::{Filter, Pyramid, Source, pyramid::PyramidCut};
             let solid = crate::implicit::MeshSolid::new(mesh);
             let source = Source::Solid(&solid);
+            crate::voxel::check_resolution_budget(row.resolution())
+                .map_err(ChainError::BadInput)?;
             let mut pyramid =
                 Pyramid::build(source, row.resolution(), 1.0, Filter::Gaussian, progress)?;
             pyramid.post = row.post();

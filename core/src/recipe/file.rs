@@ -21,6 +21,12 @@ use crate::voxel::PostSimplify;
 pub const FORMAT: &str = "lodstudio-recipe";
 /// The recipe version this lodstudio writes and reads.
 pub const VERSION: u32 = 1;
+/// Most rows a chain may have (recipes and `--lods`): far more than any
+/// engine switches between, and a bound on what a hostile recipe may make
+/// a batch build (100,000 identical rows ran until killed).
+pub const MAX_ROWS: usize = 64;
+/// Largest recipe file read: 64 rows are a few kilobytes.
+pub const MAX_FILE_BYTES: u64 = 1 << 20;
 
 /// The settings of an LOD chain: its rows and how they switch.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -165,7 +171,9 @@ impl std::str::FromStr for RowTolerance {
                 .parse::<f32>()
                 .ok()
                 .filter(|v| v.is_finite() && *v >= 0.0)
-                .ok_or_else(|| format!("{item:?} is not a number >= 0"))
+                .ok_or_else(|| {
+                    format!("{} is not a number >= 0", crate::io::confine::excerpt(item))
+                })
         };
         if let Some(p) = item.strip_suffix('%') {
             Ok(RowTolerance::Percent(number(p)?))
@@ -174,7 +182,10 @@ impl std::str::FromStr for RowTolerance {
         } else {
             let r = number(item)?;
             if !(r > 0.0 && r <= 1.0) {
-                return Err(format!("{item:?} is not a triangle ratio in (0,1]"));
+                return Err(format!(
+                    "{} is not a triangle ratio in (0,1]",
+                    crate::io::confine::excerpt(item)
+                ));
             }
             Ok(RowTolerance::Ratio(r))
         }
@@ -306,10 +317,21 @@ impl Recipe {
         let recipe: Recipe = serde_path_to_error::deserialize(de).map_err(|e| {
             let path = e.path().to_string();
             let field = if path == "." { "recipe".into() } else { path };
-            RecipeError::new(field, e.inner().to_string())
+            RecipeError::new(
+                crate::io::confine::shorten(&field),
+                crate::io::confine::shorten(&e.inner().to_string()),
+            )
         })?;
         recipe.check()?;
         Ok(recipe)
+    }
+
+    /// Reads a recipe file (a regular file of at most [`MAX_FILE_BYTES`]); a
+    /// bad value's error names the file, the row and the field.
+    pub fn read(path: &std::path::Path) -> Result<Recipe, String> {
+        let bytes = crate::io::confine::read_regular(path, MAX_FILE_BYTES)
+            .map_err(|e| e.message().to_string())?;
+        Recipe::from_json(&bytes).map_err(|e| format!("{}: {e}", path.display()))
     }
 
     /// The recipe as written to a file (stable: fields in declaration order).
@@ -361,6 +383,12 @@ impl Recipe {
         }
         if self.rows.is_empty() {
             return Err(RecipeError::new("rows", "a chain needs at least one row"));
+        }
+        if self.rows.len() > MAX_ROWS {
+            return Err(RecipeError::new(
+                "rows",
+                format!("{} rows, at most {MAX_ROWS}", self.rows.len()),
+            ));
         }
         for (i, row) in self.rows.iter().enumerate() {
             row.check().map_err(|(field, message)| {
@@ -442,9 +470,14 @@ impl Row {
 pub fn parse_lods(list: &str, method: Option<Method>) -> Result<Vec<Row>, String> {
     let bad = |item: &str, why: &str| {
         format!(
-            "--lods: {item:?} {why} (expected items like 1%, 8px, a triangle ratio 0.25, or METHOD:1%)"
+            "--lods: {} {why} (expected items like 1%, 8px, a triangle ratio 0.25, or METHOD:1%)",
+            crate::io::confine::excerpt(item)
         )
     };
+    let items = list.split(',').count();
+    if items > MAX_ROWS {
+        return Err(format!("--lods: {items} items, at most {MAX_ROWS}"));
+    }
     let mut rows = Vec::new();
     for item in list.split(',').map(str::trim) {
         if item.is_empty() {
@@ -468,7 +501,8 @@ pub fn parse_lods(list: &str, method: Option<Method>) -> Result<Vec<Row>, String
         };
         let tolerance = tolerance.parse::<RowTolerance>().map_err(|e| {
             format!(
-                "--lods: {e} (expected items like 1%, 8px, a triangle ratio 0.25, or METHOD:1%)"
+                "--lods: {} (expected items like 1%, 8px, a triangle ratio 0.25, or METHOD:1%)",
+                crate::io::confine::shorten(&e)
             )
         })?;
         rows.push(Row::new(m, tolerance));

@@ -28,6 +28,18 @@ use crate::progress::{Cancelled, Progress};
 /// export, studio): below 8 the filter leaves nothing of §2's levels; 512³
 /// floats are 0.5 GiB, what a desktop holds beside the pyramid.
 pub const RESOLUTION_RANGE: std::ops::RangeInclusive<usize> = 8..=512;
+/// Refuses a resolution whose grids would not fit the memory budget: a
+/// pyramid holds a few float grids of the finest size at once (sampled,
+/// filtered, and the coarser levels: about four).
+pub fn check_resolution_budget(resolution: usize) -> Result<(), String> {
+    let voxels = (resolution as u64).saturating_pow(3);
+    crate::io::limits::check_budget(
+        &format!("a voxel pyramid of resolution {resolution}"),
+        voxels.saturating_mul(4 * 4),
+    )
+    .map_err(|e| e.expected)
+}
+
 /// Filter support radius R, in voxels of the sampling grid.
 pub const RADIUS_RANGE: std::ops::RangeInclusive<f32> = 0.0..=64.0;
 
