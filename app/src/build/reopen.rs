@@ -23,10 +23,7 @@ pub struct Reopened {
 /// # Errors
 /// The file cannot be read, or is damaged (a one-line reason).
 pub fn reopen(path: &Path) -> Result<Reopened, LoadError> {
-    let bytes = std::fs::read(path).map_err(|source| LoadError::Io {
-        file: path.to_path_buf(),
-        source,
-    })?;
+    let bytes = lodstudio_core::io::read_file(path, &lodstudio_core::Progress::new())?;
     let bad = |why: String| LoadError::malformed(path, ParseError::new(Location::File, why));
     let (header, hierarchy) =
         lodstudio_core::open::reopen(&bytes).map_err(|e| bad(e.to_string()))?;

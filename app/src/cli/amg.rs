@@ -52,8 +52,7 @@ pub fn run(args: AmgArgs) -> Result<(), CliError> {
     for out in [&args.output, &args.matrix_out].into_iter().flatten() {
         check_output(out, args.report.force)?;
     }
-    let loaded =
-        lodstudio_core::open::open(&args.file, &args.input.load_options()?, &Progress::new())?;
+    let loaded = open_input(&args.file, &args.input.load_options()?)?;
     let points = amg::point_set(&loaded.model).ok_or_else(|| {
         CliError::BadInput(format!(
             "{}: the amg method takes point sets and meshes, not a {}",
@@ -76,6 +75,11 @@ pub fn run(args: AmgArgs) -> Result<(), CliError> {
         )));
     }
     let texel = args.texel.unwrap_or_else(|| ms.default_texel());
+    io::limits::check_budget(
+        &format!("the level {level} textures at --texel {texel}"),
+        amg::primitive::texture_bytes(&ms, level, texel),
+    )
+    .map_err(|e| CliError::BadInput(format!("--texel: {}", e.expected)))?;
     let start = std::time::Instant::now();
     let prims = amg::primitives(&ms, level, texel, &progress)
         .map_err(|_| CliError::Failure("cancelled".into()))?;
@@ -87,8 +91,10 @@ pub fn run(args: AmgArgs) -> Result<(), CliError> {
         )?;
     }
     if let Some(out) = &args.matrix_out {
-        amg::write_matrix_market(&ms, out)
-            .map_err(|e| CliError::BadInput(format!("{}: cannot write: {e}", out.display())))?;
+        let mut bytes = Vec::new();
+        amg::write_matrix_market(&ms, &mut bytes)
+            .map_err(|e| CliError::Failure(format!("{}: cannot write: {e}", out.display())))?;
+        write_output(out, &bytes)?;
     }
     if let Some(out) = &args.output {
         write_cut(out, &prims.draw_set(None))?;

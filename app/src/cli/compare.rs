@@ -23,6 +23,9 @@ pub struct CompareArgs {
     /// red, only B: green, elsewhere the colour difference ×4).
     #[arg(long, value_name = "DIR")]
     save_diff: Option<PathBuf>,
+    /// Replace difference images that exist in --save-diff's folder.
+    #[arg(long)]
+    force: bool,
     /// Print one JSON object.
     #[arg(long)]
     json: bool,
@@ -30,10 +33,20 @@ pub struct CompareArgs {
     input: InputArgs,
 }
 
+/// Where view `i`'s difference image goes.
+fn diff_path(dir: &std::path::Path, i: usize) -> PathBuf {
+    dir.join(format!("view{i}.png"))
+}
+
 pub fn run(args: CompareArgs) -> Result<(), CliError> {
     let opts = args.input.load_options()?;
+    if let Some(dir) = &args.save_diff {
+        for i in 0..args.views as usize {
+            check_output(&diff_path(dir, i), args.force)?;
+        }
+    }
     let scene = |file: &std::path::Path| -> Result<Scene, CliError> {
-        let loaded = lodstudio_core::open::open(file, &opts, &Progress::new())?;
+        let loaded = open_input(file, &opts)?;
         Ok(Scene::from_model(&loaded.model))
     };
     let (a, b) = (scene(&args.a)?, scene(&args.b)?);
@@ -49,10 +62,7 @@ pub fn run(args: CompareArgs) -> Result<(), CliError> {
         .map_err(CliError::Failure)?;
     if let Some(dir) = &args.save_diff {
         for (i, view) in views.iter().enumerate() {
-            let path = dir.join(format!("view{i}.png"));
-            io::write_atomic(&path, &io::image::encode_png(&view.image)).map_err(|e| {
-                CliError::BadInput(format!("{}: cannot write: {e}", path.display()))
-            })?;
+            write_output(&diff_path(dir, i), &io::image::encode_png(&view.image))?;
         }
     }
     let n = views.len() as f64;

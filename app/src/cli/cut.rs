@@ -43,8 +43,8 @@ pub fn run(args: CutArgs) -> Result<(), CliError> {
     if let Some(out) = &args.output {
         check_output(out, args.report.force)?;
     }
-    let bytes = std::fs::read(&args.file)
-        .map_err(|e| CliError::BadInput(format!("{}: cannot read: {e}", args.file.display())))?;
+    super::outputs::input(&args.file)?;
+    let bytes = io::read_file(&args.file, &Progress::new())?;
     let start = std::time::Instant::now();
     let (header, mut hierarchy) = lodstudio_core::open::reopen(&bytes)
         .map_err(|e| CliError::BadInput(format!("{}: {e}", args.file.display())))?;

@@ -115,13 +115,12 @@ pub fn run(args: ExportArgs) -> Result<(), CliError> {
     // partly failed ran it too); a refused run leaves no file behind.
     let save = || -> Result<(), CliError> {
         match &args.save_recipe {
-            Some(path) => io::write_atomic(path, &recipe.to_json())
-                .map_err(|e| CliError::BadInput(format!("{}: cannot write: {e}", path.display()))),
+            Some(path) => write_output(path, &recipe.to_json()),
             None => Ok(()),
         }
     };
     let entries = match (&args.manifest, &args.file) {
-        (Some(m), _) => Some(lodstudio_core::batch::read_manifest(m).map_err(CliError::BadInput)?),
+        (Some(m), _) => Some(lodstudio_core::batch::read_manifest(m)?),
         (None, Some(file)) => lodstudio_core::batch::manifest::folder_or_glob(file)
             .map_err(CliError::BadInput)?
             .map(|files| {
@@ -134,7 +133,9 @@ pub fn run(args: ExportArgs) -> Result<(), CliError> {
     };
     if let Some(entries) = entries {
         let outcome = batch::run(&args, &recipe, entries)?;
+        // The batch ran (whatever became of its models): its recipe is kept.
         save()?;
+        super::outputs::commit()?;
         return outcome;
     }
     let file = args.file.as_deref().expect("a file when no manifest");
@@ -160,9 +161,7 @@ pub fn run(args: ExportArgs) -> Result<(), CliError> {
 
 /// Reads a recipe file; a bad value's error names the file, row and field.
 pub fn read_recipe(path: &Path) -> Result<Recipe, CliError> {
-    let bytes = std::fs::read(path)
-        .map_err(|e| CliError::BadInput(format!("{}: cannot read: {e}", path.display())))?;
-    Recipe::from_json(&bytes).map_err(|e| CliError::BadInput(format!("{}: {e}", path.display())))
+    Recipe::read(path).map_err(CliError::BadInput)
 }
 
 /// The recipe the options describe.
@@ -230,13 +229,19 @@ fn export_one(
 ) -> Result<serde_json::Value, CliError> {
     let mut options = input.load_options()?;
     options.repair.weld = recipe.weld();
-    let loaded = lodstudio_core::open::open(file, &options, &Progress::new())?;
+    let loaded = open_input(file, &options)?;
     let start = std::time::Instant::now();
     let chain = build_chain(&loaded.model, recipe, &Progress::new()).map_err(|e| match e {
         ChainError::BadInput(m) => CliError::BadInput(format!("{}: {m}", file.display())),
         ChainError::Cancelled => CliError::Failure("cancelled".into()),
     })?;
-    let bytes = io::gltf_writer::write_file(output, &chain.glb()).map_err(CliError::BadInput)?;
+    let mut bytes = 0;
+    for (path, data) in
+        io::gltf_writer::encode_file(output, &chain.glb()).map_err(CliError::BadInput)?
+    {
+        bytes += data.len();
+        write_output(&path, &data)?;
+    }
     let seconds = start.elapsed().as_secs_f64();
     let mesh = match &loaded.model {
         Model::Mesh(m) => Some(m),

@@ -92,8 +92,7 @@ pub fn run(args: HybridArgs) -> Result<(), CliError> {
                 csv.push_str(&format!("{name},{},{}\n", p.0, p.1));
             }
         }
-        io::write_atomic(path, csv.as_bytes())
-            .map_err(|e| CliError::BadInput(format!("{}: cannot write: {e}", path.display())))?;
+        write_output(path, csv.as_bytes())?;
     }
     let diag = mrg.diagonal;
     let cut = match (tolerance, &args.output) {

@@ -33,7 +33,7 @@ pub fn run(args: InfoArgs) -> Result<(), CliError> {
         return Ok(());
     }
     let file = args.file.expect("clap requires FILE without --builtins");
-    if let Ok(bytes) = std::fs::read(&file)
+    if let Ok(bytes) = io::read_file(&file, &Progress::new())
         && io::hierarchy_file::is_hierarchy(&bytes)
     {
         // A saved hierarchy: what it holds, checked whole (decoded and its

@@ -22,6 +22,12 @@ pub struct MeasureArgs {
 
 pub fn run(args: MeasureArgs) -> Result<(), CliError> {
     use lodstudio_core::distance::{SamplingOptions, hausdorff_mesh_mesh};
+    // Each sample is a point and its distance, on both sides.
+    io::limits::check_items("--samples", args.samples, 2 * 32)
+        .map_err(|e| CliError::BadInput(e.expected))?;
+    if args.samples == 0 {
+        return Err(CliError::BadInput("--samples must be at least 1".into()));
+    }
     let a = load_mesh(&args.a, &args.input)?;
     let b = load_mesh(&args.b, &args.input)?;
     let start = std::time::Instant::now();

@@ -3,7 +3,7 @@
 
 use std::path::PathBuf;
 
-use clap::{Args, Parser, Subcommand};
+use clap::{Args, CommandFactory, FromArgMatches, Parser, Subcommand};
 use lodstudio_core::geom::{RepairOptions, Weld};
 use lodstudio_core::io::{self, LoadError, LoadOptions, Model, RawSpec, ScalarType};
 use lodstudio_core::simplify::{CollapseOptions, SimplifyOptions, Target};
@@ -19,6 +19,7 @@ mod hybrid;
 mod info;
 mod measure;
 mod mergetree;
+mod outputs;
 mod simplify;
 mod voxel;
 
@@ -33,6 +34,42 @@ struct Cli {
     pub command: Option<Command>,
     #[command(flatten)]
     limits: LimitArgs,
+    #[command(flatten)]
+    confine: ConfineArgs,
+}
+
+/// Where the files a model names may be (io::confine; README, "Running on
+/// untrusted input").
+#[derive(Args, Debug)]
+struct ConfineArgs {
+    /// The folder that the files a model or manifest names (glTF buffers and
+    /// images, manifest lines) must lie in [default: the folder of the file
+    /// that names them].
+    #[arg(long, global = true, value_name = "DIR")]
+    asset_root: Option<PathBuf>,
+    /// Follow references anywhere: absolute paths, `..`, links out of the
+    /// folder and file: URIs (trusted local files only; off by default,
+    /// batch included).
+    #[arg(long, global = true)]
+    allow_outside_uris: bool,
+}
+
+impl ConfineArgs {
+    fn apply(&self) -> Result<(), CliError> {
+        if let Some(root) = &self.asset_root
+            && !root.is_dir()
+        {
+            return Err(CliError::BadInput(format!(
+                "--asset-root {}: not a folder",
+                root.display()
+            )));
+        }
+        io::confine::set(io::confine::Policy {
+            asset_root: self.asset_root.clone(),
+            allow_outside: self.allow_outside_uris,
+        });
+        Ok(())
+    }
 }
 
 /// Hard limits on what an input may make lodstudio allocate (io::limits).
@@ -55,6 +92,7 @@ impl LimitArgs {
         let mut limits = io::limits::Limits::from_env().map_err(CliError::BadInput)?;
         if let Some(v) = self.max_decompressed {
             limits.max_decompressed = v;
+            limits.ratio_limited = false;
         }
         if let Some(v) = self.max_memory {
             limits.memory_budget = v;
@@ -128,8 +166,7 @@ impl SaveArgs {
         let bytes = hierarchy
             .save(&params)
             .ok_or_else(|| CliError::Failure("this hierarchy cannot be saved".into()))?;
-        io::write_atomic(path, &bytes)
-            .map_err(|e| CliError::BadInput(format!("{}: cannot write: {e}", path.display())))
+        outputs::write(path, &bytes)
     }
 }
 
@@ -244,8 +281,22 @@ impl From<LoadError> for CliError {
     }
 }
 
+impl From<io::confine::Refused> for CliError {
+    fn from(e: io::confine::Refused) -> Self {
+        match e {
+            io::confine::Refused::Input(m) => CliError::BadInput(m),
+            io::confine::Refused::Io(m) => CliError::Failure(m),
+        }
+    }
+}
+
 pub fn run() -> Result<(), CliError> {
-    let cli = match Cli::try_parse() {
+    // `--kappa -1` is a value to refuse with its range, not an unknown option.
+    let parsed = Cli::command()
+        .mut_subcommands(|s| s.allow_negative_numbers(true))
+        .try_get_matches()
+        .and_then(|m| Cli::from_arg_matches(&m));
+    let cli = match parsed {
         Ok(c) => c,
         Err(e) => {
             use clap::error::ErrorKind;
@@ -263,7 +314,19 @@ pub fn run() -> Result<(), CliError> {
         }
     };
     cli.limits.apply()?;
-    match cli.command {
+    cli.confine.apply()?;
+    let result = dispatch(cli.command);
+    match result {
+        Ok(()) => outputs::commit(),
+        Err(e) => {
+            outputs::discard();
+            Err(e)
+        }
+    }
+}
+
+fn dispatch(command: Option<Command>) -> Result<(), CliError> {
+    match command {
         None => studio(None),
         Some(Command::Open { file }) => studio(Some(file)),
         Some(Command::Info(args)) => info::run(args),
@@ -347,12 +410,22 @@ pub fn parse_triple<T: std::str::FromStr + Copy + Default>(s: &str) -> Result<[T
     Ok(out)
 }
 
+/// Opens FILE (a model, builtin:NAME, FILE#lodN or a saved hierarchy) as
+/// an input of this run: no output of it may be written over the file.
+pub fn open_input(
+    file: &std::path::Path,
+    opts: &LoadOptions,
+) -> Result<lodstudio_core::io::Loaded, CliError> {
+    outputs::input(file)?;
+    Ok(lodstudio_core::open::open(file, opts, &Progress::new())?)
+}
+
 /// Loads FILE and insists on a triangle mesh.
 pub fn load_mesh(
     file: &std::path::Path,
     input: &InputArgs,
 ) -> Result<lodstudio_core::TriMesh, CliError> {
-    let loaded = lodstudio_core::open::open(file, &input.load_options()?, &Progress::new())?;
+    let loaded = open_input(file, &input.load_options()?)?;
     match loaded.model {
         Model::Mesh(m) => Ok(m),
         other => Err(CliError::BadInput(format!(
@@ -363,15 +436,15 @@ pub fn load_mesh(
     }
 }
 
-/// Refuses to replace an existing file unless `--force` was given.
+/// Claims an output of this run: an existing file is replaced only with
+/// `--force`, and no two outputs, nor an output and an input, share a path.
 pub fn check_output(out: &std::path::Path, force: bool) -> Result<(), CliError> {
-    if out.exists() && !force {
-        return Err(CliError::BadInput(format!(
-            "{} exists (use --force to overwrite)",
-            out.display()
-        )));
-    }
-    Ok(())
+    outputs::claim(out, force)
+}
+
+/// Writes one output file (put in place when the command succeeds).
+pub fn write_output(out: &std::path::Path, bytes: &[u8]) -> Result<(), CliError> {
+    outputs::write(out, bytes)
 }
 
 /// Writes a cut through the one writer (`io::cut_writer`: GLB holds it all,
@@ -380,13 +453,13 @@ pub fn write_cut(
     out: &std::path::Path,
     set: &lodstudio_core::lod::DrawSet,
 ) -> Result<(), CliError> {
-    io::cut_writer::write(out, set)
-        .map(|_| ())
-        .map_err(CliError::BadInput)
+    for (path, bytes) in io::cut_writer::encode(out, set).map_err(CliError::BadInput)? {
+        outputs::write(&path, &bytes)?;
+    }
+    Ok(())
 }
 
 pub fn write_mesh(out: &std::path::Path, mesh: &lodstudio_core::TriMesh) -> Result<(), CliError> {
     let bytes = io::encode_mesh(out, mesh).map_err(CliError::BadInput)?;
-    io::write_atomic(out, &bytes)
-        .map_err(|e| CliError::BadInput(format!("{}: cannot write: {e}", out.display())))
+    outputs::write(out, &bytes)
 }

@@ -11,10 +11,10 @@ pub struct SimplifyArgs {
     /// Output mesh (.obj, .ply or .glb).
     #[arg(short = 'o', long = "output", value_name = "OUT")]
     output: PathBuf,
-    /// Keep at most N triangles.
+    /// Keep at most N triangles (N >= 1).
     #[arg(long, value_name = "N")]
     triangles: Option<usize>,
-    /// Keep at most this fraction of the triangles (0..1).
+    /// Keep at most this fraction of the triangles, in (0, 1].
     #[arg(long, value_name = "R")]
     ratio: Option<f32>,
     /// Largest certified error: a distance, or a percentage of the bounding-box diagonal ("0.5%").
@@ -63,7 +63,19 @@ pub(super) fn parse_error_target(e: &str) -> Result<Target, CliError> {
 pub fn run(args: SimplifyArgs) -> Result<(), CliError> {
     check_output(&args.output, args.report.force)?;
     let target = match (args.triangles, args.ratio, &args.error) {
+        // "At most 0" cannot be honoured (a mesh keeps a triangle): refused,
+        // not answered with what the collapse could reach.
+        (Some(0), _, _) => {
+            return Err(CliError::BadInput(
+                "--triangles must be at least 1, got 0".into(),
+            ));
+        }
         (Some(n), _, _) => Target::Triangles(n),
+        (_, Some(r), _) if !(r > 0.0 && r <= 1.0) => {
+            return Err(CliError::BadInput(format!(
+                "--ratio must be in (0, 1], got {r}"
+            )));
+        }
         (_, Some(r), _) => Target::Ratio(r),
         (_, _, Some(e)) => parse_error_target(e)?,
         _ => unreachable!("clap requires one target"),

@@ -98,6 +98,8 @@ pub fn run(args: VoxelArgs) -> Result<(), CliError> {
             args.resolution
         )));
     }
+    lodstudio_core::voxel::check_resolution_budget(args.resolution)
+        .map_err(|e| CliError::BadInput(format!("--resolution: {e}")))?;
     if !(args.radius.is_finite() && radii.contains(&args.radius)) {
         return Err(CliError::BadInput(format!(
             "--radius must be in {radii:?} voxels, got {}",

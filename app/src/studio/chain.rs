@@ -300,9 +300,7 @@ impl StudioApp {
     /// Reads a recipe into the chain panel; a bad one is reported (naming
     /// the row and the field) and the rows stay as they were.
     pub fn open_recipe(&mut self, path: &Path) {
-        let read = std::fs::read(path)
-            .map_err(|e| format!("{}: cannot read: {e}", path.display()))
-            .and_then(|b| Recipe::from_json(&b).map_err(|e| format!("{}: {e}", path.display())));
+        let read = Recipe::read(path);
         match read {
             Ok(recipe) => {
                 self.info(format!("Opened the recipe {}", path.display()));
