@@ -5,12 +5,14 @@
 //! same bytes.
 //!
 //! - `manifest`: the inputs (a manifest file, a folder or a glob), each with
-//!   its per-asset recipe overrides;
+//!   its per-asset recipe overrides, confined to the asset root;
 //! - `shard`: which shard runs an input (balanced by size, largest first)
 //!   and the shard index from the environment;
 //! - `cache`: outputs keyed by the content of the inputs, the recipe and the
-//!   tool, kept in the output folder;
-//! - `schedule`: the models of one machine on workers within a memory budget.
+//!   tool, kept in the output folder, with the temporaries of killed runs
+//!   removed by the next (never a live run's);
+//! - `schedule`: the models of one machine on workers within a memory budget
+//!   (a gzip input counted at its inflated size).
 
 pub mod cache;
 pub mod manifest;
@@ -19,5 +21,5 @@ pub mod shard;
 
 pub use cache::{Cache, Lookup, Record};
 pub use manifest::{Entry, read_manifest};
-pub use schedule::{estimate_peak, run_within_budget};
+pub use schedule::{estimate_peak, parsed_size, run_within_budget};
 pub use shard::{Shard, assign};

@@ -2,17 +2,21 @@
 //! largest first, and a model whose estimated peak does not fit what the
 //! running ones leave waits (one that fits no budget runs alone).
 
+use std::io::Read;
+use std::path::Path;
 use std::sync::{Condvar, Mutex};
 
 use crate::lod::Method;
 use crate::recipe::Recipe;
 
-/// Bytes of memory per input byte that the heaviest method of `recipe`
-/// may reach at its peak, from BENCHMARKS.md's dragon figures (peak RSS
-/// over the PLY's bytes: hybrid 2.0 GB, AMG 0.8 GB, edge collapse 0.33 GB,
-/// merge tree 0.24 GB of a 32 MB file), plus the voxel grids.
-pub fn estimate_peak(input_bytes: u64, compressed: bool, recipe: &Recipe) -> u64 {
-    let bytes = input_bytes.saturating_mul(if compressed { 4 } else { 1 });
+/// Bytes of memory per parsed input byte that the heaviest method of
+/// `recipe` may reach at its peak, from BENCHMARKS.md's dragon figures (peak
+/// RSS over the PLY's bytes: hybrid 2.0 GB, AMG 0.8 GB, edge collapse
+/// 0.33 GB, merge tree 0.24 GB of a 32 MB file), plus the voxel grids.
+/// `parsed_bytes`: what the readers parse, a gzip input's inflated size
+/// ([`parsed_size`]), not the bytes on disk.
+pub fn estimate_peak(parsed_bytes: u64, recipe: &Recipe) -> u64 {
+    let bytes = parsed_bytes;
     let per_byte = |m: Method| -> u64 {
         match m {
             Method::Hybrid => 64,
@@ -37,7 +41,35 @@ pub fn estimate_peak(input_bytes: u64, compressed: bool, recipe: &Recipe) -> u64
         .map(|r| (r.resolution() as u64).pow(3) * 4 * 4)
         .max()
         .unwrap_or(0);
-    64 * 1024 * 1024 + bytes.saturating_mul(heaviest) + grids
+    (64u64 << 20)
+        .saturating_add(bytes.saturating_mul(heaviest))
+        .saturating_add(grids)
+}
+
+/// The bytes a reader parses from the file at `path`: its length, or for a
+/// gzip file (known by its first bytes, as the loader knows it) the length
+/// it inflates to, measured by inflating it as a stream and counting (no
+/// more than a buffer is held) up to `cap`. A stream that runs past the cap,
+/// or whose size cannot be learned (corrupt, unreadable after its start),
+/// counts as `cap`: the most a reader may be made to parse. A file that
+/// cannot be opened, or is not a regular file, counts 0 (it fails when
+/// built, alone).
+pub fn parsed_size(path: &Path, cap: u64) -> u64 {
+    let Ok(file) = crate::io::confine::open_regular(path) else {
+        return 0;
+    };
+    let len = file.metadata().map_or(0, |m| m.len());
+    let mut reader = std::io::BufReader::with_capacity(1 << 16, file);
+    let mut magic = [0u8; 2];
+    if reader.read_exact(&mut magic).is_err() || !crate::io::is_gzip(&magic) {
+        return len;
+    }
+    let stream = std::io::Cursor::new(magic).chain(reader);
+    let mut inflate = flate2::read::MultiGzDecoder::new(stream).take(cap.saturating_add(1));
+    match std::io::copy(&mut inflate, &mut std::io::sink()) {
+        Ok(n) if n <= cap => n,
+        _ => cap,
+    }
 }
 
 /// Runs its closure when dropped.
@@ -140,7 +172,44 @@ mod tests {
         assert_eq!(alone, [0, 1]);
         let r = Recipe::new(crate::recipe::parse_lods("hybrid:1%,simplify:2%", None).unwrap());
         let light = Recipe::new(crate::recipe::parse_lods("simplify:2%", None).unwrap());
-        assert!(estimate_peak(1 << 20, false, &r) > estimate_peak(1 << 20, false, &light));
-        assert!(estimate_peak(1 << 20, true, &light) > estimate_peak(1 << 20, false, &light));
+        assert!(estimate_peak(1 << 20, &r) > estimate_peak(1 << 20, &light));
+        assert!(estimate_peak(4 << 20, &light) >= (4 << 20) * 11);
+    }
+
+    /// A gzip input counts as what it inflates to (or the cap, when that is
+    /// over it or cannot be learned), not as its compressed bytes.
+    #[test]
+    fn gzip_inputs_count_their_inflated_size() {
+        use std::io::Write;
+        let dir = tempfile::tempdir().unwrap();
+        let gz = |name: &str, bytes: &[u8]| {
+            let path = dir.path().join(name);
+            let mut e = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::fast());
+            e.write_all(bytes).unwrap();
+            std::fs::write(&path, e.finish().unwrap()).unwrap();
+            path
+        };
+        let zeros = gz("zeros.obj.gz", &vec![0u8; 3 << 20]);
+        assert!(std::fs::metadata(&zeros).unwrap().len() < 64 << 10);
+        assert_eq!(parsed_size(&zeros, 1 << 30), 3 << 20);
+        assert_eq!(parsed_size(&zeros, 1 << 20), 1 << 20, "at the cap");
+        // Two members, as MultiGzDecoder (the loader) reads them.
+        let mut two = std::fs::read(&zeros).unwrap();
+        two.extend(std::fs::read(&zeros).unwrap());
+        let twice = dir.path().join("twice.ply.gz");
+        std::fs::write(&twice, &two).unwrap();
+        assert_eq!(parsed_size(&twice, 1 << 30), 6 << 20);
+        // Corrupt after its header: its size cannot be learned.
+        let mut broken = std::fs::read(&zeros).unwrap();
+        broken.truncate(broken.len() / 2);
+        broken.extend([0xff; 64]);
+        let broken_path = dir.path().join("broken.off.gz");
+        std::fs::write(&broken_path, broken).unwrap();
+        assert_eq!(parsed_size(&broken_path, 5 << 20), 5 << 20);
+        let plain = dir.path().join("plain.obj");
+        std::fs::write(&plain, b"v 0 0 0\n").unwrap();
+        assert_eq!(parsed_size(&plain, 1), 8, "not gzip: its length");
+        assert_eq!(parsed_size(&dir.path().join("missing.obj"), 1 << 20), 0);
+        assert_eq!(parsed_size(dir.path(), 1 << 20), 0, "a folder");
     }
 }
