@@ -75,11 +75,8 @@ pub fn run(args: AmgArgs) -> Result<(), CliError> {
         )));
     }
     let texel = args.texel.unwrap_or_else(|| ms.default_texel());
-    io::limits::check_budget(
-        &format!("the level {level} textures at --texel {texel}"),
-        amg::primitive::texture_bytes(&ms, level, texel),
-    )
-    .map_err(|e| CliError::BadInput(format!("--texel: {}", e.expected)))?;
+    amg::primitive::check_texel(&ms, level, texel)
+        .map_err(|e| CliError::BadInput(format!("--texel: {e}")))?;
     let start = std::time::Instant::now();
     let prims = amg::primitives(&ms, level, texel, &progress)
         .map_err(|_| CliError::Failure("cancelled".into()))?;

@@ -101,28 +101,51 @@ pub fn decode_srgb(v: u8) -> f32 {
     }
 }
 
-/// At most how many bytes the textures of `level`'s primitives take with
-/// texels of side `texel`: each domain's texture is no wider or taller
-/// than its members' bounding-box diagonal (plus the padding, at most that
-/// again), so a texel size asked of a CLI or a saved file is checked against
-/// the memory budget before any texture is made (`--texel 1e-9` grew past
-/// 2.4 GB).
-pub fn texture_bytes(ms: &Multiscale, level: usize, texel: f32) -> u64 {
+/// Most texels a level's textures may hold per input point (or
+/// [`MIN_TEXEL_CAP`] in all): a texture resamples the points (§4.3), so
+/// texels far finer than the points add nothing but memory.
+pub const TEXELS_PER_POINT: u64 = 4096;
+/// What every level may hold, however few its points.
+pub const MIN_TEXEL_CAP: u64 = 1 << 24;
+
+/// Refuses a texel size whose textures for `level` would be absurdly fine
+/// or not fit the memory budget (`--texel 1e-9` grew past 2.4 GB): each
+/// domain's texture spans its members' extent along the plane's axes (at
+/// most their bounding-box diagonal) padded by their median radius (at most
+/// the largest) on each side, clamped to [`MAX_TEXTURE`], which bounds the
+/// texels before any texture is made.
+pub fn check_texel(ms: &Multiscale, level: usize, texel: f32) -> Result<(), String> {
     let positions = &ms.points.positions;
-    ms.domains(level)
+    let texels: u64 = ms
+        .domains(level)
         .iter()
         .map(|members| {
             let (mut lo, mut hi) = (glam::Vec3::INFINITY, glam::Vec3::NEG_INFINITY);
+            let mut pad = 0f32;
             for &(m, _) in members {
                 let p = positions[m as usize];
                 lo = lo.min(p);
                 hi = hi.max(p);
+                pad = pad.max(ms.radii[m as usize]);
             }
-            let side = 2.0 * f64::from((hi - lo).length());
-            let texels = ((side / f64::from(texel)).ceil() as u64).clamp(1, u64::from(MAX_TEXTURE));
-            texels * texels * 4
+            let side = f64::from((hi - lo).length() + 2.0 * pad);
+            let n = ((side / f64::from(texel)).ceil() as u64).clamp(1, u64::from(MAX_TEXTURE));
+            n * n
         })
-        .sum()
+        .sum();
+    let cap = (positions.len() as u64 * TEXELS_PER_POINT).max(MIN_TEXEL_CAP);
+    if texels > cap {
+        return Err(format!(
+            "texel {texel} gives level {level} up to {texels} texels, over the {cap} its {} points \
+             can fill ({TEXELS_PER_POINT} per point): use a larger texel",
+            positions.len()
+        ));
+    }
+    crate::io::limits::check_budget(
+        &format!("level {level}'s textures at texel {texel}"),
+        texels * 4,
+    )
+    .map_err(|e| e.expected)
 }
 
 /// The primitives of `level` with texels of side `texel` (object units).

@@ -274,7 +274,7 @@ pub fn read_regular(path: &Path, limit: u64) -> Result<Vec<u8>, Refused> {
     }
     if meta.len() > limit {
         return Err(Refused::Input(format!(
-            "{shown}: {} is over the {} this file may have (raise --max-memory)",
+            "{shown}: {} is over the {} a file of this kind may have",
             super::limits::format_size(meta.len()),
             super::limits::format_size(limit)
         )));
