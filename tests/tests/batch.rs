@@ -798,17 +798,7 @@ fn a_model_over_its_timeout_is_killed_and_reported() {
         std::time::Duration::from_secs(60),
     );
     assert!(start.elapsed().as_secs() < 20, "{:?}", start.elapsed());
-    assert_eq!(
-        run.status.code(),
-        Some(1),
-        "{}",
-        String::from_utf8_lossy(&run.stderr)
-    );
-    let j: Value = serde_json::from_slice(&run.stdout).unwrap();
-    assert_eq!(
-        (j["built"].as_u64(), j["failed"].as_u64()),
-        (Some(1), Some(1))
-    );
+    let j = summary_of(&run, 1, 1, 1);
     let failure = &j["failures"][0];
     assert!(
         failure["file"]
@@ -916,17 +906,7 @@ fn gltf_references_are_confined_to_the_batch_root() {
     let out = tmp.path().join("out");
     let (m, o) = (manifest.to_str().unwrap(), out.to_str().unwrap());
     let run = lodstudio(&["export", "--manifest", m, "--lods", LODS, "-o", o, "--json"]);
-    assert_eq!(
-        run.status.code(),
-        Some(2),
-        "{}",
-        String::from_utf8_lossy(&run.stderr)
-    );
-    let j: Value = serde_json::from_slice(&run.stdout).unwrap();
-    assert_eq!(
-        (j["built"].as_u64(), j["failed"].as_u64()),
-        (Some(2), Some(1))
-    );
+    let j = summary_of(&run, 2, 2, 1);
     let failure = &j["failures"][0];
     assert!(failure["file"].as_str().unwrap().ends_with("escape.gltf"));
     let error = failure["error"].as_str().unwrap();
@@ -963,4 +943,20 @@ fn export_manifest(manifest: &str, out: &str) -> (Option<i32>, Value) {
         run.status.code(),
         serde_json::from_slice(&run.stdout).unwrap(),
     )
+}
+
+/// A batch's summary, after checking its exit code and its built and failed counts.
+fn summary_of(run: &std::process::Output, code: i32, built: u64, failed: u64) -> Value {
+    assert_eq!(
+        run.status.code(),
+        Some(code),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let j: Value = serde_json::from_slice(&run.stdout).unwrap();
+    assert_eq!(
+        (j["built"].as_u64(), j["failed"].as_u64()),
+        (Some(built), Some(failed))
+    );
+    j
 }
