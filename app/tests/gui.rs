@@ -381,23 +381,19 @@ fn dropped_file_opens_and_becomes_recent() {
     );
 }
 
-/// A load blocked on a FIFO nobody writes to stays in progress until cancelled.
-#[cfg(unix)]
+/// A long load (the 871k-triangle dragon) stays in progress until cancelled,
+/// and the model shown before it stays.
 #[test]
 fn cancel_keeps_previous_model() {
-    let fifo = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("gui-cancel.fifo");
-    let _ = std::fs::remove_file(&fifo);
-    let made = std::process::Command::new("mkfifo")
-        .arg(&fifo)
-        .status()
-        .expect("run mkfifo");
-    assert!(made.success());
-
+    let dragon = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../shared/models/dragon_vrip.ply.gz"
+    );
     let mut harness = studio(Some("builtin:sphere".into()));
     wait_for_load(&mut harness);
     let before = harness.state().summary().expect("sphere loaded").clone();
 
-    harness.state_mut().open(&fifo);
+    harness.state_mut().open(dragon);
     harness.step();
     harness.step();
     assert!(harness.state().is_loading());
@@ -413,11 +409,38 @@ fn cancel_keeps_previous_model() {
         harness
             .state()
             .log_lines()
-            .any(|l| l.starts_with("Cancelled loading gui-cancel.fifo")),
+            .any(|l| l.starts_with("Cancelled loading dragon_vrip.ply.gz")),
     );
-    // Let the abandoned worker finish: a writer that closes at once gives it EOF.
-    drop(std::fs::OpenOptions::new().write(true).open(&fifo));
-    let _ = std::fs::remove_file(&fifo);
+}
+
+/// A FIFO (or a device) is no model: refused at once with a message, never
+/// waited on, and the model shown before it stays.
+#[cfg(unix)]
+#[test]
+fn a_fifo_is_refused_at_once_and_the_model_kept() {
+    let dir = tempfile::tempdir().unwrap();
+    let fifo = dir.path().join("gui.fifo");
+    let made = std::process::Command::new("mkfifo")
+        .arg(&fifo)
+        .status()
+        .expect("run mkfifo");
+    assert!(made.success());
+
+    let mut harness = studio(Some("builtin:sphere".into()));
+    wait_for_load(&mut harness);
+    let before = harness.state().summary().expect("sphere loaded").clone();
+
+    harness.state_mut().open(&fifo);
+    wait_for_load(&mut harness);
+    assert!(has_label(&harness, "Could not open model"), "error window");
+    assert!(
+        harness
+            .query_all_by_label_contains("a FIFO, not a regular file")
+            .next()
+            .is_some(),
+        "the error says why"
+    );
+    assert_eq!(harness.state().summary(), Some(&before));
 }
 
 /// Triangles the viewport draws now.

@@ -17,8 +17,8 @@ use super::CliError;
 
 #[derive(Default)]
 struct Transaction {
-    /// Paths claimed as outputs (as identified by [`identity`]) and by whom.
-    claimed: Vec<(PathBuf, String)>,
+    /// Paths claimed as outputs (as identified by [`identity`]).
+    claimed: Vec<PathBuf>,
     /// Inputs read: no output may replace one.
     inputs: Vec<PathBuf>,
     /// Written temporaries and where each goes.
@@ -57,11 +57,10 @@ pub fn claim(path: &Path, force: bool) -> Result<(), CliError> {
         if t.inputs.contains(&id) {
             return Err(same_as_input(path));
         }
-        if let Some((_, other)) = t.claimed.iter().find(|(p, _)| *p == id) {
+        if t.claimed.contains(&id) {
             return Err(CliError::BadInput(format!(
-                "{}: named for two outputs of one run ({other} and {}): give each its own file",
+                "{}: named for two outputs of one run (say --output and --save): give each its own file",
                 path.display(),
-                path.display()
             )));
         }
         if path.exists() && !force {
@@ -70,7 +69,7 @@ pub fn claim(path: &Path, force: bool) -> Result<(), CliError> {
                 path.display()
             )));
         }
-        t.claimed.push((id, path.display().to_string()));
+        t.claimed.push(id);
         Ok(())
     })
 }
@@ -86,7 +85,7 @@ fn same_as_input(path: &Path) -> CliError {
 pub fn input(path: &Path) -> Result<(), CliError> {
     let id = identity(path);
     with(|t| {
-        if t.claimed.iter().any(|(p, _)| *p == id) {
+        if t.claimed.contains(&id) {
             return Err(same_as_input(path));
         }
         t.inputs.push(id);
