@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Runs the whole test suite on a fresh machine: installs the software renderer the
 # GUI tests draw with (Mesa's lavapipe Vulkan driver; llvmpipe GL is the fallback)
-# when it is missing, then `cargo test --workspace --no-fail-fast`.
+# when it is missing, checks formatting and clippy (warnings are errors), then
+# `cargo test --workspace --no-fail-fast`.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -19,4 +20,14 @@ unset DISPLAY WAYLAND_DISPLAY
 export XDG_RUNTIME_DIR="${XDG_RUNTIME_DIR:-$(mktemp -d)}"
 chmod 700 "$XDG_RUNTIME_DIR"
 export CARGO_INCREMENTAL=0 CARGO_TERM_COLOR=never
+
+# What the README claims of the code: formatted, and clippy clean with the
+# workspace lints (Cargo.toml, clippy.toml) as errors. The layering check is
+# a test (tests/tests/layering.rs).
+if cargo fmt --version >/dev/null 2>&1 && cargo clippy --version >/dev/null 2>&1; then
+  cargo fmt --all --check
+  cargo clippy --workspace --all-targets -- -D warnings
+else
+  echo "warning: rustfmt or clippy is not installed: format and lint checks skipped" >&2
+fi
 exec cargo test --workspace --no-fail-fast "$@"

@@ -5,6 +5,10 @@
 //! studio's worker threads, the CLI) can show the stage, the fraction done and
 //! cancel at once.
 
+// A library answers bad input with an error, never a panic: no unwrap
+// outside tests (clippy.toml allows them in tests).
+#![warn(clippy::unwrap_used)]
+
 pub mod amg;
 pub mod batch;
 pub mod builtins;

@@ -371,9 +371,11 @@ pub fn marching_cubes(
         })
         .collect::<Result<_, Cancelled>>()?;
     let mut plane_offset = Vec::with_capacity(nz + 1);
-    plane_offset.push(0u32);
+    let mut edge_vertices = 0u32;
+    plane_offset.push(edge_vertices);
     for p in &planes {
-        plane_offset.push(plane_offset.last().unwrap() + p.positions.len() as u32);
+        edge_vertices += p.positions.len() as u32;
+        plane_offset.push(edge_vertices);
     }
 
     let layers: Vec<LayerTriangles> = (0..nz - 1)
@@ -461,7 +463,6 @@ pub fn marching_cubes(
         })
         .collect::<Result<_, Cancelled>>()?;
 
-    let edge_vertices = *plane_offset.last().unwrap();
     let mut positions = Vec::with_capacity(
         edge_vertices as usize + layers.iter().map(|l| l.centres.len()).sum::<usize>(),
     );
