@@ -148,8 +148,8 @@ mod tests {
             mesh: lodstudio_core::builtins::torus(1.0, 0.3, 8, 4),
             ..Default::default()
         };
-        let dir = std::env::temp_dir();
-        match write(&set, &dir.join("lodstudio-export-test.xyz")) {
+        let dir = tempfile::tempdir().unwrap();
+        match write(&set, &dir.path().join("lodstudio-export-test.xyz")) {
             Saved::Failed(message) => assert!(message.contains("xyz"), "{message}"),
             other => panic!("expected a failure, got {other:?}"),
         }

@@ -197,8 +197,8 @@ mod tests {
 
     #[test]
     fn session_round_trips_and_unchanged_sessions_are_not_rewritten() {
-        let dir = std::env::temp_dir().join(format!("lodstudio-session-{}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&dir);
+        let tmp = tempfile::tempdir().unwrap();
+        let dir = tmp.path().join("session");
         let mut autosave = Autosave::in_dir(&dir);
         assert_eq!(autosave.load(), Ok(None));
         assert_eq!(
@@ -237,6 +237,5 @@ mod tests {
             "out of range → clamped"
         );
         assert_eq!(restored.volume_threshold, None);
-        std::fs::remove_dir_all(&dir).unwrap();
     }
 }

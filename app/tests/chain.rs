@@ -27,14 +27,6 @@ fn shared(name: &str) -> PathBuf {
         .join(name)
 }
 
-fn temp(name: &str) -> PathBuf {
-    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("chain");
-    std::fs::create_dir_all(&dir).unwrap();
-    let path = dir.join(name);
-    let _ = std::fs::remove_file(&path);
-    path
-}
-
 /// The JSON chunk of a GLB.
 fn glb_json(glb: &[u8]) -> serde_json::Value {
     assert_eq!(&glb[0..4], b"glTF");
@@ -66,6 +58,7 @@ fn built_chain(harness: &mut Harness<'_, StudioApp>) {
 /// the LODs with the distance, and the export is the CLI's, byte for byte.
 #[test]
 fn a_mixed_chain_builds_previews_and_exports_as_the_cli_does() {
+    let tmp = tempfile::tempdir().unwrap();
     let bones = shared("bones.off");
     let mut harness = studio(Some(bones.clone()));
     wait_while(&mut harness, "loading", StudioApp::is_loading);
@@ -180,7 +173,7 @@ fn a_mixed_chain_builds_previews_and_exports_as_the_cli_does() {
     harness.state_mut().set_switch_distance(None);
 
     // Export, read back: three nodes, MSFT_lod ids, the LODs' primitives.
-    let out = temp("bones-chain.glb");
+    let out = tmp.path().join("bones-chain.glb");
     let ctx = harness.ctx.clone();
     harness.state_mut().export_chain_to(&out, &ctx);
     wait_while(&mut harness, "exporting", StudioApp::is_exporting);
@@ -203,10 +196,10 @@ fn a_mixed_chain_builds_previews_and_exports_as_the_cli_does() {
     );
 
     // The recipe saved from the studio replays in the CLI byte for byte.
-    let recipe_file = temp("bones-recipe.json");
+    let recipe_file = tmp.path().join("bones-recipe.json");
     harness.state_mut().save_recipe_to(&recipe_file, &ctx);
     wait_while(&mut harness, "saving", StudioApp::is_exporting);
-    let cli_out = temp("bones-cli.glb");
+    let cli_out = tmp.path().join("bones-cli.glb");
     let cli = std::process::Command::new(env!("CARGO_BIN_EXE_lodstudio"))
         .args(["export"])
         .arg(&bones)
@@ -237,6 +230,7 @@ fn a_mixed_chain_builds_previews_and_exports_as_the_cli_does() {
 /// it by its rule; a bad recipe file is refused naming the row and the field.
 #[test]
 fn the_panel_edits_rows_and_refuses_bad_recipes() {
+    let tmp = tempfile::tempdir().unwrap();
     let mut harness = studio(Some("builtin:torus".into()));
     wait_while(&mut harness, "loading", StudioApp::is_loading);
     let rows = |h: &Harness<'_, StudioApp>| h.state().chain_settings().recipe.rows.len();
@@ -282,7 +276,7 @@ fn the_panel_edits_rows_and_refuses_bad_recipes() {
         .collect();
     assert!(triangles.windows(2).all(|w| w[1] < w[0]), "{triangles:?}");
 
-    let bad = temp("bad-recipe.json");
+    let bad = tmp.path().join("bad-recipe.json");
     std::fs::write(
         &bad,
         r#"{"format":"lodstudio-recipe","version":1,"rows":[{"method":"simplify","tolerance":"1%"},{"method":"voxel","tolerance":"2%","resolution":2}]}"#,
@@ -307,8 +301,9 @@ fn the_panel_edits_rows_and_refuses_bad_recipes() {
 /// restart through the autosave.
 #[test]
 fn an_unsaved_chain_survives_a_restart() {
-    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("autosave-chain");
-    let _ = std::fs::remove_dir_all(&dir);
+    // Declared first, removed last: the studio below saves on drop.
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("autosave-chain");
     let interval = Duration::from_millis(100);
     let mut first = studio(Some("builtin:torus".into()));
     let autosave = Autosave::in_dir(&dir).with_interval(interval);
@@ -340,6 +335,7 @@ fn an_unsaved_chain_survives_a_restart() {
 /// materials into its LODs.
 #[test]
 fn the_truck_chain_is_drawn_textured_row_by_row() {
+    let tmp = tempfile::tempdir().unwrap();
     let truck = shared("CesiumMilkTruck.glb");
     let mut harness = studio(Some(truck));
     wait_while(&mut harness, "loading", StudioApp::is_loading);
@@ -379,7 +375,7 @@ fn the_truck_chain_is_drawn_textured_row_by_row() {
             "LOD{row}: {textured} vs {original}"
         );
     }
-    let out = temp("truck-chain.glb");
+    let out = tmp.path().join("truck-chain.glb");
     let ctx = harness.ctx.clone();
     harness.state_mut().export_chain_to(&out, &ctx);
     wait_while(&mut harness, "exporting", StudioApp::is_exporting);

@@ -353,8 +353,8 @@ impl egui::DroppedFile for Dropped {
 
 #[test]
 fn dropped_file_opens_and_becomes_recent() {
-    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR"));
-    let file = dir.join("gui-dropped-tetrahedron.off");
+    let tmp = tempfile::tempdir().unwrap();
+    let file = tmp.path().join("gui-dropped-tetrahedron.off");
     std::fs::write(
         &file,
         "OFF\n4 4 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n",
@@ -540,9 +540,9 @@ fn edge_collapse_builds_shows_certificate_and_exports() {
     assert!(shades > 20, "only {shades} shades");
 
     // Export writes a file the loader reads back with the same triangles.
-    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR"));
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path();
     let out = dir.join("gui-export.obj");
-    let _ = std::fs::remove_file(&out);
     assert_eq!(export_and_reload(&mut harness, &out), triangles);
 
     // A format the writer does not know is reported, not written.
@@ -645,8 +645,9 @@ fn build_on_a_point_set_explains_instead_of_failing() {
 /// reported and the defaults are used.
 #[test]
 fn autosave_restores_a_killed_session() {
-    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("autosave-killed");
-    let _ = std::fs::remove_dir_all(&dir);
+    // Declared first, removed last: the studios below save on drop.
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("autosave-killed");
     let interval = Duration::from_millis(100);
     let mut first = studio(Some(SKULL.into()));
     let autosave = Autosave::in_dir(&dir).with_interval(interval);
@@ -794,8 +795,8 @@ fn voxel_method_closes_holes_as_the_filter_widens() {
     assert_eq!(result_row(&harness, "LOD genus"), genus.to_string());
 
     // Export writes the voxel mesh.
-    let out = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("gui-voxel-export.ply");
-    let _ = std::fs::remove_file(&out);
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("gui-voxel-export.ply");
     let wide = harness
         .state()
         .result()
@@ -955,8 +956,8 @@ fn voxel_method_builds_a_volume_at_its_threshold() {
     );
     assert_eq!(drawn_triangles(&harness), Some(triangles));
 
-    let out = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("gui-voxel-volume-export.obj");
-    let _ = std::fs::remove_file(&out);
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("gui-voxel-volume-export.obj");
     assert_eq!(export_and_reload(&mut harness, &out), triangles);
 
     // The threshold belongs to the volume: reopening it keeps it, another
@@ -964,7 +965,7 @@ fn voxel_method_builds_a_volume_at_its_threshold() {
     harness.state_mut().open(SKULL);
     wait_for_load(&mut harness);
     assert_eq!(harness.state().methods().voxel.threshold, Some(2.9));
-    let other = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("gui-ramp.nrrd");
+    let other = tmp.path().join("gui-ramp.nrrd");
     let mut nrrd =
         b"NRRD0004\ntype: uint8\ndimension: 3\nsizes: 4 4 4\nencoding: raw\nendian: little\n\n"
             .to_vec();
@@ -1202,9 +1203,9 @@ fn hybrid_cut_mixes_triangles_and_points_live() {
     harness.run();
     assert_eq!(cut_stats(&harness).cuts, coarse.cuts);
     // Export writes the cut's triangles and, beside them, its points.
-    let out = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("gui-hybrid-cut.obj");
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("gui-hybrid-cut.obj");
     let points = out.with_extension("points.ply");
-    let _ = std::fs::remove_file(&points);
     assert_eq!(export_and_reload(&mut harness, &out), coarse.triangles);
     let read = lodstudio_core::io::load(&points, &Default::default(), &Default::default())
         .expect("the points load");
@@ -1237,8 +1238,8 @@ fn saved_hierarchies_reopen_without_rebuilding() {
     harness.step();
     wait_for_build(&mut harness);
     let before = cut_stats(&harness);
-    let out = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("gui-tree.lodh");
-    let _ = std::fs::remove_file(&out);
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("gui-tree.lodh");
     let ctx = harness.ctx.clone();
     harness.state_mut().save_hierarchy_to(&out, &ctx);
     wait_while(&mut harness, "saving", StudioApp::is_exporting);
@@ -1310,7 +1311,8 @@ fn amg_splats_are_drawn_and_the_level_moves_live() {
         "one domain per face at the coarsest level"
     );
     // Export writes the splats: a GLB with their textures, blended ...
-    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR"));
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path();
     let ctx = harness.ctx.clone();
     harness.state_mut().export_to(dir.join("gui-amg.glb"), &ctx);
     wait_while(&mut harness, "exporting", StudioApp::is_exporting);
@@ -1319,7 +1321,6 @@ fn amg_splats_are_drawn_and_the_level_moves_live() {
     assert_eq!(text.matches("\"image/png\"").count(), 8);
     assert_eq!(text.matches("\"BLEND\"").count(), 8);
     // ... and a format that cannot hold them says so instead of dropping them.
-    let _ = std::fs::remove_file(dir.join("gui-amg.obj"));
     harness.state_mut().export_to(dir.join("gui-amg.obj"), &ctx);
     wait_while(&mut harness, "exporting", StudioApp::is_exporting);
     assert!(!dir.join("gui-amg.obj").exists());
@@ -1573,9 +1574,9 @@ fn the_exported_truck_lods_look_like_the_original() {
     wait_for_load(&mut harness);
     let camera = harness.state().viewport().camera;
     let original = viewport_image(&mut harness, "truck-file-original");
+    let tmp = tempfile::tempdir().unwrap();
     for (l, lod) in ["0.5%", "2%", "8%"].iter().enumerate() {
-        let out =
-            std::env::temp_dir().join(format!("lodstudio-truck-lod{l}-{}.glb", std::process::id()));
+        let out = tmp.path().join(format!("truck-lod{l}.glb"));
         let status = std::process::Command::new(env!("CARGO_BIN_EXE_lodstudio"))
             .args([
                 "export",
@@ -1613,6 +1614,5 @@ fn the_exported_truck_lods_look_like_the_original() {
             mean < most_mean && far < most_far,
             "LOD{l}: mean {mean}, far {far}"
         );
-        std::fs::remove_file(&out).ok();
     }
 }

@@ -2,12 +2,6 @@
 
 use lodstudio_tests::{lodstudio, lodstudio_json, shared_model};
 
-fn tmp(name: &str) -> std::path::PathBuf {
-    let dir = std::env::temp_dir().join(format!("lodstudio-amg-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir.join(name)
-}
-
 fn counts(j: &serde_json::Value, key: &str) -> Vec<u64> {
     j[key]
         .as_array()
@@ -28,7 +22,8 @@ fn octahedron_reaches_eight_face_primitives_in_a_glb() {
         .iter()
         .position(|&d| d == 8)
         .expect("a level of 8 domains");
-    let out = tmp("octahedron.glb");
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("octahedron.glb");
     let j = lodstudio_json(&[
         "amg",
         "builtin:octahedron-points",

@@ -9,26 +9,19 @@ use std::process::{Command, Stdio};
 use lodstudio_tests::{lodstudio, lodstudio_bin, malformed_dir, shared_model};
 use serde_json::Value;
 
-fn temp(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("lodstudio-batch-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
+/// A new, empty folder `name` in `tmp`.
+fn folder(tmp: &Path, name: &str) -> PathBuf {
+    let dir = tmp.join(name);
+    std::fs::create_dir(&dir).unwrap();
     dir
 }
 
-/// A new folder `name` holding copies of the shared models `models`.
-fn copies(name: &str, models: &[&str]) -> PathBuf {
-    let dir = temp(name);
-    for m in models {
-        std::fs::copy(shared_model(m), dir.join(m)).unwrap();
-    }
-    dir
-}
-
-/// 30 models: seven shared ones (the engine with its .bin), 19 built-ins
-/// written as OBJ, PLY and GLB, and four malformed files.
-fn thirty_models() -> (PathBuf, usize) {
-    let dir = copies(
+/// A folder `thirty` in `tmp` holding 30 models: seven shared ones (the engine
+/// with its .bin), 19 built-ins written as OBJ, PLY and GLB, and four
+/// malformed files.
+fn thirty_models(tmp: &Path) -> (PathBuf, usize) {
+    let dir = copies_in(
+        tmp,
         "thirty",
         &[
             "bones.off",
@@ -110,8 +103,9 @@ fn strs(v: &Value) -> Vec<String> {
 /// threads; the malformed models fail in the reports and stop nothing.
 #[test]
 fn three_concurrent_shards_write_what_one_run_writes() {
-    let (models, broken) = thirty_models();
-    let one = temp("one");
+    let tmp = tempfile::tempdir().unwrap();
+    let (models, broken) = thirty_models(tmp.path());
+    let one = folder(tmp.path(), "one");
     let (code, all) = export(&models, &one, &["--threads", "2"]);
     assert_eq!(code, Some(2), "malformed inputs make the exit 2");
     assert_eq!(all["models"], 30);
@@ -133,7 +127,7 @@ fn three_concurrent_shards_write_what_one_run_writes() {
         }
     }
 
-    let sharded = temp("sharded");
+    let sharded = folder(tmp.path(), "sharded");
     let children: Vec<_> = (0..3)
         .map(|i| {
             Command::new(lodstudio_bin())
@@ -189,7 +183,9 @@ fn three_concurrent_shards_write_what_one_run_writes() {
 #[test]
 fn a_killed_run_leaves_whole_files_and_the_next_completes_it() {
     use std::os::unix::process::CommandExt;
-    let models = copies(
+    let tmp = tempfile::tempdir().unwrap();
+    let models = copies_in(
+        tmp.path(),
         "kill-in",
         &[
             "horse.ply",
@@ -200,9 +196,9 @@ fn a_killed_run_leaves_whole_files_and_the_next_completes_it() {
             "bones.off",
         ],
     );
-    let reference = temp("kill-ref");
+    let reference = folder(tmp.path(), "kill-ref");
     assert_eq!(export(&models, &reference, &[]).0, Some(0));
-    let out = temp("kill-out");
+    let out = folder(tmp.path(), "kill-out");
     let mut child = Command::new(lodstudio_bin())
         .args(["export", models.to_str().unwrap(), "--lods", LODS, "-o"])
         .arg(&out)
@@ -256,7 +252,9 @@ fn reference_bytes(dir: &Path, name: &str) -> Vec<u8> {
 /// recipe everything.
 #[test]
 fn the_cache_skips_what_has_not_changed() {
-    let models = copies(
+    let tmp = tempfile::tempdir().unwrap();
+    let models = copies_in(
+        tmp.path(),
         "cache-in",
         &[
             "fandisk.obj",
@@ -268,7 +266,7 @@ fn the_cache_skips_what_has_not_changed() {
     );
     // A copy under another name: the same key, its own output and record.
     std::fs::copy(models.join("bones.off"), models.join("bones-copy.off")).unwrap();
-    let out = temp("cache-out");
+    let out = folder(tmp.path(), "cache-out");
     let (code, first) = export(&models, &out, &[]);
     assert_eq!((code, first["built"].as_u64()), (Some(0), Some(5)));
     let (_, again) = export(&models, &out, &[]);
@@ -321,7 +319,8 @@ fn the_cache_skips_what_has_not_changed() {
 /// write one output, a bad override or a bad shard are refused with exit 2.
 #[test]
 fn manifests_take_overrides_and_bad_plans_are_refused() {
-    let dir = temp("manifest");
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = folder(tmp.path(), "manifest");
     let recipe = dir.join("hero.json");
     let saved = lodstudio(&[
         "export",

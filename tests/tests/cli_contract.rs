@@ -4,8 +4,8 @@ use lodstudio_tests::{lodstudio, lodstudio_json, malformed_dir};
 
 #[test]
 fn every_malformed_file_gives_exit_2_and_one_line() {
-    let out_dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("malformed-out");
-    let _ = std::fs::remove_dir_all(&out_dir);
+    let tmp = tempfile::tempdir().unwrap();
+    let out_dir = tmp.path();
     let mut seen = 0;
     for entry in std::fs::read_dir(malformed_dir()).unwrap() {
         let path = entry.unwrap().path();
@@ -114,9 +114,8 @@ fn builtins_are_listed_and_all_load() {
 
 #[test]
 fn raw_volumes_need_and_use_their_layout() {
-    let dir = std::env::temp_dir().join(format!("lodstudio-raw-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let path = dir.join("cube.raw");
+    let tmp = tempfile::tempdir().unwrap();
+    let path = tmp.path().join("cube.raw");
     let data: Vec<u8> = (0..4 * 3 * 2).map(|i| i as u8).collect();
     std::fs::write(&path, &data).unwrap();
     let p = path.to_str().unwrap();
@@ -130,7 +129,6 @@ fn raw_volumes_need_and_use_their_layout() {
     assert_eq!(j["value_range"], serde_json::json!([0.0, 23.0]));
     let out = lodstudio(&["info", p, "--raw-dims", "4,3,3", "--raw-type", "u8"]);
     assert_eq!(out.status.code(), Some(2), "too few bytes for the grid");
-    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 /// `open FILE` (and no subcommand) starts the studio; with no display it

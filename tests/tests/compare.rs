@@ -3,20 +3,12 @@
 //! differs more, in silhouette and in PSNR; an exported LOD differs less than
 //! a grossly displaced copy; a missing level of a chain is bad input.
 
-use std::path::PathBuf;
+use std::path::Path;
 
 use glam::Vec3;
 use lodstudio_core::io;
 use lodstudio_tests::{lodstudio, lodstudio_json, shared_mesh, shared_model};
 use serde_json::Value;
-
-fn temp(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("lodstudio-compare-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let path = dir.join(name);
-    let _ = std::fs::remove_file(&path);
-    path
-}
 
 fn fandisk() -> String {
     shared_model("fandisk.obj").display().to_string()
@@ -49,14 +41,15 @@ fn f64_of(v: &Value) -> f64 {
     v.as_f64().unwrap_or_else(|| panic!("a number, not {v}"))
 }
 
-/// Fandisk moved by `fraction` of its bounding-box diagonal (obliquely), as OBJ.
-fn displaced(fraction: f32) -> String {
+/// Fandisk moved by `fraction` of its bounding-box diagonal (obliquely), as OBJ
+/// in `dir`.
+fn displaced(dir: &Path, fraction: f32) -> String {
     let mut mesh = shared_mesh("fandisk.obj");
     let shift = Vec3::new(1.0, 0.6, 0.3).normalize() * fraction * mesh.bounds().diagonal();
     for p in &mut mesh.positions {
         *p += shift;
     }
-    let out = temp(&format!("fandisk-{fraction}.obj"));
+    let out = dir.join(format!("fandisk-{fraction}.obj"));
     io::write_atomic(&out, &io::encode_mesh(&out, &mesh).unwrap()).unwrap();
     out.display().to_string()
 }
@@ -73,9 +66,10 @@ fn a_model_against_itself_differs_nowhere() {
 
 #[test]
 fn a_copy_moved_further_differs_more() {
+    let tmp = tempfile::tempdir().unwrap();
     let measured: Vec<(f64, f64)> = [0.005, 0.01, 0.02]
         .into_iter()
-        .map(|f| compare(&fandisk(), &displaced(f)))
+        .map(|f| compare(&fandisk(), &displaced(tmp.path(), f)))
         .collect();
     eprintln!("0.5%, 1%, 2% of the diagonal: {measured:?}");
     assert!(measured[0].0 > 0.0 && measured[0].1 < 100.0, "{measured:?}");
@@ -87,7 +81,8 @@ fn a_copy_moved_further_differs_more() {
 
 #[test]
 fn an_exported_lod_differs_less_than_a_displaced_copy() {
-    let chain = temp("fandisk.glb");
+    let tmp = tempfile::tempdir().unwrap();
+    let chain = tmp.path().join("fandisk.glb");
     let chain_arg = chain.display().to_string();
     let out = lodstudio(&[
         "export",
@@ -106,7 +101,7 @@ fn an_exported_lod_differs_less_than_a_displaced_copy() {
     );
     let lod0 = compare(&fandisk(), &format!("{chain_arg}#lod0"));
     let lod1 = compare(&fandisk(), &format!("{chain_arg}#lod1"));
-    let far = compare(&fandisk(), &displaced(0.3));
+    let far = compare(&fandisk(), &displaced(tmp.path(), 0.3));
     eprintln!("LOD0 {lod0:?}, LOD1 {lod1:?}, displaced by 30% {far:?}");
     assert!(
         lod0.0 <= lod1.0,
@@ -133,8 +128,8 @@ fn an_exported_lod_differs_less_than_a_displaced_copy() {
 
 #[test]
 fn difference_images_are_written_per_view() {
-    let dir = temp("diff");
-    let _ = std::fs::remove_dir_all(&dir);
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("diff");
     let dir_arg = dir.display().to_string();
     let out = lodstudio(&[
         "compare",

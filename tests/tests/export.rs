@@ -3,19 +3,11 @@
 //! core's glTF reader (a loader without the extension: it must see LOD0) and as
 //! raw glTF JSON (the extension, the LOD order and the thresholds).
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use lodstudio_core::io::gltf;
 use lodstudio_tests::{lodstudio, lodstudio_json, shared_model};
 use serde_json::Value;
-
-fn temp(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("lodstudio-export-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let path = dir.join(name);
-    let _ = std::fs::remove_file(&path);
-    path
-}
 
 /// The JSON chunk of a GLB.
 fn glb_json(glb: &[u8]) -> Value {
@@ -183,7 +175,8 @@ fn export_json(file: &str, lods: &str, out: &Path, extra: &[&str]) -> Value {
 
 #[test]
 fn torus_chain_round_trips() {
-    let out = temp("torus.glb");
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("torus.glb");
     let report = export_json("builtin:torus", "0.5%,2%,8%", &out, &[]);
     let lods = check_chain(&out, &report);
     assert_eq!(lods.len(), 3);
@@ -199,7 +192,8 @@ fn torus_chain_round_trips() {
 
 #[test]
 fn bunny_chain_round_trips() {
-    let out = temp("bunny.glb");
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("bunny.glb");
     let bunny = shared_model("stanford-bunny.obj");
     let report = export_json(bunny.to_str().unwrap(), "0.5%,2%,8%", &out, &[]);
     let lods = check_chain(&out, &report);
@@ -210,7 +204,8 @@ fn bunny_chain_round_trips() {
 
 #[test]
 fn pixel_and_ratio_items_are_sorted_by_decreasing_quality() {
-    let out = temp("mixed.glb");
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("mixed.glb");
     let (pixels, height) = (2.0, 1000.0);
     let report = export_json(
         "builtin:torus",
@@ -253,7 +248,8 @@ fn pixel_and_ratio_items_are_sorted_by_decreasing_quality() {
 
 #[test]
 fn bad_input_exits_2_and_loses_nothing() {
-    let out = temp("existing.glb");
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("existing.glb");
     std::fs::write(&out, b"keep me").unwrap();
     let o = out.to_str().unwrap();
     // (input, method, LIST, further arguments): each exits 2 with one line on
@@ -297,7 +293,7 @@ fn bad_input_exits_2_and_loses_nothing() {
         assert_eq!(std::fs::read(&out).unwrap(), b"keep me", "{args:?}");
     }
     // Not a .glb name: refused before anything is written.
-    let obj = temp("chain.obj");
+    let obj = tmp.path().join("chain.obj");
     let r = lodstudio(&[
         "export",
         "builtin:torus",
@@ -326,8 +322,8 @@ fn bad_input_exits_2_and_loses_nothing() {
 /// reads LOD0 back through it.
 #[test]
 fn gltf_with_a_separate_buffer_round_trips() {
-    let out = temp("torus.gltf");
-    let _ = std::fs::remove_file(out.with_extension("bin"));
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("torus.gltf");
     let report = export_json("builtin:torus", "1%,4%", &out, &[]);
     let doc: Value = serde_json::from_slice(&std::fs::read(&out).unwrap()).unwrap();
     assert_eq!(doc["buffers"][0]["uri"], "torus.bin");
@@ -348,16 +344,15 @@ fn gltf_with_a_separate_buffer_round_trips() {
 /// (exit 2) and the good ones are still written.
 #[test]
 fn folder_batch_writes_one_file_per_model_and_reports_failures() {
-    let dir = temp("batch-in");
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("batch-in");
+    std::fs::create_dir(&dir).unwrap();
     for name in ["bones.off", "fandisk.obj"] {
         std::fs::copy(shared_model(name), dir.join(name)).unwrap();
     }
     std::fs::write(dir.join("broken.obj"), "v 0 0 0\nf 1 2 3\n").unwrap();
     std::fs::write(dir.join("notes.txt"), "not a model").unwrap();
-    let out = temp("batch-out");
-    let _ = std::fs::remove_dir_all(&out);
+    let out = tmp.path().join("batch-out");
     let (d, o) = (dir.to_str().unwrap(), out.to_str().unwrap());
     let run = lodstudio(&[
         "export", d, "--method", "simplify", "--lods", "2%", "-o", o, "--json",
@@ -412,6 +407,7 @@ fn folder_batch_writes_one_file_per_model_and_reports_failures() {
 /// hybrid cuts (points included), merge-tree cuts and certified voxel levels.
 #[test]
 fn hybrid_mergetree_and_voxel_chains_round_trip() {
+    let tmp = tempfile::tempdir().unwrap();
     let bunny = shared_model("stanford-bunny.obj");
     let b = bunny.to_str().unwrap();
     for (method, lods, extra) in [
@@ -419,7 +415,7 @@ fn hybrid_mergetree_and_voxel_chains_round_trip() {
         ("mergetree", "0.5%,2%,8%", &[][..]),
         ("voxel", "4%,30%", &["--resolution", "64"][..]),
     ] {
-        let out = temp(&format!("bunny-{method}.glb"));
+        let out = tmp.path().join(format!("bunny-{method}.glb"));
         let mut args = vec![
             "export",
             b,
@@ -455,6 +451,7 @@ fn hybrid_mergetree_and_voxel_chains_round_trip() {
 /// image bytes, embedded once, one primitive per material per LOD.
 #[test]
 fn original_materials_and_textures_are_carried_into_every_lod() {
+    let tmp = tempfile::tempdir().unwrap();
     let truck = shared_model("CesiumMilkTruck.glb");
     let input = std::fs::read(&truck).unwrap();
     let original = gltf::read(&input, None).unwrap();
@@ -465,7 +462,7 @@ fn original_materials_and_textures_are_carried_into_every_lod() {
         .clone()
         .expect("textured");
     for method in ["simplify", "mergetree", "hybrid"] {
-        let out = temp(&format!("truck-{method}.glb"));
+        let out = tmp.path().join(format!("truck-{method}.glb"));
         let report = lodstudio_json(&[
             "export",
             truck.to_str().unwrap(),
@@ -528,7 +525,12 @@ fn original_materials_and_textures_are_carried_into_every_lod() {
 /// `--recipe` and bad recipe values are refused (exit 2) naming what is wrong.
 #[test]
 fn recipes_replay_mixed_chains_byte_for_byte() {
-    let (first, recipe, replay) = (temp("mixed-a.glb"), temp("mixed.json"), temp("mixed-b.glb"));
+    let tmp = tempfile::tempdir().unwrap();
+    let (first, recipe, replay) = (
+        tmp.path().join("mixed-a.glb"),
+        tmp.path().join("mixed.json"),
+        tmp.path().join("mixed-b.glb"),
+    );
     let fandisk = shared_model("fandisk.obj");
     let f = fandisk.to_str().unwrap();
     let report = lodstudio_json(&[
@@ -593,21 +595,22 @@ fn recipes_replay_mixed_chains_byte_for_byte() {
         assert_eq!(r.status.code(), Some(2), "{extra:?}");
     }
     // A refused run saves no recipe.
-    let unsaved = temp("unsaved.json");
+    let unsaved = tmp.path().join("unsaved.json");
+    let not_gltf = tmp.path().join("not-gltf.png");
     let refused = lodstudio(&[
         "export",
         f,
         "--lods",
         "simplify:1%",
         "-o",
-        "/tmp/not-gltf.png",
+        not_gltf.to_str().unwrap(),
         "--save-recipe",
         unsaved.to_str().unwrap(),
     ]);
     assert_eq!(refused.status.code(), Some(2));
     assert!(!unsaved.exists(), "no recipe for a run that did not happen");
     // A bad value names the row and the field.
-    let bad = temp("bad.json");
+    let bad = tmp.path().join("bad.json");
     let mut text = String::from_utf8(std::fs::read(&recipe).unwrap()).unwrap();
     text = text.replacen("\"amg\"", "\"hybrid\",\n      \"kappa\": 500", 1);
     std::fs::write(&bad, text).unwrap();

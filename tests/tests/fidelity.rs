@@ -5,17 +5,10 @@
 //! own structures.
 
 use std::collections::BTreeMap;
-use std::path::PathBuf;
 
 use glam::Vec3;
 use lodstudio_tests::{load_mesh, lodstudio, lodstudio_json, shared_model};
 use serde_json::Value;
-
-fn temp(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("lodstudio-fidelity-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir.join(name)
-}
 
 /// A glTF document and its binary buffer (GLB, or `.gltf` with one `.bin`).
 fn read_gltf(path: &std::path::Path) -> (Value, Vec<u8>) {
@@ -132,13 +125,14 @@ fn export(model: &str, method: &str, out: &std::path::Path, extra: &[&str]) -> V
 
 #[test]
 fn truck_textures_stay_on_their_side_of_every_seam() {
+    let tmp = tempfile::tempdir().unwrap();
     let truck = shared_model("CesiumMilkTruck.glb");
     let original = load_mesh(&truck);
     let (src_doc, _) = read_gltf(&truck);
     let src_meshes: Vec<usize> = (0..src_doc["meshes"].as_array().unwrap().len()).collect();
     let src_attrs = attributes_by_material(&src_doc, &src_meshes);
     for method in ["simplify", "hybrid", "mergetree"] {
-        let out = temp(&format!("truck-{method}.glb"));
+        let out = tmp.path().join(format!("truck-{method}.glb"));
         let report = export("CesiumMilkTruck.glb", method, &out, &[]);
         let (doc, bin) = read_gltf(&out);
         let lods = report["lods"].as_array().unwrap();
@@ -181,6 +175,7 @@ fn lod_node(doc: &Value, l: usize) -> usize {
 
 #[test]
 fn engine_normals_face_their_triangles_and_gain_no_colours() {
+    let tmp = tempfile::tempdir().unwrap();
     let engine = shared_model("2CylinderEngine.gltf");
     let (src_doc, src_bin) = read_gltf(&engine);
     let n_meshes = src_doc["meshes"].as_array().unwrap().len();
@@ -192,7 +187,7 @@ fn engine_normals_face_their_triangles_and_gain_no_colours() {
     }
     let src_attrs = attributes_by_material(&src_doc, &(0..n_meshes).collect::<Vec<_>>());
     for method in ["simplify", "hybrid", "mergetree"] {
-        let out = temp(&format!("engine-{method}.glb"));
+        let out = tmp.path().join(format!("engine-{method}.glb"));
         let report = export(
             "2CylinderEngine.gltf",
             method,
@@ -221,8 +216,9 @@ fn engine_normals_face_their_triangles_and_gain_no_colours() {
 /// (the hybrid's points, as discs, are the method's own).
 #[test]
 fn horse_normals_face_their_triangles_and_gain_nothing() {
+    let tmp = tempfile::tempdir().unwrap();
     for method in ["simplify", "hybrid", "mergetree"] {
-        let out = temp(&format!("horse-{method}.glb"));
+        let out = tmp.path().join(format!("horse-{method}.glb"));
         let report = export("horse.ply", method, &out, &["--points-as", "discs"]);
         let (doc, bin) = read_gltf(&out);
         let lods = report["lods"].as_array().unwrap().len();
@@ -244,7 +240,8 @@ fn horse_normals_face_their_triangles_and_gain_nothing() {
 
 #[test]
 fn points_say_what_radius_means_or_become_covering_meshes() {
-    let out = temp("engine-points.glb");
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("engine-points.glb");
     let report = export("2CylinderEngine.gltf", "hybrid", &out, &[]);
     let points: u64 = report["lods"]
         .as_array()
@@ -272,7 +269,7 @@ fn points_say_what_radius_means_or_become_covering_meshes() {
     // Quads and discs: 4 and 8 triangles per point, and the polygon covers
     // the point's disc (its edges are at least the radius from the centre).
     for (how, per_point) in [("quads", 4u64), ("discs", 8)] {
-        let out = temp(&format!("engine-{how}.glb"));
+        let out = tmp.path().join(format!("engine-{how}.glb"));
         let r = export(
             "2CylinderEngine.gltf",
             "hybrid",
@@ -329,7 +326,7 @@ fn points_say_what_radius_means_or_become_covering_meshes() {
         "--lods",
         "1%",
         "-o",
-        temp("bad.glb").to_str().unwrap(),
+        tmp.path().join("bad.glb").to_str().unwrap(),
         "--points-as",
         "blobs",
     ]);
@@ -341,14 +338,15 @@ fn points_say_what_radius_means_or_become_covering_meshes() {
 /// square itself (and no distance between the two).
 #[test]
 fn measure_reports_normals_against_winding() {
+    let tmp = tempfile::tempdir().unwrap();
     let square = |nz: i32| {
         format!(
             "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nvn 0 0 {nz}\n\
              f 1//1 2//1 3//1\nf 1//1 3//1 4//1\n"
         )
     };
-    let good = temp("square-up.obj");
-    let flipped = temp("square-down.obj");
+    let good = tmp.path().join("square-up.obj");
+    let flipped = tmp.path().join("square-down.obj");
     std::fs::write(&good, square(1)).unwrap();
     std::fs::write(&flipped, square(-1)).unwrap();
     let (g, f) = (good.to_str().unwrap(), flipped.to_str().unwrap());
@@ -364,8 +362,9 @@ fn measure_reports_normals_against_winding() {
 /// input's, and invents none) — on the textured truck and the horse.
 #[test]
 fn voxel_surfaces_write_their_own_normals_and_nothing_else() {
+    let tmp = tempfile::tempdir().unwrap();
     for model in ["CesiumMilkTruck.glb", "horse.ply"] {
-        let out = temp(&format!("voxel-{model}.glb"));
+        let out = tmp.path().join(format!("voxel-{model}.glb"));
         let file = shared_model(model);
         let report = lodstudio_json(&[
             "export",

@@ -1,8 +1,6 @@
 //! Hybrid simplification (issue 4): the curve against triangle-only
 //! simplification on a real model, and the `hybrid` and `flythrough` CLI contracts.
 
-use std::path::PathBuf;
-
 use lodstudio_core::hybrid::{HybridOptions, build, curve};
 use lodstudio_core::io::{self, Model};
 use lodstudio_core::simplify::{self, CollapseOptions, SimplifyOptions, Target};
@@ -13,13 +11,6 @@ fn load(path: &std::path::Path) -> Model {
     io::load(path, &Default::default(), &Progress::new())
         .unwrap()
         .model
-}
-
-fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("lodstudio-hybrid-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
 }
 
 /// §5.1 / Fig. 8: with τ = 1 the hybrid curve is nowhere above the
@@ -64,7 +55,8 @@ fn hybrid_curve_is_not_above_the_triangle_curve_for_tau_one() {
 
 #[test]
 fn hybrid_cli_reports_the_graph_and_writes_the_cut() {
-    let dir = scratch("cli");
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path();
     let out = dir.join("cut.glb");
     let csv = dir.join("curve.csv");
     let (o, c) = (out.to_str().unwrap(), csv.to_str().unwrap());
@@ -133,7 +125,8 @@ fn hybrid_cli_reports_the_graph_and_writes_the_cut() {
 
 #[test]
 fn hybrid_and_flythrough_refuse_bad_input() {
-    let dir = scratch("bad");
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path();
     let out = dir.join("x.ply");
     let o = out.to_str().unwrap();
     for args in [

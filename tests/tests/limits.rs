@@ -2,7 +2,7 @@
 //! elements are refused within a second and in little memory, with an error
 //! that names the cap that stopped them.
 
-use std::io::Write as _;
+use std::io::{Read as _, Seek as _, Write as _};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
@@ -22,15 +22,14 @@ struct Measured {
 /// memory is this child's alone, not that of other tests' children.
 #[expect(clippy::zombie_processes, reason = "reaped by wait4, for its rusage")]
 fn measured(args: &[&str], env: &[(&str, &str)]) -> Measured {
-    static RUNS: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
-    let run = RUNS.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-    let err = tempfile(&format!("stderr-{run}.txt"));
+    // An unnamed temporary file: nothing is left behind, however the run ends.
+    let mut err = tempfile::tempfile().unwrap();
     let start = Instant::now();
     let child = Command::new(lodstudio_bin())
         .args(args)
         .envs(env.iter().copied())
         .stdout(Stdio::null())
-        .stderr(std::fs::File::create(&err).unwrap())
+        .stderr(err.try_clone().unwrap())
         .spawn()
         .expect("run lodstudio");
     let mut status = 0;
@@ -43,22 +42,20 @@ fn measured(args: &[&str], env: &[(&str, &str)]) -> Measured {
         libc::WIFEXITED(status),
         "lodstudio {args:?} died of a signal"
     );
+    let mut stderr = String::new();
+    err.rewind().unwrap();
+    err.read_to_string(&mut stderr).unwrap();
     Measured {
         code: libc::WEXITSTATUS(status),
-        stderr: std::fs::read_to_string(&err).unwrap(),
+        stderr,
         time,
         max_rss_bytes: usage.ru_maxrss as u64 * 1024, // KiB on Linux
     }
 }
 
-fn tempfile(name: &str) -> PathBuf {
-    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("limits");
-    std::fs::create_dir_all(&dir).unwrap();
-    dir.join(format!("{}-{name}", std::process::id()))
-}
-
-/// `members` gzip members of 16 MiB of zeros each, after `head` (its own member).
-fn gzip_bomb(name: &str, head: &[u8], members: usize) -> PathBuf {
+/// `dir/name`: `members` gzip members of 16 MiB of zeros each, after `head`
+/// (its own member).
+fn gzip_bomb(dir: &Path, name: &str, head: &[u8], members: usize) -> PathBuf {
     let gz = |data: &[u8]| {
         let mut e = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::best());
         e.write_all(data).unwrap();
@@ -73,7 +70,7 @@ fn gzip_bomb(name: &str, head: &[u8], members: usize) -> PathBuf {
     for _ in 0..members {
         bytes.extend_from_slice(&zeros);
     }
-    let path = tempfile(name);
+    let path = dir.join(name);
     std::fs::write(&path, bytes).unwrap();
     path
 }
@@ -100,7 +97,8 @@ fn assert_refused_fast_and_small(m: &Measured, what: &str) {
 #[test]
 fn a_two_gigabyte_gzip_bomb_is_refused_within_a_second_and_100_mb() {
     // 2 MB on disk, 2 GiB inflated: no model's header within its first bytes.
-    let bomb = gzip_bomb("bomb.ply.gz", b"", 128);
+    let tmp = tempfile::tempdir().unwrap();
+    let bomb = gzip_bomb(tmp.path(), "bomb.ply.gz", b"", 128);
     assert!(std::fs::metadata(&bomb).unwrap().len() < 4 * MB);
     let m = measured(&["info", bomb.to_str().unwrap()], &[]);
     assert_refused_fast_and_small(&m, "bomb");
@@ -111,7 +109,8 @@ fn a_two_gigabyte_gzip_bomb_is_refused_within_a_second_and_100_mb() {
 fn a_gzip_bomb_behind_a_valid_header_stops_at_the_cap_it_names() {
     let header = b"ply\nformat binary_little_endian 1.0\nelement vertex 100000000\n\
                    property float x\nproperty float y\nproperty float z\nend_header\n";
-    let bomb = gzip_bomb("headed.ply.gz", header, 128);
+    let tmp = tempfile::tempdir().unwrap();
+    let bomb = gzip_bomb(tmp.path(), "headed.ply.gz", header, 128);
     let path = bomb.to_str().unwrap();
     let m = measured(&["info", path, "--max-decompressed", "32M"], &[]);
     assert_refused_fast_and_small(&m, "--max-decompressed 32M");
@@ -123,7 +122,7 @@ fn a_gzip_bomb_behind_a_valid_header_stops_at_the_cap_it_names() {
     assert!(m.stderr.contains("16.0 MiB"), "{}", m.stderr);
 
     // Under the cap the same stream is a model (so the cap, not the data, refused it).
-    let small = gzip_bomb("headed-small.ply.gz", header, 0);
+    let small = gzip_bomb(tmp.path(), "headed-small.ply.gz", header, 0);
     let m = measured(
         &["info", small.to_str().unwrap(), "--max-decompressed", "32M"],
         &[],
@@ -134,7 +133,8 @@ fn a_gzip_bomb_behind_a_valid_header_stops_at_the_cap_it_names() {
 
 #[test]
 fn a_ply_header_claiming_4e9_vertices_is_refused_before_allocating() {
-    let ply = tempfile("huge.ply");
+    let tmp = tempfile::tempdir().unwrap();
+    let ply = tmp.path().join("huge.ply");
     std::fs::write(
         &ply,
         "ply\nformat ascii 1.0\nelement vertex 4000000000\nproperty float x\n\
@@ -147,7 +147,7 @@ fn a_ply_header_claiming_4e9_vertices_is_refused_before_allocating() {
     assert!(m.stderr.contains("4000000000 vertex"), "{}", m.stderr);
 
     // Binary, with the bytes present for none of them: the estimate is named.
-    let bin = tempfile("huge-binary.ply");
+    let bin = tmp.path().join("huge-binary.ply");
     std::fs::write(
         &bin,
         "ply\nformat binary_little_endian 1.0\nelement vertex 4000000000\n\

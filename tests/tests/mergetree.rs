@@ -220,7 +220,8 @@ fn backface_criterion_simplifies_the_far_side() {
 
 #[test]
 fn cli_reports_table_one_and_writes_the_last_frame() {
-    let out = std::env::temp_dir().join(format!("lodstudio-mergetree-{}.ply", std::process::id()));
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("mergetree.ply");
     let o = out.to_str().unwrap();
     let horse = shared_model("horse.ply");
     let j = lodstudio_json(&[
@@ -257,7 +258,6 @@ fn cli_reports_table_one_and_writes_the_last_frame() {
     assert_eq!(back["components"], 1);
     assert_eq!(back["genus"], 0);
     assert!(back["triangles"].as_f64().unwrap() > 0.0);
-    std::fs::remove_file(&out).ok();
     // The zoom path refines as the camera comes closer.
     let zoom = lodstudio_json(&[
         "mergetree",

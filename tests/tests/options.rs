@@ -7,12 +7,6 @@ use glam::Vec3;
 use lodstudio_core::TriMesh;
 use lodstudio_tests::{load_mesh, lodstudio_json, shared_model};
 
-fn temp(name: &str) -> std::path::PathBuf {
-    let dir = std::env::temp_dir().join(format!("lodstudio-options-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir.join(name)
-}
-
 /// Positions of the vertices on a border (an edge of one triangle only).
 fn border_positions(m: &TriMesh) -> Vec<Vec3> {
     let mut uses: HashMap<(u32, u32), u32> = HashMap::new();
@@ -36,12 +30,13 @@ fn border_positions(m: &TriMesh) -> Vec<Vec3> {
 /// where it was; without it, borders slide.
 #[test]
 fn lock_borders_keeps_every_border_vertex() {
+    let tmp = tempfile::tempdir().unwrap();
     let bunny = shared_model("stanford-bunny.obj");
     let b = bunny.to_str().unwrap();
     let input = border_positions(&load_mesh(&bunny));
     assert!(input.len() > 20, "the bunny is open");
     let kept = |extra: &[&str]| {
-        let out = temp(&format!("bunny{}.ply", extra.len()));
+        let out = tmp.path().join(format!("bunny{}.ply", extra.len()));
         let mut args = vec![
             "simplify",
             b,
@@ -72,6 +67,7 @@ fn lock_borders_keeps_every_border_vertex() {
 /// some of them.
 #[test]
 fn keep_seams_keeps_every_seam_loop() {
+    let tmp = tempfile::tempdir().unwrap();
     let truck = shared_model("CesiumMilkTruck.glb");
     let t = truck.to_str().unwrap();
     let loops = |file: &str| {
@@ -80,8 +76,8 @@ fn keep_seams_keeps_every_seam_loop() {
             .unwrap()
     };
     let input = loops(t);
-    let kept = temp("truck-seams.glb");
-    let welded = temp("truck-welded.glb");
+    let kept = tmp.path().join("truck-seams.glb");
+    let welded = tmp.path().join("truck-welded.glb");
     let (k, w) = (kept.to_str().unwrap(), welded.to_str().unwrap());
     lodstudio_json(&[
         "simplify",
@@ -134,7 +130,8 @@ fn merge_tree_criteria_switches_change_the_cut() {
 /// row and column per point, symmetric, as many entries as it says.
 #[test]
 fn amg_matrix_out_writes_the_stiffness_matrix() {
-    let out = temp("stiffness.mtx");
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("stiffness.mtx");
     let j = lodstudio_json(&[
         "amg",
         "builtin:octahedron-points",
@@ -177,7 +174,8 @@ fn amg_matrix_out_writes_the_stiffness_matrix() {
 /// error, their bound labelled an estimate (AMG's plane error).
 #[test]
 fn export_amg_writes_splat_lods() {
-    let out = temp("octahedron-lods.glb");
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("octahedron-lods.glb");
     let j = lodstudio_json(&[
         "export",
         "builtin:octahedron-points",

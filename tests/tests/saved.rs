@@ -4,18 +4,17 @@
 
 use lodstudio_tests::{lodstudio, lodstudio_json, shared_model};
 
-fn temp(name: &str) -> std::path::PathBuf {
-    let dir = std::env::temp_dir().join(format!("lodstudio-saved-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir.join(name)
-}
-
 #[test]
 fn reopened_hierarchies_cut_exactly_as_built() {
+    let tmp = tempfile::tempdir().unwrap();
     let bunny = shared_model("stanford-bunny.obj");
     let b = bunny.to_str().unwrap();
     // Hybrid: the cut written at build time and the reopened one are the same file.
-    let (h, built, again) = (temp("bunny.lodh"), temp("built.glb"), temp("again.glb"));
+    let (h, built, again) = (
+        tmp.path().join("bunny.lodh"),
+        tmp.path().join("built.glb"),
+        tmp.path().join("again.glb"),
+    );
     let j = lodstudio_json(&[
         "hybrid",
         b,
@@ -55,7 +54,7 @@ fn reopened_hierarchies_cut_exactly_as_built() {
     );
 
     // Merge tree and voxel pyramid: reopened cuts are deterministic and sized sensibly.
-    let m = temp("bunny-tree.lodh");
+    let m = tmp.path().join("bunny-tree.lodh");
     lodstudio_json(&[
         "mergetree",
         b,
@@ -69,7 +68,7 @@ fn reopened_hierarchies_cut_exactly_as_built() {
     let coarse = lodstudio_json(&["cut", m.to_str().unwrap(), "--error", "4%"]);
     assert!(coarse["triangles"].as_u64() < fine["triangles"].as_u64());
     assert!(coarse["error_bound"].as_f64().unwrap() > 0.0);
-    let v = temp("part.lodh");
+    let v = tmp.path().join("part.lodh");
     lodstudio_json(&[
         "voxel",
         "builtin:csg-part",
@@ -93,7 +92,7 @@ fn reopened_hierarchies_cut_exactly_as_built() {
     assert!(between["triangles"].as_u64() < level0["triangles"].as_u64());
 
     // AMG multiscale: a looser plane error draws fewer, larger splats.
-    let a = temp("octahedron.lodh");
+    let a = tmp.path().join("octahedron.lodh");
     lodstudio_json(&[
         "amg",
         "builtin:octahedron-points",
@@ -112,7 +111,8 @@ fn reopened_hierarchies_cut_exactly_as_built() {
 
 #[test]
 fn damaged_hierarchies_are_refused_clearly() {
-    let v = temp("damaged.lodh");
+    let tmp = tempfile::tempdir().unwrap();
+    let v = tmp.path().join("damaged.lodh");
     lodstudio_json(&[
         "voxel",
         "builtin:csg-part",
@@ -135,7 +135,7 @@ fn damaged_hierarchies_are_refused_clearly() {
         ("not a saved lodstudio hierarchy", b"LODSTHR".to_vec()),
     ];
     for (what, data) in cases {
-        let path = temp(&format!("bad-{}.lodh", what.len()));
+        let path = tmp.path().join(format!("bad-{}.lodh", what.len()));
         std::fs::write(&path, data).unwrap();
         let out = lodstudio(&["cut", path.to_str().unwrap()]);
         assert_eq!(out.status.code(), Some(2), "{what}");
@@ -151,9 +151,13 @@ fn damaged_hierarchies_are_refused_clearly() {
 /// measurement never exceeds, and a tighter error never gives a larger bound.
 #[test]
 fn a_saved_edge_collapse_cuts_as_fresh_runs() {
+    let tmp = tempfile::tempdir().unwrap();
     let bunny = shared_model("stanford-bunny.obj");
     let b = bunny.to_str().unwrap();
-    let (p, floor) = (temp("bunny-collapse.lodh"), temp("floor.ply"));
+    let (p, floor) = (
+        tmp.path().join("bunny-collapse.lodh"),
+        tmp.path().join("floor.ply"),
+    );
     let run = lodstudio_json(&[
         "simplify",
         b,
@@ -169,7 +173,10 @@ fn a_saved_edge_collapse_cuts_as_fresh_runs() {
     let input = run["input_triangles"].as_u64().unwrap();
     let floor_n = run["output_triangles"].as_u64().unwrap();
     for n in [floor_n, input / 10, input / 3] {
-        let (fresh, cut) = (temp(&format!("fresh{n}.ply")), temp(&format!("cut{n}.ply")));
+        let (fresh, cut) = (
+            tmp.path().join(format!("fresh{n}.ply")),
+            tmp.path().join(format!("cut{n}.ply")),
+        );
         let n_arg = n.to_string();
         let (fresh_s, cut_s) = (fresh.to_str().unwrap(), cut.to_str().unwrap());
         let f = lodstudio_json(&[

@@ -5,7 +5,8 @@ use lodstudio_tests::{lodstudio, lodstudio_json, shared_model};
 
 #[test]
 fn single_level_reports_the_contract_keys_and_writes_the_mesh() {
-    let out = std::env::temp_dir().join(format!("lodstudio-voxel-{}.ply", std::process::id()));
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("voxel.ply");
     let o = out.to_str().unwrap();
     let j = lodstudio_json(&[
         "voxel",
@@ -38,7 +39,6 @@ fn single_level_reports_the_contract_keys_and_writes_the_mesh() {
     let back = lodstudio_json(&["info", o]);
     assert_eq!(back["triangles"], j["triangles"]);
     assert_eq!(back["genus"], 5);
-    std::fs::remove_file(&out).unwrap();
 }
 
 #[test]
@@ -155,7 +155,8 @@ fn meshes_are_solids_and_their_genus_falls_along_the_pyramid() {
 /// holds them all, one alpha-blended node each.
 #[test]
 fn layers_follow_the_error_bound_and_export_together() {
-    let out = std::env::temp_dir().join(format!("lodstudio-layers-{}.glb", std::process::id()));
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("layers.glb");
     let o = out.to_str().unwrap();
     let args = |d: &'static str| {
         [
@@ -192,7 +193,6 @@ fn layers_follow_the_error_bound_and_export_together() {
     let back = lodstudio_json(&["info", o]);
     assert_eq!(back["triangles"].as_u64(), Some(per_layer));
     assert_eq!(back["parts"].as_u64(), Some(n as u64));
-    std::fs::remove_file(&out).unwrap();
 }
 
 /// Table 3: the MRI head's pyramid pools the thresholded scan into coarser
@@ -227,7 +227,8 @@ fn the_mri_head_pyramid_and_in_between_levels() {
 fn pyramid_levels_carry_certified_bounds_and_cuts_follow_the_error() {
     let horse = shared_model("horse.ply");
     let h = horse.to_str().unwrap();
-    let dir = std::env::temp_dir().join(format!("lodstudio-pyr-bounds-{}", std::process::id()));
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("pyr-bounds");
     let saved = dir.with_extension("lodh");
     let j = lodstudio_json(&[
         "voxel",
@@ -281,7 +282,8 @@ fn pyramid_levels_carry_certified_bounds_and_cuts_follow_the_error() {
 /// there on are reported empty, without a bound, and the pyramid says where.
 #[test]
 fn a_pyramid_says_where_a_thin_part_vanishes() {
-    let plate = std::env::temp_dir().join(format!("lodstudio-plate-{}.obj", std::process::id()));
+    let tmp = tempfile::tempdir().unwrap();
+    let plate = tmp.path().join("plate.obj");
     let (x, y, z) = (1.0, 1.0, 0.02);
     let mut obj = String::new();
     for i in 0..8 {

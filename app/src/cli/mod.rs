@@ -416,7 +416,12 @@ pub fn open_input(
     file: &std::path::Path,
     opts: &LoadOptions,
 ) -> Result<lodstudio_core::io::Loaded, CliError> {
-    outputs::input(file)?;
+    // `FILE.glb#lodN` reads FILE.glb.
+    let read = file
+        .to_str()
+        .and_then(|f| f.rsplit_once("#lod"))
+        .map_or(file, |(f, _)| std::path::Path::new(f));
+    outputs::input(read)?;
     Ok(lodstudio_core::open::open(file, opts, &Progress::new())?)
 }
 

@@ -3,6 +3,10 @@
 //! (§2.2), coarsened by Ruge–Stüben algebraic multigrid into a multiscale of
 //! quasi-flat domains (§2.3), each drawn as a textured domain primitive (§3)
 //! blended with its domain neighbours (§4).
+//!
+//! Paper: D. Reniers, A. Telea, "Extreme simplification and rendering of
+//! point sets using algebraic multigrid", Computing and Visualization in
+//! Science, Springer (accepted 2006) (the "AMG paper" in this tree's docs).
 
 pub mod basis;
 pub mod classifier;

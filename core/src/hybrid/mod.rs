@@ -1,6 +1,10 @@
 //! Hybrid simplification: triangles and points in one multi-resolution graph
 //! (hybrid paper, Cohen, Aliaga & Zhang).
 //!
+//! Paper: J. D. Cohen, D. G. Aliaga, W. Zhang, "Hybrid Simplification:
+//! Combining Multi-resolution Polygon and Point Rendering", Proc. IEEE
+//! Visualization 2001 (the "hybrid paper" in this tree's docs).
+//!
 //! - `mrg`: the graph (§4): nodes, arcs, primitives, invariants.
 //! - `build`: the queue of edge collapses and point replacements (§5.1–5.2), τ, κ.
 //! - `point_replacement`: §5.3 sampling and the optimal sampling distance.

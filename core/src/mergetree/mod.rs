@@ -1,6 +1,10 @@
 //! View-dependent simplification with merge trees (Xia & Varshney, merge-tree
 //! paper).
 //!
+//! Paper: J. C. Xia, A. Varshney, "Dynamic View-Dependent Simplification for
+//! Polygonal Models", Proc. IEEE Visualization '96 (the "merge-tree paper" in
+//! this tree's docs).
+//!
 //! Offline, [`build`] collapses edges level by level into a merge tree over the
 //! mesh's vertices (§4.1), stores switch distances and attribute ranges at its
 //! nodes (§4.2, §5.1) and the dependencies between collapses that keep the

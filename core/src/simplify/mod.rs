@@ -1,6 +1,10 @@
 //! Edge-collapse simplification with a certified two-sided Hausdorff bound
 //! (hybrid paper §2.1, §5.2).
 //!
+//! Paper: J. D. Cohen, D. G. Aliaga, W. Zhang, "Hybrid Simplification:
+//! Combining Multi-resolution Polygon and Point Rendering", Proc. IEEE
+//! Visualization 2001, §5.2 (the "hybrid paper" in this tree's docs).
+//!
 //! `collapse` performs the collapses (the step API the hybrid and merge-tree
 //! methods build on) and `step_bounds` gives every collapse the guaranteed
 //! bound of its new triangles; `bound` certifies a result: every output

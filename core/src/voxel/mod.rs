@@ -1,5 +1,9 @@
 //! Voxel-based object simplification (voxel-based-object-simplification.txt).
 //!
+//! Paper: T. He, L. Hong, A. Kaufman, A. Varshney, S. Wang, "Voxel Based
+//! Object Simplification", Proc. IEEE Visualization '95 (the "voxel paper" in
+//! this tree's docs; the copy in ../shared/papers starts at its abstract).
+//!
 //! §2: the object is sampled into a volume buffer S (eq. 2, [`sampling`]), low-pass
 //! filtered into a density f = h ∗ S (eq. 1, [`filter`]: the Gaussian or the
 //! hyper-cone of eq. 3), and the iso-density surface f = 0.5 is extracted by
