@@ -23,7 +23,7 @@ pub struct MeasureArgs {
 pub fn run(args: MeasureArgs) -> Result<(), CliError> {
     use lodstudio_core::distance::{SamplingOptions, hausdorff_mesh_mesh};
     // Each sample is a point and its distance, on both sides.
-    io::limits::check_items("--samples", args.samples, 2 * 32)
+    io::limits::check_items("samples (--samples)", args.samples, 2 * 32)
         .map_err(|e| CliError::BadInput(e.expected))?;
     if args.samples == 0 {
         return Err(CliError::BadInput("--samples must be at least 1".into()));
