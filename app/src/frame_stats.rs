@@ -37,6 +37,11 @@ impl Default for FrameStats {
 impl FrameStats {
     /// One frame at time `now` (seconds): its interval since the last frame,
     /// its CPU time where known, and whether a build was running.
+    /// Whether the statistics (and the log) go to stderr.
+    pub fn reporting(&self) -> bool {
+        self.report
+    }
+
     pub fn record(&mut self, now: f64, interval_ms: f32, cpu_ms: Option<f32>, building: bool) {
         let start = *self.window_start.get_or_insert(now);
         if self.len < CAPACITY {

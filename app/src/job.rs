@@ -50,7 +50,6 @@ impl<T: Send + 'static> Job<T> {
         std::thread::Builder::new()
             .name(thread.into())
             .spawn(move || {
-                lower_priority();
                 let answer = match background_pool() {
                     Some(pool) => pool.install(|| work(&worker_progress)),
                     None => work(&worker_progress),
@@ -72,35 +71,21 @@ impl<T: Send + 'static> Job<T> {
     }
 }
 
-/// The rayon pool jobs run their parallel work on, apart from the UI's: its
-/// threads yield to every other thread (see [`lower_priority`]). `None` if it
-/// could not start (jobs then use the global pool).
+/// The rayon pool jobs run their parallel work on, apart from the UI's.
+/// Its threads run at normal priority: what keeps the UI responsive is that
+/// it draws only on input or at the studio's poll interval, not that builds
+/// starve (under SCHED_IDLE a build stalled while a software renderer drew:
+/// benchmarks/studio.md, "Builds against the CLI"). `None` if it could not
+/// start (jobs then use the global pool).
 fn background_pool() -> Option<&'static rayon::ThreadPool> {
     static POOL: OnceLock<Option<rayon::ThreadPool>> = OnceLock::new();
     POOL.get_or_init(|| {
         rayon::ThreadPoolBuilder::new()
             .thread_name(|i| format!("build {i}"))
-            .start_handler(|_| lower_priority())
             .build()
             .ok()
     })
     .as_ref()
-}
-
-/// Gives the calling thread the lowest CPU priority: Linux's SCHED_IDLE
-/// policy (per thread), so that while a build takes every core the UI thread
-/// and a software rasteriser's threads run the moment they want a core
-/// (orbiting during a hybrid build on lavapipe: 112–134 → 94–115 ms a frame,
-/// `benchmarks/studio.md`). Where that is refused, nice 19; elsewhere a no-op.
-fn lower_priority() {
-    #[cfg(target_os = "linux")]
-    // SAFETY: both calls only read their arguments; 0 is the calling thread.
-    unsafe {
-        let param = libc::sched_param { sched_priority: 0 };
-        if libc::sched_setscheduler(0, libc::SCHED_IDLE, &param) != 0 {
-            libc::setpriority(libc::PRIO_PROCESS, 0, 19);
-        }
-    }
 }
 
 impl<T> Job<T> {

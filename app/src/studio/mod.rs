@@ -40,9 +40,13 @@ use crate::session::{Autosave, Session};
 use crate::settings::MethodSettings;
 use crate::settings::voxel::VolumeGrid;
 
-/// How often the UI refreshes the progress bar while a worker runs; the worker
-/// also wakes the UI the moment it finishes.
-const POLL_INTERVAL: Duration = Duration::from_millis(50);
+/// How often the UI refreshes the progress bar while a worker runs (input
+/// still draws at once; the worker also wakes the UI the moment it ends).
+/// Under a software renderer a frame costs ~55 ms of CPU, so polling at 20 Hz
+/// took both cores from the build (horse edge collapse 26.6 s in the studio
+/// against 4.65 s on the CLI); at 4 Hz it takes 5.2–5.6 s
+/// (benchmarks/studio.md, "Builds against the CLI").
+const POLL_INTERVAL: Duration = Duration::from_millis(250);
 
 /// The model on screen.
 struct Current {

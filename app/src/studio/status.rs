@@ -26,6 +26,10 @@ impl StudioApp {
     }
 
     fn push_log(&mut self, text: String, error: bool) {
+        // Measured sessions (scripts/studio-session.sh) read the log too.
+        if self.frame_stats.reporting() {
+            eprintln!("log {text}");
+        }
         if self.log.len() >= MAX_LOG {
             self.log.drain(..MAX_LOG / 10);
         }
