@@ -845,6 +845,28 @@ fn unprivileged() -> Option<Option<u32>> {
     ok.then_some(Some(65534))
 }
 
+/// A read-only folder in `dir` and the options that run the CLI as an
+/// unprivileged user (root writes anywhere); `None`, with a note, where
+/// neither can be had.
+fn read_only_as_unprivileged(dir: &Path) -> Option<(PathBuf, Opts)> {
+    let Some(uid) = unprivileged() else {
+        eprintln!("note: running as root without setuid: the read-only folder case is skipped");
+        return None;
+    };
+    open_to(dir, uid);
+    let Some(ro) = read_only_folder(dir, uid) else {
+        eprintln!("note: a read-only folder is writable here (root): case skipped");
+        return None;
+    };
+    Some((
+        ro,
+        Opts {
+            uid,
+            ..Opts::default()
+        },
+    ))
+}
+
 /// A folder the child cannot write to: 0o555 (0o500 when the child is this
 /// user), checked by trying; `None` (the test skips) when writing works anyway.
 fn read_only_folder(parent: &Path, as_uid: Option<u32>) -> Option<PathBuf> {
@@ -893,20 +915,10 @@ fn a_save_that_cannot_be_written_leaves_no_output() {
     assert_one_line(&run);
     assert!(!ok.exists(), "ok.ply written though the save failed");
 
-    let Some(uid) = unprivileged() else {
-        eprintln!("note: running as root without setuid: the read-only folder case is skipped");
-        return;
-    };
-    open_to(dir.path(), uid);
-    let Some(ro) = read_only_folder(dir.path(), uid) else {
-        eprintln!("note: a read-only folder is writable here (root): case skipped");
+    let Some((ro, opts)) = read_only_as_unprivileged(dir.path()) else {
         return;
     };
     let save = ro.join("x.lodh");
-    let opts = Opts {
-        uid,
-        ..Opts::default()
-    };
     let run = cli_with(
         &[
             "simplify",
@@ -1412,20 +1424,10 @@ fn a_full_disk_is_an_environment_failure() {
 #[test]
 fn permission_denied_on_the_output_folder_is_an_environment_failure() {
     let dir = tempfile::tempdir().unwrap();
-    let Some(uid) = unprivileged() else {
-        eprintln!("note: running as root without setuid: skipped");
-        return;
-    };
-    open_to(dir.path(), uid);
-    let Some(ro) = read_only_folder(dir.path(), uid) else {
-        eprintln!("note: a read-only folder is writable here (root): skipped");
+    let Some((ro, opts)) = read_only_as_unprivileged(dir.path()) else {
         return;
     };
     let target = ro.join("out.ply");
-    let opts = Opts {
-        uid,
-        ..Opts::default()
-    };
     let run = cli_with(
         &[
             "simplify",
