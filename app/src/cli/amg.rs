@@ -74,9 +74,16 @@ pub fn run(args: AmgArgs) -> Result<(), CliError> {
             "--level {level}: the coarsest level is {coarsest}"
         )));
     }
-    let texel = args.texel.unwrap_or_else(|| ms.default_texel());
-    amg::primitive::check_texel(&ms, level, texel)
-        .map_err(|e| CliError::BadInput(format!("--texel: {e}")))?;
+    // The default texel follows the points; one the user names is checked
+    // (its domains are found once more for that, not on the default path).
+    let texel = match args.texel {
+        Some(t) => {
+            amg::primitive::check_texel(&ms, level, t)
+                .map_err(|e| CliError::BadInput(format!("--texel: {e}")))?;
+            t
+        }
+        None => ms.default_texel(),
+    };
     let start = std::time::Instant::now();
     let prims = amg::primitives(&ms, level, texel, &progress)
         .map_err(|_| CliError::Failure("cancelled".into()))?;
