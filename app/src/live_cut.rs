@@ -224,6 +224,11 @@ impl LiveCut {
         self.hierarchy.has_levels()
     }
 
+    /// Which knobs the cut reads and whether the threshold chooses it now.
+    pub fn controls(&self) -> lodstudio_core::lod::Controls {
+        self.hierarchy.controls()
+    }
+
     /// The hierarchy as a saved-hierarchy file with `params`, when it saves.
     pub fn save(&self, params: &serde_json::Value) -> Option<Vec<u8>> {
         self.hierarchy.save(params)
@@ -257,6 +262,8 @@ mod tests {
             origin: glam::Vec3::splat(-2.0),
             spacing: glam::Vec3::splat(0.1),
             error_bound: f32::INFINITY,
+            level: None,
+            plan: None,
         };
         let tol = crate::settings::threshold::Threshold::default().tolerance();
         let view = View::orbit(glam::Vec3::ZERO, 4.0, 0.1, 0.1);

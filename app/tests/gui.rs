@@ -14,8 +14,8 @@ use egui_kittest::kittest::Queryable as _;
 use lodstudio::session::{Autosave, Session};
 use lodstudio::settings::Method;
 use lodstudio::settings::simplify::TargetMode;
-use lodstudio::settings::voxel::FilterKind;
 use lodstudio::studio::StudioApp;
+use lodstudio_core::voxel::Filter;
 use pixels::{colourful, viewport_image};
 
 /// Steps frames until the studio has no load running (bounded), then settles.
@@ -657,7 +657,7 @@ fn autosave_restores_a_killed_session() {
     let mut methods = *first.state().methods();
     methods.auto_rebuild = false;
     methods.method = Method::Voxel;
-    methods.voxel.filter = FilterKind::Cone;
+    methods.voxel.filter = Filter::Cone;
     methods.voxel.radius = 3.5;
     methods.voxel.threshold = Some(2.9);
     methods.edge_collapse.mode = TargetMode::Triangles;
@@ -816,8 +816,8 @@ fn voxel_on_a_point_set_explains_instead_of_building() {
         .click();
     harness.run();
     assert!(!harness.state().is_building(), "nothing to build");
-    let message = "Voxel simplification samples solids (meshes, implicit built-ins, volumes); \
-                   this model is a point set (16000 points) with no inside.";
+    let message = "Voxel (low-pass + marching cubes) samples solids (meshes, implicit \
+                   built-ins, volumes), and this model is a point set (16000 points).";
     assert!(has_label(&harness, message), "the method section says why");
 
     // Asked anyway (the Build button is disabled): the same message, no result.
@@ -855,7 +855,7 @@ fn cancelling_a_voxel_build_keeps_the_previous_result() {
         .clone();
 
     // The hyper-cone is not separable: this wide one takes seconds. Cancel it.
-    methods.voxel.filter = FilterKind::Cone;
+    methods.voxel.filter = Filter::Cone;
     methods.voxel.resolution = 64;
     methods.voxel.radius = 16.0;
     harness.state_mut().set_methods(methods);

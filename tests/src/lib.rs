@@ -4,9 +4,9 @@
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
-use std::sync::{Arc, OnceLock};
+use std::sync::OnceLock;
 
-use lodstudio_core::lod::{Hierarchy, Method};
+use lodstudio_core::lod::{Hierarchy, Method, Params};
 use lodstudio_core::{Progress, TriMesh};
 
 /// `../shared/models` beside the checkout (fixed by the project layout), or
@@ -94,49 +94,19 @@ pub fn shared_mesh(name: &str) -> TriMesh {
     load_mesh(&shared_model(name))
 }
 
-/// `method` built on `mesh` with the parameters a user would start from,
-/// and the parameters it is saved with.
+/// `method` built on `mesh` through `lod::build` with its default
+/// parameters (a voxel build keeps its whole pyramid, as recipe rows do, so
+/// its cuts have levels to choose between), and the parameters it is saved
+/// with.
 pub fn build_hierarchy(method: Method, mesh: &TriMesh) -> (Box<dyn Hierarchy>, serde_json::Value) {
-    let p = Progress::new();
-    match method {
-        Method::EdgeCollapse => {
-            let floor = mesh.triangles.len() / 100;
-            let r =
-                lodstudio_core::simplify::progressive::record(mesh, Default::default(), floor, &p);
-            let cut =
-                lodstudio_core::simplify::progressive::ProgressiveCut::new(Arc::new(r.unwrap()));
-            (Box::new(cut), serde_json::json!({}))
+    let params = match Params::default_for(method) {
+        Params::Voxel(v) => {
+            Params::Voxel(lodstudio_core::voxel::VoxelParams { pyramid: true, ..v })
         }
-        Method::Hybrid => {
-            let opts = lodstudio_core::hybrid::HybridOptions::default();
-            let mrg = lodstudio_core::hybrid::build(mesh, &opts, &p).unwrap();
-            let cut = lodstudio_core::hybrid::HybridCut::new(Arc::new(mrg));
-            (Box::new(cut), serde_json::json!({}))
-        }
-        Method::MergeTree => {
-            let tree = lodstudio_core::mergetree::build(mesh, &Default::default(), &p).unwrap();
-            let view =
-                lodstudio_core::mergetree::MergeTreeView::new(Arc::new(tree), Default::default());
-            (Box::new(view), serde_json::json!({}))
-        }
-        Method::Voxel => {
-            use lodstudio_core::voxel::{Filter, Pyramid, Source, pyramid::PyramidCut};
-            let solid = lodstudio_core::implicit::MeshSolid::new(mesh);
-            let source = Source::Solid(&solid);
-            let mut pyramid = Pyramid::build(source, 48, 1.5, Filter::Gaussian, &p).unwrap();
-            pyramid.certify(source.surface(), &p).unwrap();
-            (
-                Box::new(PyramidCut::new(pyramid, None)),
-                serde_json::json!({}),
-            )
-        }
-        Method::Amg => {
-            let model = lodstudio_core::Model::Mesh(mesh.clone());
-            let points = lodstudio_core::amg::point_set(&model).unwrap();
-            let ms = lodstudio_core::amg::decompose(&points, &Default::default(), &p).unwrap();
-            let texel = ms.default_texel();
-            let h = lodstudio_core::amg::AmgHierarchy::new(ms, texel);
-            (Box::new(h), serde_json::json!({ "texel": texel }))
-        }
-    }
+        other => other,
+    };
+    let model = lodstudio_core::Model::Mesh(mesh.clone());
+    let built = lodstudio_core::lod::build(&params, &model, &Progress::new())
+        .unwrap_or_else(|e| panic!("{method:?}: {e}"));
+    (built, serde_json::json!({}))
 }

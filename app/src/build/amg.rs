@@ -1,46 +1,25 @@
-//! Building the AMG multiscale of a point set on a worker (AMG paper §2) and
-//! handing it to the studio as a live cut of domain primitives (§3–4).
+//! What the inspector shows of an AMG build (AMG paper §2): the levels of
+//! the multiscale and their sizes.
 
-use std::time::Instant;
+use lodstudio_core::amg::AmgHierarchy;
+use lodstudio_core::lod::BuildError;
+use lodstudio_core::progress::Progress;
 
-use lodstudio_core::amg::{self, AmgError, AmgHierarchy, AmgOptions};
-use lodstudio_core::io::Model;
-use lodstudio_core::progress::{Cancelled, Progress};
+use super::{Inspection, Plot, Row};
 
-use super::{Built, Plot, Row};
-use crate::settings::BuildParams;
-use crate::settings::amg::AmgSettings;
-
-/// Decomposes the points of `model` (a point set, or a mesh's vertices).
+/// The AMG levels and their sizes; builds the primitives of every level the
+/// threshold can choose and of the `shown` one, so the first cuts do not.
 ///
 /// # Errors
-/// `Err(Cancelled)` when `progress` was cancelled; `Ok(Err(message))` when
-/// the model has no points or the decomposition refuses them.
-pub fn run(
-    model: &Model,
-    settings: AmgSettings,
+/// `BuildError::Cancelled` when `progress` was cancelled.
+pub fn inspect(
+    hierarchy: &mut AmgHierarchy,
+    shown: Option<usize>,
+    seconds: f32,
     progress: &Progress,
-) -> Result<Result<Built, String>, Cancelled> {
-    let Some(points) = amg::point_set(model) else {
-        return Ok(Err(
-            "AMG simplification needs points: a point set or a mesh's vertices.".into(),
-        ));
-    };
-    // The level shown first: its primitives are built here, not by the first cut.
-    let shown = (!settings.auto_level).then_some(settings.level);
-    let settings = settings.build_params();
-    let opts = AmgOptions {
-        k: settings.k,
-        ..AmgOptions::default()
-    };
-    let start = Instant::now();
-    let ms = match amg::decompose(&points, &opts, progress) {
-        Ok(ms) => ms,
-        Err(AmgError::Cancelled) => return Err(Cancelled),
-        Err(AmgError::BadInput(m)) => return Ok(Err(m)),
-    };
-    let seconds = start.elapsed().as_secs_f32();
-    let texel = settings.texel * ms.default_texel();
+) -> Result<Inspection, BuildError> {
+    let ms = hierarchy.multiscale();
+    let points = &ms.points;
     let sizes = ms.level_sizes();
     let plot = Plot {
         title: "unknowns per AMG level",
@@ -82,15 +61,11 @@ pub fn run(
             hint: "Neighbourhoods, classifier, stiffness matrix and coarsening.",
         },
     ];
-    let mut hierarchy = AmgHierarchy::new(ms, texel);
+    progress.stage("domain primitives");
     hierarchy.build_levels(shown, progress)?;
-    hierarchy.set_level(shown);
-    Ok(Ok(Built::live(
-        Box::new(hierarchy),
-        points.bounds(),
-        BuildParams::Amg(settings),
-        seconds,
+    Ok(Inspection {
         rows,
-        vec![plot],
-    )))
+        plots: vec![plot],
+        voxel: None,
+    })
 }

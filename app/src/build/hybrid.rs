@@ -1,46 +1,36 @@
-//! Building the hybrid multi-resolution graph on a worker (hybrid paper §5),
-//! with its triangle-only twin for the primitives-versus-error plot, and
-//! handing it to the studio as a live cut (§6).
+//! What the inspector shows of a hybrid build (hybrid paper §5): the
+//! multi-resolution graph's nodes, and its primitives against error beside
+//! its triangle-only twin's.
 
-use std::sync::Arc;
-use std::time::Instant;
+use lodstudio_core::hybrid::{self, HybridCut, HybridOptions, NodeKind};
+use lodstudio_core::lod::{self, BuildError, Input, Params};
+use lodstudio_core::progress::Progress;
 
-use lodstudio_core::hybrid::{self, HybridCut, NodeKind};
-use lodstudio_core::io::Model;
-use lodstudio_core::progress::{Cancelled, Progress};
-
-use super::{Built, Plot, Row, mesh_of};
-use crate::settings::BuildParams;
-use crate::settings::hybrid::HybridSettings;
+use super::{Inspection, Plot, Row, build_time};
 
 /// Points of the curves kept for the plot.
 const CURVE_STEPS: usize = 120;
 
-/// Builds the MRG of `model`'s mesh and the triangle-only curve beside it.
+/// The MRG's node counts, and its primitives-versus-error curve beside the
+/// triangle-only twin's (built here, on the worker, through `lod::build`).
 ///
 /// # Errors
-/// `Err(Cancelled)` when `progress` was cancelled; `Ok(Err(message))` when the
-/// model is no triangle mesh.
-pub fn run(
-    model: &Model,
-    settings: HybridSettings,
+/// `BuildError::Cancelled` when `progress` was cancelled.
+pub fn inspect(
+    cut: &HybridCut,
+    opts: &HybridOptions,
+    input: Input<'_>,
+    seconds: f32,
     progress: &Progress,
-) -> Result<Result<Built, String>, Cancelled> {
-    let mesh = match mesh_of(model) {
-        Ok(mesh) => mesh,
-        Err(message) => {
-            return Ok(Err(
-                message.replace("Edge collapse", "Hybrid simplification")
-            ));
-        }
-    };
-    let opts = settings.options();
-    let start = Instant::now();
-    let mrg = Arc::new(hybrid::build(mesh, &opts, progress)?);
-    let seconds = start.elapsed().as_secs_f32();
+) -> Result<Inspection, BuildError> {
+    let mrg = cut.mrg();
     progress.stage("triangle-only curve");
-    let triangles_only = hybrid::build(mesh, &opts.triangles_only(), progress)?;
-    let input = mesh.triangles.len() as f64;
+    let twin = lod::build(&Params::Hybrid(opts.triangles_only()), input, progress)?;
+    let triangles_only = twin
+        .downcast_ref::<HybridCut>()
+        .map(|t| hybrid::curve::curve(t.mrg()))
+        .unwrap_or_default();
+    let input = mrg.input_triangles as f64;
     let thin = |c: Vec<(f32, f64)>| {
         let mut points = hybrid::curve::thin(&c, CURVE_STEPS);
         points.retain(|p| p[0] > 0.0);
@@ -55,12 +45,9 @@ pub fn run(
         series: vec![
             (
                 format!("hybrid κ={} τ={}", opts.kappa, opts.tau),
-                thin(hybrid::curve::curve(&mrg)),
+                thin(hybrid::curve::curve(mrg)),
             ),
-            (
-                "triangles only".to_string(),
-                thin(hybrid::curve::curve(&triangles_only)),
-            ),
+            ("triangles only".to_string(), thin(triangles_only)),
         ],
     };
     let rows = vec![
@@ -85,19 +72,14 @@ pub fn run(
             value: mrg.count(NodeKind::PointSimplification).to_string(),
             hint: "PS nodes: each merges up to 8 points into one sphere (§5.4).",
         },
-        Row {
-            label: "build time",
-            value: format!("{seconds:.2} s"),
-            hint: "Time to build the graph (without the triangle-only curve).",
-        },
+        build_time(
+            seconds,
+            "Time to build the graph (without the triangle-only curve).",
+        ),
     ];
-    progress.stage("first cut");
-    Ok(Ok(Built::live(
-        Box::new(HybridCut::new(mrg)),
-        mesh.bounds(),
-        BuildParams::Hybrid(settings.sanitized()),
-        seconds,
+    Ok(Inspection {
         rows,
-        vec![plot],
-    )))
+        plots: vec![plot],
+        voxel: None,
+    })
 }

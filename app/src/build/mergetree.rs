@@ -1,36 +1,13 @@
-//! Building a merge tree on a worker (merge-tree paper §4) and handing it to
-//! the studio as a live cut that refines while the camera moves (§5).
+//! What the inspector shows of a merge tree (merge-tree paper §4): its
+//! levels, merges and dependencies.
 
-use std::sync::Arc;
-use std::time::Instant;
+use lodstudio_core::mergetree::MergeTreeView;
 
-use lodstudio_core::io::Model;
-use lodstudio_core::mergetree::{self, MergeTreeView};
-use lodstudio_core::progress::{Cancelled, Progress};
+use super::{Inspection, Plot, Row, build_time};
 
-use super::{Built, Plot, Row, mesh_of};
-use crate::settings::BuildParams;
-use crate::settings::mergetree::MergeTreeSettings;
-
-/// Builds the merge tree of `model`'s mesh.
-///
-/// # Errors
-/// `Err(Cancelled)` when `progress` was cancelled; `Ok(Err(message))` when the
-/// model is no triangle mesh.
-pub fn run(
-    model: &Model,
-    settings: MergeTreeSettings,
-    progress: &Progress,
-) -> Result<Result<Built, String>, Cancelled> {
-    let mesh = match mesh_of(model) {
-        Ok(mesh) => mesh,
-        Err(message) => return Ok(Err(message.replace("Edge collapse", "The merge tree"))),
-    };
-    let settings = settings.sanitized();
-    let start = Instant::now();
-    let tree = Arc::new(mergetree::build(mesh, &settings.options(), progress)?);
-    let seconds = start.elapsed().as_secs_f32();
-    progress.stage("first cut");
+/// The tree's depth, merges and dependencies, and its vertices per level.
+pub fn inspect(view: &MergeTreeView, seconds: f32) -> Inspection {
+    let tree = view.tree();
     let levels = tree.levels().to_vec();
     let dependencies = tree.dependency_count();
     let merges = tree.merges().len();
@@ -52,11 +29,10 @@ pub fn run(
             value: dependencies.to_string(),
             hint: "Vertices that must be present before a merge or split (§4.3).",
         },
-        Row {
-            label: "build time",
-            value: format!("{seconds:.2} s"),
-            hint: "Time to build the tree, its ranges and dependencies.",
-        },
+        build_time(
+            seconds,
+            "Time to build the tree, its ranges and dependencies.",
+        ),
     ];
     let plot = Plot {
         title: "vertices per tree level",
@@ -72,12 +48,9 @@ pub fn run(
                 .collect(),
         )],
     };
-    Ok(Ok(Built::live(
-        Box::new(MergeTreeView::new(tree, settings.criteria())),
-        mesh.bounds(),
-        BuildParams::MergeTree(settings.options()),
-        seconds,
+    Inspection {
         rows,
-        vec![plot],
-    )))
+        plots: vec![plot],
+        voxel: None,
+    }
 }

@@ -1,7 +1,7 @@
 //! `amg`: extreme point-set simplification by algebraic multigrid (AMG paper):
 //! decomposition into quasi-flat domains, then textured domain primitives.
 
-use lodstudio_core::amg::{self, AmgError, AmgOptions};
+use lodstudio_core::amg::{self, AmgParams, Texel};
 
 use super::*;
 
@@ -10,10 +10,10 @@ pub struct AmgArgs {
     /// A point set (PLY with or without colours and normals), a mesh (its vertices), or builtin:NAME.
     file: PathBuf,
     /// Neighbours k_min per point for the classifier (§2.1; the paper uses 50–100).
-    #[arg(long, default_value_t = 50)]
+    #[arg(long, default_value_t = AmgParams::default().k)]
     k: usize,
     /// Minimal feature size ε: neighbourhoods grow to the whole ball B_ε (§2.1); 0 = k nearest only.
-    #[arg(long, default_value_t = 0.0)]
+    #[arg(long, default_value_t = AmgParams::default().epsilon)]
     epsilon: f32,
     /// AMG level to build primitives for, 0 = the points; default L−5 with L the coarsest (§2.3).
     #[arg(long)]
@@ -36,36 +36,26 @@ pub struct AmgArgs {
 }
 
 pub fn run(args: AmgArgs) -> Result<(), CliError> {
-    let opts = AmgOptions {
+    let mut amg_params = AmgParams {
         k: args.k,
         epsilon: args.epsilon,
-        ..AmgOptions::default()
+        ..Default::default()
     };
-    if let Some(t) = args.texel
-        && !(t.is_finite() && t > 0.0)
-    {
-        return Err(CliError::BadInput(format!(
-            "--texel must be a length > 0, got {t}"
-        )));
+    if let Some(t) = args.texel {
+        amg_params.texel = Texel::Length(t);
     }
+    let params = Params::Amg(amg_params);
+    params.validate()?;
     args.save.check(args.report.force)?;
     for out in [&args.output, &args.matrix_out].into_iter().flatten() {
         check_output(out, args.report.force)?;
     }
     let loaded = open_input(&args.file, &args.input.load_options()?)?;
-    let points = amg::point_set(&loaded.model).ok_or_else(|| {
-        CliError::BadInput(format!(
-            "{}: the amg method takes point sets and meshes, not a {}",
-            args.file.display(),
-            loaded.model.kind()
-        ))
-    })?;
     let progress = Progress::new();
     let start = std::time::Instant::now();
-    let ms = amg::decompose(&points, &opts, &progress).map_err(|e| match e {
-        AmgError::BadInput(m) => CliError::BadInput(format!("{}: {m}", args.file.display())),
-        AmgError::Cancelled => CliError::Failure("cancelled".into()),
-    })?;
+    let hierarchy: Box<amg::AmgHierarchy> = super::build(&params, &loaded.model, &args.file)?;
+    let ms = hierarchy.multiscale();
+    let points = &ms.points;
     let seconds_decomposition = start.elapsed().as_secs_f64();
     let coarsest = ms.levels() - 1;
     let level = args.level.unwrap_or(ms.default_level());
@@ -76,27 +66,24 @@ pub fn run(args: AmgArgs) -> Result<(), CliError> {
     }
     // The default texel follows the points; one the user names is checked
     // (its domains are found once more for that, not on the default path).
-    let texel = match args.texel {
-        Some(t) => {
-            amg::primitive::check_texel(&ms, level, t)
-                .map_err(|e| CliError::BadInput(format!("--texel: {e}")))?;
-            t
-        }
-        None => ms.default_texel(),
-    };
+    let texel = hierarchy.texel();
+    if args.texel.is_some() {
+        amg::primitive::check_texel(ms, level, texel)
+            .map_err(|e| CliError::BadInput(format!("--texel: {e}")))?;
+    }
     let start = std::time::Instant::now();
-    let prims = amg::primitives(&ms, level, texel, &progress)
+    let prims = amg::primitives(ms, level, texel, &progress)
         .map_err(|_| CliError::Failure("cancelled".into()))?;
     let seconds_primitives = start.elapsed().as_secs_f64();
     if args.save.save.is_some() {
         args.save.write(
-            &amg::AmgHierarchy::new(ms.clone(), texel),
+            hierarchy.as_ref(),
             serde_json::json!({"k": args.k, "texel": texel, "file": args.file.display().to_string()}),
         )?;
     }
     if let Some(out) = &args.matrix_out {
         let mut bytes = Vec::new();
-        amg::write_matrix_market(&ms, &mut bytes)
+        amg::write_matrix_market(ms, &mut bytes)
             .map_err(|e| CliError::Failure(format!("{}: cannot write: {e}", out.display())))?;
         write_output(out, &bytes)?;
     }

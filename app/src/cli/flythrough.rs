@@ -3,7 +3,6 @@
 
 use super::*;
 use lodstudio_core::hybrid::{HybridOptions, flythrough};
-use std::sync::Arc;
 
 #[derive(Args, Debug)]
 pub struct FlythroughArgs {
@@ -16,7 +15,7 @@ pub struct FlythroughArgs {
     #[arg(long, value_name = "P", default_value_t = 3.0)]
     pixels: f32,
     /// Performance ratio κ of the hybrid configurations.
-    #[arg(long, value_name = "K", default_value_t = 3.0)]
+    #[arg(long, value_name = "K", default_value_t = HybridOptions::default().kappa)]
     kappa: f32,
     /// Transition factors τ of the hybrid configurations.
     #[arg(
@@ -63,9 +62,7 @@ pub fn run(args: FlythroughArgs) -> Result<(), CliError> {
         ..Default::default()
     };
     for tau in &args.taus {
-        HybridOptions { tau: *tau, ..base }
-            .validate()
-            .map_err(CliError::BadInput)?;
+        HybridOptions { tau: *tau, ..base }.validate()?;
     }
     let mesh = load_mesh(&args.file, &args.input)?;
     let start = std::time::Instant::now();
@@ -73,11 +70,11 @@ pub fn run(args: FlythroughArgs) -> Result<(), CliError> {
         "triangles",
         1.0,
         1.0,
-        Arc::new(super::hybrid::build(&mesh, &base.triangles_only())?),
+        super::hybrid::build(&mesh, &base.triangles_only(), &args.file)?,
     )];
     for tau in &args.taus {
-        let mrg = super::hybrid::build(&mesh, &HybridOptions { tau: *tau, ..base })?;
-        configs.push(("hybrid", args.kappa, *tau, Arc::new(mrg)));
+        let mrg = super::hybrid::build(&mesh, &HybridOptions { tau: *tau, ..base }, &args.file)?;
+        configs.push(("hybrid", args.kappa, *tau, mrg));
     }
     let seconds_build = start.elapsed().as_secs_f64();
     let bounds = mesh.bounds();

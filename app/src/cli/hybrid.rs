@@ -1,7 +1,7 @@
 //! `hybrid`: the multi-resolution graph of triangles and points (hybrid paper).
 
 use super::*;
-use lodstudio_core::hybrid::{self, HybridCut, HybridOptions, Mrg, NodeKind, curve};
+use lodstudio_core::hybrid::{HybridCut, HybridOptions, Mrg, NodeKind, curve};
 use lodstudio_core::lod::Hierarchy;
 use lodstudio_core::view::{Tolerance, View};
 use std::sync::Arc;
@@ -11,10 +11,10 @@ pub struct HybridArgs {
     /// A mesh file, or builtin:NAME.
     file: PathBuf,
     /// Performance ratio κ of points to triangles (κ ≤ 1: no points).
-    #[arg(long, value_name = "K", default_value_t = 3.0)]
+    #[arg(long, value_name = "K", default_value_t = HybridOptions::default().kappa)]
     kappa: f32,
     /// Transition factor τ (> 0; larger introduces points sooner).
-    #[arg(long, value_name = "T", default_value_t = 1.0)]
+    #[arg(long, value_name = "T", default_value_t = HybridOptions::default().tau)]
     tau: f32,
     /// Write the primitives-versus-error curves (hybrid and triangle-only) as CSV.
     #[arg(long, value_name = "CSV")]
@@ -39,13 +39,14 @@ pub struct HybridArgs {
     input: InputArgs,
 }
 
-/// Builds the MRG, reporting bad options and empty meshes as bad input.
-pub fn build(mesh: &lodstudio_core::TriMesh, opts: &HybridOptions) -> Result<Mrg, CliError> {
-    opts.validate().map_err(CliError::BadInput)?;
-    if mesh.triangles.is_empty() {
-        return Err(CliError::BadInput("the mesh has no triangles".into()));
-    }
-    hybrid::build(mesh, opts, &Progress::new()).map_err(|e| CliError::Failure(e.to_string()))
+/// Builds the MRG of `file`'s mesh through `lod::build`.
+pub fn build(
+    mesh: &lodstudio_core::TriMesh,
+    opts: &HybridOptions,
+    file: &std::path::Path,
+) -> Result<Arc<Mrg>, CliError> {
+    let cut: Box<HybridCut> = super::build(&Params::Hybrid(*opts), mesh, file)?;
+    Ok(Arc::clone(cut.mrg()))
 }
 
 pub fn run(args: HybridArgs) -> Result<(), CliError> {
@@ -54,7 +55,7 @@ pub fn run(args: HybridArgs) -> Result<(), CliError> {
         tau: args.tau,
         ..Default::default()
     };
-    opts.validate().map_err(CliError::BadInput)?;
+    opts.validate()?;
     let tolerance = args
         .cut_error
         .as_deref()
@@ -75,9 +76,9 @@ pub fn run(args: HybridArgs) -> Result<(), CliError> {
     // The triangle-only twin first, kept as its curve alone: the two graphs
     // are never in memory together (the dragon's peak: 2.06 GB -> see
     // BENCHMARKS.md).
-    let triangle_curve = curve::curve(&build(&mesh, &opts.triangles_only())?);
+    let triangle_curve = curve::curve(build(&mesh, &opts.triangles_only(), &args.file)?.as_ref());
     let start = std::time::Instant::now();
-    let mrg = Arc::new(build(&mesh, &opts)?);
+    let mrg = build(&mesh, &opts, &args.file)?;
     args.save.write(
         &HybridCut::new(Arc::clone(&mrg)),
         serde_json::json!({"kappa": args.kappa, "tau": args.tau, "file": args.file.display().to_string()}),

@@ -6,7 +6,7 @@ use std::sync::Arc;
 use std::time::Instant;
 
 use super::*;
-use lodstudio_core::mergetree::{self, Criteria, MergeTreeOptions, MergeTreeView};
+use lodstudio_core::mergetree::{Criteria, MergeTreeOptions, MergeTreeView};
 use lodstudio_core::view::{Tolerance, View};
 
 #[derive(Args, Debug)]
@@ -23,10 +23,10 @@ pub struct MergeTreeArgs {
     #[arg(long)]
     zoom: bool,
     /// Stop building once this few vertices are left (§4.1).
-    #[arg(long, value_name = "N", default_value_t = 8)]
+    #[arg(long, value_name = "N", default_value_t = MergeTreeOptions::default().min_vertices)]
     min_vertices: usize,
     /// Sliver guard: minimum quality 4√3·area/Σl² of triangles a merge makes (eq. 3, §6); 0 disables.
-    #[arg(long, value_name = "Q", default_value_t = mergetree::DEFAULT_MIN_QUALITY)]
+    #[arg(long, value_name = "Q", default_value_t = MergeTreeOptions::default().collapse.min_quality)]
     min_quality: f32,
     /// Do not simplify back-facing and off-screen regions harder.
     #[arg(long)]
@@ -87,32 +87,18 @@ pub fn run(args: MergeTreeArgs) -> Result<(), CliError> {
             args.pixels
         )));
     }
-    if !(args.min_quality.is_finite() && (0.0..=1.0).contains(&args.min_quality)) {
-        return Err(CliError::BadInput(format!(
-            "--min-quality must be in 0..=1, got {}",
-            args.min_quality
-        )));
-    }
-    let mesh = load_mesh(&args.file, &args.input)?;
-    if mesh.triangles.is_empty() {
-        return Err(CliError::BadInput(format!(
-            "{}: the mesh has no triangles",
-            args.file.display()
-        )));
-    }
-    let opts = MergeTreeOptions {
+    let mut opts = MergeTreeOptions {
         min_vertices: args.min_vertices,
-        collapse: CollapseOptions {
-            min_quality: args.min_quality,
-            ..Default::default()
-        },
+        ..Default::default()
     };
+    opts.collapse.min_quality = args.min_quality;
+    let params = Params::MergeTree(opts);
+    params.validate()?;
+    let mesh = load_mesh(&args.file, &args.input)?;
     args.save.check(args.report.force)?;
     let start = Instant::now();
-    let tree = Arc::new(
-        mergetree::build(&mesh, &opts, &Progress::new())
-            .map_err(|e| CliError::Failure(e.to_string()))?,
-    );
+    let built: Box<MergeTreeView> = super::build(&params, &mesh, &args.file)?;
+    let tree = Arc::clone(built.tree());
     let build_seconds = start.elapsed().as_secs_f64();
     let criteria = Criteria {
         backface: !args.no_backface,

@@ -6,6 +6,7 @@ use std::path::PathBuf;
 use clap::{Args, CommandFactory, FromArgMatches, Parser, Subcommand};
 use lodstudio_core::geom::{RepairOptions, Weld};
 use lodstudio_core::io::{self, LoadError, LoadOptions, Model, RawSpec, ScalarType};
+use lodstudio_core::lod::{BuildError, Hierarchy, Params};
 use lodstudio_core::simplify::{CollapseOptions, SimplifyOptions, Target};
 use lodstudio_core::stats::ModelSummary;
 use lodstudio_core::{Progress, builtins};
@@ -193,7 +194,7 @@ impl PostArgs {
             (true, ..) => PostSimplify::Off,
             (_, Some(v), _) => PostSimplify::Voxels(v),
             (_, _, Some(n)) => PostSimplify::Triangles(n),
-            _ => PostSimplify::HALF_VOXEL,
+            _ => lodstudio_core::voxel::VoxelParams::default().post,
         };
         post.check().map_err(CliError::BadInput)?;
         Ok(post)
@@ -288,6 +289,42 @@ impl From<io::confine::Refused> for CliError {
             io::confine::Refused::Io(m) => CliError::Failure(m),
         }
     }
+}
+
+impl From<lodstudio_core::lod::ParamError> for CliError {
+    /// Named as its flag: `--kappa: must be in 1..=16, got 40`.
+    fn from(e: lodstudio_core::lod::ParamError) -> Self {
+        CliError::BadInput(format!("{}: {}", e.flag(), e.message))
+    }
+}
+
+impl From<BuildError> for CliError {
+    fn from(e: BuildError) -> Self {
+        match e {
+            BuildError::Param(p) => p.into(),
+            BuildError::BadInput(m) => CliError::BadInput(m),
+            BuildError::Cancelled => CliError::Failure(e.to_string()),
+        }
+    }
+}
+
+/// Builds `params` on `input`, opened from `file`, through `lod::build`
+/// (every subcommand's one build path) and hands back the method's own
+/// structure, which the subcommand reports on.
+pub fn build<'a, T: Hierarchy>(
+    params: &Params,
+    input: impl Into<lodstudio_core::lod::Input<'a>>,
+    file: &std::path::Path,
+) -> Result<Box<T>, CliError> {
+    let built =
+        lodstudio_core::lod::build(params, input, &Progress::new()).map_err(|e| match e {
+            BuildError::BadInput(m) => CliError::BadInput(format!("{}: {m}", file.display())),
+            e => e.into(),
+        })?;
+    let method = built.method();
+    (built as Box<dyn std::any::Any>)
+        .downcast()
+        .map_err(|_| CliError::Failure(format!("internal error: {method:?} built another type")))
 }
 
 pub fn run() -> Result<(), CliError> {

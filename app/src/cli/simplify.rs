@@ -28,7 +28,7 @@ pub struct SimplifyArgs {
     #[arg(long, conflicts_with_all = ["weld_tolerance", "no_weld"])]
     keep_seams: bool,
     /// Sliver guard: minimum triangle quality 4√3·area/Σl² (merge-tree paper eq. 3); 0 disables.
-    #[arg(long, value_name = "Q", default_value_t = 0.0)]
+    #[arg(long, value_name = "Q", default_value_t = CollapseOptions::default().min_quality)]
     min_quality: f32,
     #[command(flatten)]
     report: ReportArgs,
@@ -80,12 +80,12 @@ pub fn run(args: SimplifyArgs) -> Result<(), CliError> {
         (_, _, Some(e)) => parse_error_target(e)?,
         _ => unreachable!("clap requires one target"),
     };
-    if !(args.min_quality.is_finite() && (0.0..=1.0).contains(&args.min_quality)) {
-        return Err(CliError::BadInput(format!(
-            "--min-quality must be in 0..=1, got {}",
-            args.min_quality
-        )));
-    }
+    let collapse = CollapseOptions {
+        lock_borders: args.lock_borders || args.keep_seams,
+        min_quality: args.min_quality,
+        ..Default::default()
+    };
+    collapse.validate()?;
     args.save.check(args.report.force)?;
     let mut input = args.input;
     input.no_weld |= args.keep_seams;
@@ -94,11 +94,7 @@ pub fn run(args: SimplifyArgs) -> Result<(), CliError> {
     let opts = SimplifyOptions {
         per_triangle_bounds: false,
         target,
-        collapse: CollapseOptions {
-            lock_borders: args.lock_borders || args.keep_seams,
-            min_quality: args.min_quality,
-            ..Default::default()
-        },
+        collapse,
     };
     let result = simplify::simplify(&mesh, &opts, &Progress::new()).map_err(|e| match e {
         simplify::SimplifyError::BadTarget(m) => CliError::BadInput(m),
@@ -107,12 +103,17 @@ pub fn run(args: SimplifyArgs) -> Result<(), CliError> {
     let seconds = start.elapsed().as_secs_f64();
     write_mesh(&args.output, &result.mesh)?;
     if args.save.save.is_some() {
+        // The record down to this run's result, built as every
+        // edge-collapse hierarchy is.
         let floor = result.mesh.triangles.len();
-        let progressive =
-            simplify::progressive::record(&mesh, opts.collapse, floor, &Progress::new())
-                .map_err(|e| CliError::Failure(e.to_string()))?;
+        let params = Params::EdgeCollapse(simplify::progressive::ProgressiveOptions {
+            collapse,
+            floor: Some(floor),
+        });
+        let progressive: Box<simplify::progressive::ProgressiveCut> =
+            super::build(&params, &mesh, &args.file)?;
         args.save.write(
-            &simplify::progressive::ProgressiveCut::new(std::sync::Arc::new(progressive)),
+            progressive.as_ref(),
             serde_json::json!({
                 "file": args.file.display().to_string(),
                 "floor": floor,

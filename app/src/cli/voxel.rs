@@ -1,6 +1,8 @@
 //! `voxel`: low-pass filtered volume buffers and marching cubes (voxel paper).
 
 use super::*;
+use lodstudio_core::lod::Input;
+use lodstudio_core::voxel::{Filter, VoxelParams};
 
 #[derive(clap::ValueEnum, Debug, Clone, Copy)]
 enum FilterArg {
@@ -14,10 +16,10 @@ pub struct VoxelArgs {
     /// builtin:csg-part, or a volume (NRRD, NIfTI, INR, raw).
     file: PathBuf,
     /// Voxels along the longest side of an implicit solid's bounds (volumes keep their grid).
-    #[arg(long, default_value_t = 128)]
+    #[arg(long, default_value_t = VoxelParams::default().resolution)]
     resolution: usize,
     /// Filter support radius R in voxels of that grid.
-    #[arg(long, default_value_t = 2.0)]
+    #[arg(long, default_value_t = VoxelParams::default().radius)]
     radius: f32,
     /// Low-pass filter: the Gaussian or the hyper-cone of eq. 3.
     #[arg(long, value_enum, default_value = "gaussian")]
@@ -52,12 +54,29 @@ pub struct VoxelArgs {
     input: InputArgs,
 }
 
-/// What the voxel method samples: an implicit solid or a scalar volume.
+/// What the voxel method samples: a built-in implicit solid, or the model
+/// opened (a mesh through its winding number, or a volume on its own grid).
 enum VoxelInput {
     Solid(Box<dyn lodstudio_core::implicit::Implicit>),
-    Volume(lodstudio_core::Volume, f32),
-    /// A mesh, inside where its generalised winding number is ≥ ½.
-    Mesh(Box<lodstudio_core::TriMesh>),
+    Model(Box<Model>),
+}
+
+impl VoxelInput {
+    fn input(&self) -> Input<'_> {
+        match self {
+            VoxelInput::Solid(solid) => Input::Solid(solid.as_ref()),
+            VoxelInput::Model(model) => model.as_ref().into(),
+        }
+    }
+
+    /// The input surface levels are certified against, where there is one.
+    fn surface(&self) -> Option<&lodstudio_core::TriMesh> {
+        match self.input() {
+            Input::Mesh(mesh) => Some(mesh),
+            Input::Solid(solid) => solid.surface(),
+            Input::Points(_) | Input::Volume(_) => None,
+        }
+    }
 }
 
 fn voxel_input(args: &VoxelArgs) -> Result<VoxelInput, CliError> {
@@ -71,69 +90,32 @@ fn voxel_input(args: &VoxelArgs) -> Result<VoxelInput, CliError> {
     }
     let loaded =
         lodstudio_core::open::open(&args.file, &args.input.load_options()?, &Progress::new())?;
-    match loaded.model {
-        Model::Volume(v) => {
-            let (lo, hi) = v.value_range();
-            let iso = args.iso.unwrap_or(0.5 * (lo + hi));
-            if !iso.is_finite() {
-                return Err(CliError::BadInput("--iso must be a finite value".into()));
-            }
-            Ok(VoxelInput::Volume(v, iso))
-        }
-        Model::Mesh(m) if !m.triangles.is_empty() => Ok(VoxelInput::Mesh(Box::new(m))),
-        other => Err(CliError::BadInput(format!(
-            "{}: the voxel method samples solids (meshes, implicit built-ins, volumes), not {} input",
-            args.file.display(),
-            other.kind()
-        ))),
-    }
+    Ok(VoxelInput::Model(Box::new(loaded.model)))
+}
+
+/// The parameters the arguments name (`--at` browses a pyramid).
+fn params(args: &VoxelArgs) -> Result<VoxelParams, CliError> {
+    let d = VoxelParams::default();
+    Ok(VoxelParams {
+        resolution: args.resolution,
+        radius: args.radius,
+        filter: match args.filter {
+            FilterArg::Gaussian => Filter::Gaussian,
+            FilterArg::Cone => Filter::Cone,
+        },
+        threshold: args.iso,
+        layers_error: args.layers_error.unwrap_or(d.layers_error),
+        post: args.post.post()?,
+        pyramid: args.pyramid || args.at.is_some(),
+        ..d
+    })
 }
 
 pub fn run(args: VoxelArgs) -> Result<(), CliError> {
-    use lodstudio_core::voxel::{self, DENSITY_ISO, Filter, Pyramid, Source};
-    let (resolutions, radii) = (voxel::RESOLUTION_RANGE, voxel::RADIUS_RANGE);
-    if !resolutions.contains(&args.resolution) {
-        return Err(CliError::BadInput(format!(
-            "--resolution must be in {resolutions:?}, got {}",
-            args.resolution
-        )));
-    }
-    lodstudio_core::voxel::check_resolution_budget(args.resolution)
-        .map_err(|e| CliError::BadInput(format!("--resolution: {e}")))?;
-    if !(args.radius.is_finite() && radii.contains(&args.radius)) {
-        return Err(CliError::BadInput(format!(
-            "--radius must be in {radii:?} voxels, got {}",
-            args.radius
-        )));
-    }
-    let filter = match args.filter {
-        FilterArg::Gaussian => Filter::Gaussian,
-        FilterArg::Cone => Filter::Cone,
-    };
-    let post = args.post.post()?;
-    let input = voxel_input(&args)?;
-    if let Some(out) = &args.output {
-        check_output(out, args.report.force || (args.pyramid && out.is_dir()))?;
-    }
-    let progress = Progress::new();
-    // What is sampled: a solid (built-in, or a mesh through its winding number)
-    // or a volume on its own grid.
-    let mesh_solid;
-    let source = match &input {
-        VoxelInput::Solid(solid) => Source::Solid(solid.as_ref()),
-        VoxelInput::Mesh(m) => {
-            mesh_solid = lodstudio_core::implicit::MeshSolid::new(m);
-            Source::Solid(&mesh_solid)
-        }
-        VoxelInput::Volume(v, iso) => Source::Volume(v, *iso),
-    };
-    if let Some(d) = args.layers_error
-        && !(d.is_finite() && d >= 0.0)
-    {
-        return Err(CliError::BadInput(format!(
-            "--layers-error must be a number >= 0, got {d}"
-        )));
-    }
+    use lodstudio_core::voxel::{self, layers::Layered, pyramid::PyramidCut};
+    let voxel_params = params(&args)?;
+    let params = Params::Voxel(voxel_params);
+    params.validate()?;
     if let Some(t) = args.at
         && !(t.is_finite() && t >= 0.0)
     {
@@ -141,6 +123,11 @@ pub fn run(args: VoxelArgs) -> Result<(), CliError> {
             "--at must be a pyramid position >= 0, got {t}"
         )));
     }
+    let input = voxel_input(&args)?;
+    if let Some(out) = &args.output {
+        check_output(out, args.report.force || (args.pyramid && out.is_dir()))?;
+    }
+    let progress = Progress::new();
     let level_json = |l: &voxel::VoxelLevel| {
         serde_json::json!({
             "resolution": l.resolution,
@@ -152,19 +139,15 @@ pub fn run(args: VoxelArgs) -> Result<(), CliError> {
     };
     let start = std::time::Instant::now();
     let failed = |_| CliError::Failure("cancelled".into());
-    if args.pyramid || args.at.is_some() {
+    if voxel_params.pyramid {
         args.save.check(args.report.force)?;
-        let mut pyramid = Pyramid::build(source, args.resolution, args.radius, filter, &progress)
-            .map_err(failed)?;
-        pyramid.post = post;
-        let reference = source.surface();
-        pyramid.certify(reference, &progress).map_err(failed)?;
-        let against = if pyramid.against_input {
+        let cut: Box<PyramidCut> = super::build(&params, input.input(), &args.file)?;
+        let against = if cut.pyramid.against_input {
             "input surface"
         } else {
             "finest level"
         };
-        let diagonal = pyramid.diagonal;
+        let diagonal = cut.pyramid.diagonal;
         let with_bound = |mut j: serde_json::Value, bound: f32| {
             if bound.is_finite() {
                 j["error_bound"] = bound.into();
@@ -173,21 +156,18 @@ pub fn run(args: VoxelArgs) -> Result<(), CliError> {
             j["empty"] = bound.is_infinite().into();
             j
         };
-        let pyramid = {
-            let cut = lodstudio_core::voxel::pyramid::PyramidCut::new(pyramid, None);
-            args.save.write(
-                &cut,
-                serde_json::json!({"resolution": args.resolution, "radius": args.radius, "file": args.file.display().to_string()}),
-            )?;
-            cut.pyramid
-        };
+        args.save.write(
+            cut.as_ref(),
+            serde_json::json!({"resolution": args.resolution, "radius": args.radius, "file": args.file.display().to_string()}),
+        )?;
+        let pyramid = cut.pyramid;
         if let Some(t) = args.at {
             let l = pyramid.in_between(t, &progress).map_err(failed)?;
             if let Some(out) = &args.output {
                 write_mesh(out, &l.mesh)?;
             }
             let finest = pyramid.level(0, &progress).map_err(failed)?.mesh;
-            let reference = reference.unwrap_or(&finest);
+            let reference = input.surface().unwrap_or(&finest);
             let original = lodstudio_core::simplify::Original::new(reference);
             let opts = lodstudio_core::simplify::BoundOptions::for_diagonal(pyramid.diagonal);
             let bound = voxel::pyramid::level_bound(&original, &l.mesh, &opts, &progress)
@@ -241,57 +221,42 @@ pub fn run(args: VoxelArgs) -> Result<(), CliError> {
         }
         return Ok(());
     }
-    let resolution = match source {
-        Source::Solid(_) => args.resolution,
-        Source::Volume(v, _) => v.dims.into_iter().max().unwrap_or(0),
+    // One level: its layers (one surface unless δ asks for more), certified
+    // against a mesh's surface.
+    let built: Box<Layered> = super::build(&params, input.input(), &args.file)?;
+    let (Some(l), Some(plan)) = (built.level.as_deref(), built.plan.as_ref()) else {
+        return Err(CliError::Failure(
+            "internal error: a voxel level without its extraction".into(),
+        ));
     };
-    let density =
-        voxel::density(source, resolution, 1, args.radius, filter, &progress).map_err(failed)?;
-    let voxel::layers::LayeredLevel {
-        level: l,
-        plan,
-        layers,
-    } = voxel::layers::layered_level(
-        &density,
-        (resolution, args.radius),
-        filter,
-        args.layers_error.unwrap_or(f32::INFINITY),
-        DENSITY_ISO,
-        post,
-        &progress,
-    )
-    .map_err(failed)?;
     if let Some(out) = &args.output {
         write_cut(
             out,
             &lodstudio_core::lod::DrawSet {
-                layers: layers.clone(),
+                layers: built.layers.clone(),
                 ..Default::default()
             },
         )?;
     }
-    let mut j = level_json(&l);
-    j["layers"] = layers.len().into();
+    let mut j = level_json(l);
+    j["layers"] = built.layers.len().into();
     j["isodensities"] = serde_json::json!(plan.isodensities);
     j["opacities"] = serde_json::json!(plan.opacities);
     j["layer_triangles"] = serde_json::json!(
-        layers
+        built
+            .layers
             .iter()
             .map(|l| l.mesh.triangles.len())
             .collect::<Vec<_>>()
     );
     j["layers_error"] = plan.error.into();
-    // The level as drawn (collapsed, or every layer), certified against a
-    // mesh's surface.
-    if let Some(surface) = source.surface() {
-        let mut level = voxel::layers::Layered::new(layers, &density);
-        level.certify(surface, &progress).map_err(failed)?;
+    if let Some(surface) = input.surface() {
         let diagonal = surface.bounds().diagonal().max(f32::MIN_POSITIVE);
-        j["error_bound"] = level.error_bound.into();
-        j["error_bound_relative"] = (level.error_bound / diagonal).into();
+        j["error_bound"] = built.error_bound.into();
+        j["error_bound_relative"] = (built.error_bound / diagonal).into();
     }
     j["seconds"] = start.elapsed().as_secs_f64().into();
-    report_level(&args, &l, j)
+    report_level(&args, l, j)
 }
 
 /// Prints one level's JSON, or its summary line.

@@ -20,7 +20,7 @@ const TEXEL_HINT: &str = "§3.2: texel size of the primitives' textures, in unit
 impl AmgSettings {
     /// The controls; true when a build parameter changed.
     pub fn ui(&mut self, ui: &mut egui::Ui, levels: Option<usize>) -> bool {
-        let before = self.build_params();
+        let before = self.params();
         ui.add(
             egui::Slider::new(&mut self.k, K_RANGE)
                 .logarithmic(true)
@@ -40,6 +40,6 @@ impl AmgSettings {
             ui.add(egui::Slider::new(&mut self.level, 0..=top).text("AMG level"))
                 .on_hover_text(LEVEL_HINT);
         }
-        self.build_params() != before
+        self.params() != before
     }
 }

@@ -1,6 +1,24 @@
 //! The cut threshold's slider and its unit switch.
 
+use lodstudio_core::lod::Knob;
+
 use crate::settings::threshold::{PERCENT_RANGE, PIXELS_RANGE, Threshold};
+
+/// What the panel says instead of the threshold while `knob` chooses the cut.
+pub fn overridden(knob: Knob) -> &'static str {
+    match knob {
+        Knob::CollapseTarget => {
+            "The target above chooses the cut; choose \"Threshold\" as the target to cut by the error threshold."
+        }
+        Knob::AmgLevel => {
+            "The level above chooses the cut; tick \"level from the threshold\" to cut by the error threshold."
+        }
+        Knob::PyramidPosition => {
+            "The pyramid position above chooses the level; tick \"level follows the threshold\" to cut by the error threshold."
+        }
+        Knob::Criteria => "The criteria scale the error threshold.",
+    }
+}
 
 impl Threshold {
     /// The slider and its unit switch; true when the threshold changed.

@@ -1,11 +1,9 @@
 //! Controls of voxel-based simplification: filter, grid, iso, layers and
 //! the pyramid, explained in the paper's terms.
 
-use lodstudio_core::voxel::{RADIUS_RANGE, RESOLUTION_RANGE};
+use lodstudio_core::voxel::{Filter, RADIUS_RANGE, RESOLUTION_RANGE};
 
-use crate::settings::voxel::{
-    FilterKind, ISO_RANGE, LAYERS_RANGE, POSITION_RANGE, VolumeGrid, VoxelSettings,
-};
+use crate::settings::voxel::{ISO_RANGE, LAYERS_RANGE, POSITION_RANGE, VolumeGrid, VoxelSettings};
 
 const FILTER_HINT: &str = "The low-pass filter h of the filtered density f = h * S \
     (voxel paper §2, eq. 1): it removes the high frequencies (small features, holes, \
@@ -71,10 +69,7 @@ impl VoxelSettings {
         let before = *self;
         ui.label("Filter").on_hover_text(FILTER_HINT);
         ui.horizontal(|ui| {
-            for (kind, hint) in [
-                (FilterKind::Gaussian, GAUSSIAN_HINT),
-                (FilterKind::Cone, CONE_HINT),
-            ] {
+            for (kind, hint) in [(Filter::Gaussian, GAUSSIAN_HINT), (Filter::Cone, CONE_HINT)] {
                 ui.selectable_value(&mut self.filter, kind, kind.name())
                     .on_hover_text(hint);
             }

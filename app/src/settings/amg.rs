@@ -4,12 +4,12 @@
 
 use std::ops::RangeInclusive;
 
-use lodstudio_core::amg::K_RANGE;
+pub use lodstudio_core::amg::TEXEL_SCALE_RANGE as TEXEL_RANGE;
+use lodstudio_core::amg::{AmgParams, DEFAULT_TEXEL_SPACINGS, K_RANGE, Texel};
 use serde::{Deserialize, Serialize};
 
 use super::clamp_or;
 
-pub const TEXEL_RANGE: RangeInclusive<f32> = 0.25..=8.0;
 pub const LEVEL_RANGE: RangeInclusive<usize> = 0..=24;
 
 /// Everything the AMG decomposition needs besides the points.
@@ -27,8 +27,8 @@ pub struct AmgSettings {
 impl Default for AmgSettings {
     fn default() -> Self {
         AmgSettings {
-            k: lodstudio_core::amg::AmgOptions::default().k,
-            texel: 1.0,
+            k: AmgParams::default().k,
+            texel: DEFAULT_TEXEL_SPACINGS,
             level: 3,
             auto_level: false,
         }
@@ -47,11 +47,12 @@ impl AmgSettings {
     }
 
     /// What a build depends on (the level is chosen at run time).
-    pub fn build_params(self) -> Self {
-        AmgSettings {
-            level: 0,
-            auto_level: false,
-            ..self.sanitized()
+    pub fn params(&self) -> AmgParams {
+        let s = self.sanitized();
+        AmgParams {
+            k: s.k,
+            texel: Texel::Spacings(s.texel),
+            ..Default::default()
         }
     }
 

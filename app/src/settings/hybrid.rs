@@ -34,6 +34,7 @@ impl HybridSettings {
         }
     }
 
+    /// What a build is made with.
     pub fn options(&self) -> HybridOptions {
         let s = self.sanitized();
         HybridOptions {

@@ -4,14 +4,13 @@
 
 use std::ops::RangeInclusive;
 
+pub use lodstudio_core::mergetree::MIN_VERTICES_RANGE;
 use lodstudio_core::mergetree::{Criteria, MergeTreeOptions};
-use lodstudio_core::simplify::CollapseOptions;
+pub use lodstudio_core::simplify::collapse::GUARD_RANGE as QUALITY_RANGE;
 use serde::{Deserialize, Serialize};
 
 use super::clamp_or;
 
-pub const MIN_VERTICES_RANGE: RangeInclusive<usize> = 4..=100_000;
-pub const QUALITY_RANGE: RangeInclusive<f32> = 0.0..=0.5;
 /// The light's direction for the illumination criterion, in degrees.
 pub const AZIMUTH_RANGE: RangeInclusive<f32> = -180.0..=180.0;
 pub const ELEVATION_RANGE: RangeInclusive<f32> = -90.0..=90.0;
@@ -65,13 +64,13 @@ impl MergeTreeSettings {
 
     /// What the tree's build depends on (the criteria apply at run time).
     pub fn options(&self) -> MergeTreeOptions {
-        MergeTreeOptions {
-            min_vertices: self.min_vertices,
-            collapse: CollapseOptions {
-                min_quality: self.min_quality,
-                ..MergeTreeOptions::default().collapse
-            },
-        }
+        let s = self.sanitized();
+        let mut options = MergeTreeOptions {
+            min_vertices: s.min_vertices,
+            ..Default::default()
+        };
+        options.collapse.min_quality = s.min_quality;
+        options
     }
 
     pub fn criteria(&self) -> Criteria {

@@ -15,10 +15,8 @@ pub mod voxel;
 
 use std::ops::RangeInclusive;
 
-use lodstudio_core::simplify::CollapseOptions;
+use lodstudio_core::lod::{Knobs, Params};
 use serde::{Deserialize, Serialize};
-
-use lodstudio_core::mergetree::MergeTreeOptions;
 
 use self::amg::AmgSettings;
 use self::hybrid::HybridSettings;
@@ -44,32 +42,6 @@ pub struct MethodSettings {
     pub amg: AmgSettings,
     /// The error threshold of live cuts (hierarchies).
     pub threshold: Threshold,
-}
-
-/// What one build of one method depends on besides its input: a result built
-/// with other parameters than the shown ones is stale.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub enum BuildParams {
-    /// The collapses' legality rules (the target chooses a prefix at run time).
-    EdgeCollapse(CollapseOptions),
-    Voxel(VoxelSettings),
-    /// The tree's build options (its criteria apply at run time).
-    MergeTree(MergeTreeOptions),
-    Hybrid(HybridSettings),
-    /// The decomposition's parameters (the level is chosen at run time).
-    Amg(AmgSettings),
-}
-
-impl BuildParams {
-    pub fn method(&self) -> Method {
-        match self {
-            BuildParams::EdgeCollapse(_) => Method::EdgeCollapse,
-            BuildParams::Voxel(_) => Method::Voxel,
-            BuildParams::MergeTree(_) => Method::MergeTree,
-            BuildParams::Hybrid(_) => Method::Hybrid,
-            BuildParams::Amg(_) => Method::Amg,
-        }
-    }
 }
 
 impl Default for MethodSettings {
@@ -100,18 +72,28 @@ impl MethodSettings {
         self
     }
 
-    /// What a build of the chosen method gets; `volume` is the grid of the
-    /// open model when it is a volume (voxel builds depend on other values then).
-    pub fn params(&self, volume: Option<&VolumeGrid>) -> BuildParams {
+    /// What a build of the chosen method is made with (a result built with
+    /// other parameters is stale); `volume` is the grid of the open model
+    /// when it is a volume (voxel builds depend on other values then).
+    pub fn params(&self, volume: Option<&VolumeGrid>) -> Params {
         match self.method {
-            Method::EdgeCollapse => BuildParams::EdgeCollapse(self.edge_collapse.collapse()),
-            Method::Voxel => BuildParams::Voxel(match volume {
-                Some(grid) => self.voxel.for_volume(grid),
-                None => self.voxel.for_implicit(),
-            }),
-            Method::MergeTree => BuildParams::MergeTree(self.merge_tree.sanitized().options()),
-            Method::Hybrid => BuildParams::Hybrid(self.hybrid.sanitized()),
-            Method::Amg => BuildParams::Amg(self.amg.build_params()),
+            Method::EdgeCollapse => Params::EdgeCollapse(self.edge_collapse.params()),
+            Method::Voxel => Params::Voxel(self.voxel.params(volume)),
+            Method::MergeTree => Params::MergeTree(self.merge_tree.options()),
+            Method::Hybrid => Params::Hybrid(self.hybrid.options()),
+            Method::Amg => Params::Amg(self.amg.params()),
+        }
+    }
+}
+
+impl MethodSettings {
+    /// What changes a cut at run time, for a model of `input_triangles`.
+    pub fn knobs(&self, input_triangles: usize) -> Knobs {
+        Knobs {
+            criteria: self.merge_tree.criteria(),
+            pyramid_position: self.voxel.runtime_position(),
+            amg_level: self.amg.runtime_level(),
+            collapse: self.edge_collapse.runtime(input_triangles),
         }
     }
 }

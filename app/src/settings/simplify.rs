@@ -6,6 +6,8 @@ use std::ops::RangeInclusive;
 
 use lodstudio_core::lod::PrefixTarget;
 use lodstudio_core::simplify::CollapseOptions;
+pub use lodstudio_core::simplify::collapse::GUARD_RANGE;
+use lodstudio_core::simplify::progressive::{FLOOR_RATIO, ProgressiveOptions};
 use serde::{Deserialize, Serialize};
 
 use super::clamp_or;
@@ -22,11 +24,10 @@ pub enum TargetMode {
     Threshold,
 }
 
-pub const RATIO_RANGE: RangeInclusive<f32> = 0.001..=1.0;
+/// Down to the floor a build records.
+pub const RATIO_RANGE: RangeInclusive<f32> = FLOOR_RATIO..=1.0;
 /// Error targets as a percentage of the bounding-box diagonal.
 pub const ERROR_PERCENT_RANGE: RangeInclusive<f32> = 0.001..=10.0;
-/// The sliver and fold guards (a quality, a cosine; 0 turns either off).
-pub const GUARD_RANGE: RangeInclusive<f32> = 0.0..=1.0;
 /// DragValue needs a finite upper end; no model comes close.
 pub const MAX_TRIANGLES: usize = 1_000_000_000;
 
@@ -87,10 +88,13 @@ impl EdgeCollapseSettings {
         }
     }
 
-    /// The triangles a build records collapses down to, for `input` triangles:
-    /// the ratio slider's low end.
-    pub fn floor(input: usize) -> usize {
-        (f64::from(*RATIO_RANGE.start()) * input as f64) as usize
+    /// What a build is made with: the legality rules, recorded down to the
+    /// default floor (the ratio slider's low end).
+    pub fn params(&self) -> ProgressiveOptions {
+        ProgressiveOptions {
+            collapse: self.collapse(),
+            floor: None,
+        }
     }
 
     /// The run-time choice of a recorded collapse's prefix (the live cut's
@@ -135,6 +139,6 @@ mod tests {
             s.collapse().min_normal_cos,
             CollapseOptions::default().min_normal_cos
         );
-        assert_eq!(EdgeCollapseSettings::floor(100_000), 100);
+        assert_eq!(s.params().floor(100_000), 100, "the ratio slider's low end");
     }
 }

@@ -5,46 +5,20 @@
 use std::ops::RangeInclusive;
 
 use lodstudio_core::geom::Volume;
-use lodstudio_core::voxel::{DENSITY_ISO, Filter, RADIUS_RANGE, RESOLUTION_RANGE};
+pub use lodstudio_core::voxel::params::{ISO_RANGE, LAYERS_RANGE};
+use lodstudio_core::voxel::{Filter, PostSimplify, RADIUS_RANGE, RESOLUTION_RANGE, VoxelParams};
 use serde::{Deserialize, Serialize};
 
 use super::clamp_or;
 
-pub const ISO_RANGE: RangeInclusive<f32> = 0.05..=0.95;
 /// Pyramid positions the slider offers (levels beyond the pyramid clamp).
 pub const POSITION_RANGE: RangeInclusive<f32> = 0.0..=6.0;
-/// Layers error δ (§3, eq. 6): 0.5 and above is one surface.
-pub const LAYERS_RANGE: RangeInclusive<f32> = 0.01..=0.5;
-
-/// Which low-pass filter of §2 to apply (as stored in the settings).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
-pub enum FilterKind {
-    #[default]
-    Gaussian,
-    Cone,
-}
-
-impl FilterKind {
-    pub fn filter(self) -> Filter {
-        match self {
-            FilterKind::Gaussian => Filter::Gaussian,
-            FilterKind::Cone => Filter::Cone,
-        }
-    }
-
-    pub fn name(self) -> &'static str {
-        match self {
-            FilterKind::Gaussian => "Gaussian",
-            FilterKind::Cone => "Cone",
-        }
-    }
-}
 
 /// Everything voxel simplification needs besides the solid.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(default)]
 pub struct VoxelSettings {
-    pub filter: FilterKind,
+    pub filter: Filter,
     /// Voxels along the longest side of the object's bounds.
     pub resolution: usize,
     /// Filter support radius, in voxels of that grid.
@@ -107,15 +81,16 @@ impl VolumeGrid {
 
 impl Default for VoxelSettings {
     fn default() -> Self {
+        let d = VoxelParams::default();
         VoxelSettings {
-            filter: FilterKind::Gaussian,
-            resolution: 64,
-            radius: 2.0,
-            iso: DENSITY_ISO,
-            threshold: None,
-            layers_error: 0.5,
-            simplify: true,
-            pyramid: false,
+            filter: d.filter,
+            resolution: d.resolution,
+            radius: d.radius,
+            iso: d.iso,
+            threshold: d.threshold,
+            layers_error: d.layers_error,
+            simplify: d.post != PostSimplify::Off,
+            pyramid: d.pyramid,
             position: 0.0,
             follow_threshold: true,
         }
@@ -142,11 +117,12 @@ impl VoxelSettings {
         }
     }
 
-    /// How each extracted level is simplified further.
-    pub fn post(&self) -> lodstudio_core::voxel::PostSimplify {
+    /// How each extracted level is simplified further: the default
+    /// collapse, or none.
+    pub fn post(&self) -> PostSimplify {
         match self.simplify {
-            true => lodstudio_core::voxel::PostSimplify::HALF_VOXEL,
-            false => lodstudio_core::voxel::PostSimplify::Off,
+            true => VoxelParams::default().post,
+            false => PostSimplify::Off,
         }
     }
 
@@ -155,28 +131,26 @@ impl VoxelSettings {
         (!self.follow_threshold).then_some(self.sanitized().position)
     }
 
-    /// What a build of an implicit solid depends on: the threshold has no effect.
-    pub fn for_implicit(self) -> Self {
-        VoxelSettings {
-            threshold: None,
-            position: 0.0,
-            follow_threshold: true,
-            ..self.sanitized()
-        }
-    }
-
-    /// What a build of `grid`'s volume depends on: its threshold (resolved),
-    /// filter and radius; resolution and iso have no effect and keep their
-    /// defaults, so changing them does not make a volume's result stale.
-    pub fn for_volume(self, grid: &VolumeGrid) -> Self {
-        let d = Self::default();
-        VoxelSettings {
-            resolution: d.resolution,
-            iso: d.iso,
-            threshold: Some(grid.threshold(self.threshold)),
-            position: 0.0,
-            follow_threshold: true,
-            ..self.sanitized()
+    /// What a build is made with. Of a volume (`volume` its grid) the
+    /// threshold is resolved, and the resolution and iso, which have no
+    /// effect on it, keep their defaults, so changing them does not make its
+    /// result stale.
+    pub fn params(&self, volume: Option<&VolumeGrid>) -> VoxelParams {
+        let s = self.sanitized();
+        let d = VoxelParams::default();
+        let (resolution, iso, threshold) = match volume {
+            Some(grid) => (d.resolution, d.iso, Some(grid.threshold(s.threshold))),
+            None => (s.resolution, s.iso, None),
+        };
+        VoxelParams {
+            resolution,
+            radius: s.radius,
+            filter: s.filter,
+            iso,
+            threshold,
+            layers_error: s.layers_error,
+            post: s.post(),
+            pyramid: s.pyramid,
         }
     }
 }
@@ -188,7 +162,7 @@ mod tests {
     #[test]
     fn out_of_range_values_are_replaced() {
         let odd = VoxelSettings {
-            filter: FilterKind::Cone,
+            filter: Filter::Cone,
             resolution: 4,
             radius: f32::NAN,
             iso: 3.0,
@@ -205,7 +179,7 @@ mod tests {
         assert_eq!(VoxelSettings::default().runtime_position(), None);
         assert_eq!(odd.layers_error, 0.5);
         assert_eq!(odd.threshold, None);
-        assert_eq!(odd.filter.filter(), Filter::Cone);
+        assert_eq!(odd.filter, Filter::Cone);
         assert_eq!(odd.resolution, *RESOLUTION_RANGE.start());
         assert_eq!(odd.radius, VoxelSettings::default().radius);
         assert_eq!(odd.iso, 0.95);
@@ -229,19 +203,25 @@ mod tests {
             ([2, 1, 1], (-4.0, 10.0), 3.0)
         );
         let settings = VoxelSettings::default();
-        assert_eq!(settings.for_volume(&grid).threshold, Some(3.0));
+        assert_eq!(settings.params(Some(&grid)).threshold, Some(3.0));
         let moved = VoxelSettings {
             resolution: 200,
             iso: 0.3,
             threshold: Some(3.0),
             ..settings
         };
-        assert_eq!(moved.for_volume(&grid), settings.for_volume(&grid));
+        assert_eq!(moved.params(Some(&grid)), settings.params(Some(&grid)));
+        assert_ne!(moved.params(None), settings.params(None), "a solid's do");
         let clamped = VoxelSettings {
             threshold: Some(99.0),
             ..settings
         };
-        assert_eq!(clamped.for_volume(&grid).threshold, Some(10.0));
-        assert_eq!(clamped.for_implicit(), settings);
+        assert_eq!(clamped.params(Some(&grid)).threshold, Some(10.0));
+        assert_eq!(clamped.params(None), settings.params(None));
+        assert_eq!(
+            settings.params(None),
+            VoxelParams::default(),
+            "the studio starts from the one default"
+        );
     }
 }

@@ -3,22 +3,18 @@
 
 use std::sync::Arc;
 
-use lodstudio_core::implicit::MeshSolid;
-use lodstudio_core::progress::{Cancelled, Progress};
+use lodstudio_core::lod::BuildError;
+use lodstudio_core::progress::Cancelled;
 
 use super::StudioApp;
-use crate::build::{self, Built};
+use crate::build;
 use crate::job::{Job, Poll};
 use crate::render::{Scene, SceneStyle};
-use crate::settings::BuildParams;
 use crate::settings::voxel::VolumeGrid;
 
 /// With auto rebuild, a build starts once parameters have been still this long
 /// (seconds), so dragging a slider does not start a build every frame.
 const REBUILD_DELAY: f64 = 0.4;
-
-/// A build's work on its worker thread (one per method).
-type BuildWork = Box<dyn FnOnce(&Progress) -> Result<Result<Built, String>, Cancelled> + Send>;
 
 /// When a requested build starts.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -45,10 +41,10 @@ impl StudioApp {
 
     /// Whether the chosen method can build the model on screen (`None`
     /// without a model), or why not.
-    pub(super) fn input_check(&self) -> Option<Result<(), String>> {
+    pub(super) fn input_check(&self) -> Option<Result<(), BuildError>> {
         self.current
             .as_ref()
-            .map(|c| build::check(self.methods.method, &c.path, &c.loaded.model))
+            .map(|c| build::check(self.methods.method, &c.source()))
     }
 
     /// After a parameter changed: schedule a rebuild if wanted and possible.
@@ -83,72 +79,24 @@ impl StudioApp {
     }
 
     fn start_build(&mut self, ctx: &egui::Context) {
-        let ready = match &self.current {
-            None => Err("Open a model first.".to_string()),
-            Some(c) => build::check(self.methods.method, &c.path, &c.loaded.model).map(|()| c),
+        let Some(current) = &self.current else {
+            self.build_failed("Open a model first.".to_string());
+            return;
         };
-        let current = match ready {
-            Ok(current) => current,
-            Err(message) => {
-                self.build_failed(message);
-                return;
-            }
-        };
+        let source = current.source();
+        if let Err(e) = build::check(self.methods.method, &source) {
+            self.build_failed(e.to_string());
+            return;
+        }
         let label = format!("{} of {}", self.methods.method.name(), current.name);
-        // Every method starts here; a new one makes this match incomplete.
-        let work: BuildWork = match self.methods.params(current.volume.as_ref()) {
-            BuildParams::EdgeCollapse(options) => {
-                let loaded = Arc::clone(&current.loaded);
-                Box::new(move |progress| build::run(&loaded.model, options, progress))
-            }
-            BuildParams::Amg(settings) => {
-                let loaded = Arc::clone(&current.loaded);
-                let settings = crate::settings::amg::AmgSettings {
-                    level: self.methods.amg.level,
-                    ..settings
-                };
-                Box::new(move |progress| build::amg::run(&loaded.model, settings, progress))
-            }
-            BuildParams::Hybrid(settings) => {
-                let loaded = Arc::clone(&current.loaded);
-                Box::new(move |progress| build::hybrid::run(&loaded.model, settings, progress))
-            }
-            BuildParams::MergeTree(_) => {
-                let loaded = Arc::clone(&current.loaded);
-                let settings = self.methods.merge_tree;
-                Box::new(move |progress| build::mergetree::run(&loaded.model, settings, progress))
-            }
-            BuildParams::Voxel(settings) => {
-                match build::voxel_source(&current.path, &current.loaded.model) {
-                    Ok(build::VoxelSource::Implicit(name)) => {
-                        let Some(solid) = lodstudio_core::builtins::implicit(name) else {
-                            self.build_failed(format!("builtin:{name} is no implicit solid"));
-                            return;
-                        };
-                        Box::new(move |progress| {
-                            build::run_voxel(solid.as_ref(), settings, progress)
-                        })
-                    }
-                    Ok(build::VoxelSource::Mesh(_)) => {
-                        let loaded = Arc::clone(&current.loaded);
-                        Box::new(move |progress| match build::mesh_of(&loaded.model) {
-                            Ok(mesh) => build::run_voxel(&MeshSolid::new(mesh), settings, progress),
-                            Err(message) => Ok(Err(message)),
-                        })
-                    }
-                    Ok(build::VoxelSource::Volume(volume)) => {
-                        let loaded = Arc::clone(&current.loaded);
-                        let grid = current.volume.unwrap_or_else(|| VolumeGrid::of(volume));
-                        Box::new(move |progress| {
-                            build::run_voxel_volume(&loaded.model, &grid, settings, progress)
-                        })
-                    }
-                    Err(message) => {
-                        self.build_failed(message);
-                        return;
-                    }
-                }
-            }
+        let params = self.methods.params(current.volume.as_ref());
+        let knobs = self
+            .methods
+            .knobs(current.mesh().map_or(0, |m| m.triangles.len()));
+        // A cancelled build sends nothing (see `Job::spawn`).
+        let work = move |progress: &_| match build::run(&params, &source, &knobs, progress) {
+            Err(BuildError::Cancelled) => Err(Cancelled),
+            outcome => Ok(outcome),
         };
         // Replacing the job cancels the running build (see `Job`'s Drop).
         if let Some(old) = self.build.take() {
@@ -172,7 +120,9 @@ impl StudioApp {
         let outcome = match job.poll() {
             Poll::Running => return,
             Poll::Done(outcome) => outcome,
-            Poll::Lost => Err("the build stopped unexpectedly (internal error)".to_string()),
+            Poll::Lost => Err(BuildError::BadInput(
+                "the build stopped unexpectedly (internal error)".to_string(),
+            )),
         };
         let Some(job) = self.build.take() else {
             return;
@@ -183,7 +133,7 @@ impl StudioApp {
                 self.result = Some(built);
                 self.show_result();
             }
-            Err(message) => self.build_failed(format!("{}: {message}", job.label())),
+            Err(e) => self.build_failed(format!("{}: {e}", job.label())),
         }
     }
 

@@ -5,7 +5,7 @@ use std::sync::Arc;
 
 use lodstudio_core::lod::Picked;
 
-use super::{StudioApp, View};
+use super::{Current, StudioApp, View};
 use crate::build;
 use crate::live_cut::CutStyle;
 use crate::render::Scene;
@@ -27,22 +27,13 @@ impl StudioApp {
             let input_triangles = self
                 .current
                 .as_ref()
-                .and_then(|c| build::mesh_of(&c.loaded.model).ok())
+                .and_then(Current::mesh)
                 .map_or(0, |m| m.triangles.len());
             let mt = &self.methods.merge_tree;
             if let Some(light) = mt.light() {
                 view.light_dir = light;
             }
-            live.set_knobs(&lodstudio_core::lod::Knobs {
-                criteria: lodstudio_core::lod::Criteria {
-                    backface: mt.backface,
-                    silhouette: mt.silhouette,
-                    lighting: mt.lighting,
-                },
-                pyramid_position: self.methods.voxel.runtime_position(),
-                amg_level: self.methods.amg.runtime_level(),
-                collapse: self.methods.edge_collapse.runtime(input_triangles),
-            });
+            live.set_knobs(&self.methods.knobs(input_triangles));
             live.update(&view, self.methods.threshold.tolerance());
         }
     }
@@ -74,13 +65,15 @@ impl StudioApp {
     /// The model as opened, with its wireframe when that is on (made once).
     fn original_scene(&mut self) -> Option<Arc<Scene>> {
         let current = self.current.as_mut()?;
-        let mesh = build::mesh_of(&current.loaded.model).ok();
-        Some(match (self.wireframe, mesh) {
-            (true, Some(mesh)) => Arc::clone(current.wire_scene.get_or_insert_with(|| {
-                Arc::new(Scene::clone(&current.scene).with_wireframe(mesh))
-            })),
-            _ => Arc::clone(&current.scene),
-        })
+        if !self.wireframe || current.mesh().is_none() {
+            return Some(Arc::clone(&current.scene));
+        }
+        if current.wire_scene.is_none()
+            && let Some(mesh) = current.mesh()
+        {
+            current.wire_scene = Some(Arc::new(Scene::clone(&current.scene).with_wireframe(mesh)));
+        }
+        current.wire_scene.clone()
     }
 
     /// Shows a new result, side by side with the original if that is the view.

@@ -3,8 +3,7 @@
 
 use lodstudio_core::builtins;
 
-use super::StudioApp;
-use crate::build;
+use super::{Current, StudioApp};
 use crate::settings::Method;
 
 impl StudioApp {
@@ -59,7 +58,7 @@ impl StudioApp {
         let input_triangles = self
             .current
             .as_ref()
-            .and_then(|c| build::mesh_of(&c.loaded.model).ok())
+            .and_then(Current::mesh)
             .map(|m| m.triangles.len());
         match self.methods.method {
             Method::EdgeCollapse => {
@@ -87,12 +86,22 @@ impl StudioApp {
                 changed |= self.methods.merge_tree.ui(ui).0;
             }
         }
-        if self.result.as_ref().is_some_and(|b| b.live.has_levels()) {
+        // The threshold only where it chooses the cut: a hierarchy of one
+        // level has none to choose, and a knob may choose instead.
+        let controls = self.result.as_ref().map(|b| b.live.controls());
+        if let Some(controls) = controls.filter(|c| c.has_levels) {
             ui.add_space(4.0);
             ui.label("Cut").on_hover_text(
                 "The built hierarchy is cut live for the camera: no rebuild needed.",
             );
-            self.methods.threshold.ui(ui);
+            match controls.overridden_by {
+                None => {
+                    self.methods.threshold.ui(ui);
+                }
+                Some(knob) => {
+                    ui.weak(crate::panels::threshold::overridden(knob));
+                }
+            }
         }
         ui.add_space(4.0);
         let auto = ui
@@ -130,7 +139,7 @@ impl StudioApp {
         });
         let error_color = ui.visuals().error_fg_color;
         if let Some(Err(why)) = &input {
-            ui.colored_label(error_color, why);
+            ui.colored_label(error_color, why.to_string());
         } else if let Some(note) = &self.build_note {
             ui.colored_label(error_color, note);
         } else if self.result.is_some() && !self.is_building() && self.result_is_stale() {

@@ -225,10 +225,16 @@ impl StudioApp {
                     self.remember(&path);
                 }
                 ctx.send_viewport_cmd(egui::ViewportCommand::Title(format!("lodstudio — {name}")));
+                let solid = path
+                    .to_str()
+                    .and_then(|p| p.strip_prefix("builtin:"))
+                    .and_then(lodstudio_core::builtins::implicit)
+                    .map(Arc::from);
                 self.current = Some(Current {
                     rows: summary.lines(),
                     name,
                     path,
+                    solid,
                     loaded: Arc::new(loaded),
                     summary,
                     scene,

@@ -62,6 +62,26 @@ struct Current {
     wire_scene: Option<Arc<Scene>>,
     /// The grid and value range of a volume model.
     volume: Option<VolumeGrid>,
+    /// A built-in implicit's exact solid (voxel builds sample it).
+    solid: Option<Arc<dyn lodstudio_core::implicit::Implicit>>,
+}
+
+impl Current {
+    /// What builds work on.
+    fn source(&self) -> crate::build::Source {
+        crate::build::Source {
+            loaded: Arc::clone(&self.loaded),
+            solid: self.solid.clone(),
+        }
+    }
+
+    /// Its triangle mesh, if it is one with triangles.
+    fn mesh(&self) -> Option<&lodstudio_core::TriMesh> {
+        match &self.loaded.model {
+            lodstudio_core::io::Model::Mesh(m) if !m.triangles.is_empty() => Some(m),
+            _ => None,
+        }
+    }
 }
 
 /// The lodstudio GUI.
@@ -87,7 +107,7 @@ pub struct StudioApp {
     /// middle of the value range when a different volume opens (and is not
     /// persisted between sessions); reopening the same volume keeps it.
     threshold_volume: Option<PathBuf>,
-    build: Option<Job<Result<Built, String>>>,
+    build: Option<Job<Result<Built, lodstudio_core::lod::BuildError>>>,
     /// The last finished build of the model on screen.
     result: Option<Built>,
     /// Time of the last frame, for the inspector.

@@ -69,6 +69,77 @@ impl Default for AmgOptions {
     }
 }
 
+/// Texel sizes a build may ask for, in multiples of the default (the median
+/// point radius, §3.2): finer than a quarter spacing only costs memory,
+/// coarser than eight blurs the domains' alpha away.
+pub const TEXEL_SCALE_RANGE: std::ops::RangeInclusive<f32> = 0.25..=8.0;
+/// The texel unless told otherwise: one median point radius.
+pub const DEFAULT_TEXEL_SPACINGS: f32 = 1.0;
+/// Lengths a texel given in model units may have.
+const TEXEL_LENGTH_RANGE: std::ops::RangeInclusive<f32> = f32::MIN_POSITIVE..=f32::MAX;
+
+/// The texel size of the domain primitives' textures (§3.2).
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Texel {
+    /// A multiple of the median point radius, so about one point spacing
+    /// per texel at 1 (the studio's slider).
+    Spacings(f32),
+    /// A length in model units (the CLI's `--texel`).
+    Length(f32),
+}
+
+/// What an AMG build is made with: the decomposition's user parameters
+/// (§2.1) and the texel of its primitives (§3.2).
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(default)]
+pub struct AmgParams {
+    pub k: usize,
+    pub epsilon: f32,
+    pub texel: Texel,
+}
+
+impl Default for AmgParams {
+    fn default() -> Self {
+        let o = AmgOptions::default();
+        AmgParams {
+            k: o.k,
+            epsilon: o.epsilon,
+            texel: Texel::Spacings(DEFAULT_TEXEL_SPACINGS),
+        }
+    }
+}
+
+impl AmgParams {
+    pub fn validate(&self) -> Result<(), crate::lod::ParamError> {
+        use crate::lod::in_range;
+        in_range("k", self.k, &K_RANGE)?;
+        in_range("epsilon", self.epsilon, &(0.0..=f32::MAX))?;
+        match self.texel {
+            Texel::Spacings(s) => in_range("texel", s, &TEXEL_SCALE_RANGE),
+            Texel::Length(t) => in_range("texel", t, &TEXEL_LENGTH_RANGE),
+        }
+    }
+
+    pub fn options(&self) -> AmgOptions {
+        AmgOptions {
+            k: self.k,
+            epsilon: self.epsilon,
+            ..AmgOptions::default()
+        }
+    }
+
+    /// Decomposes `points` (§2) into a hierarchy of domain primitives.
+    pub fn build(&self, points: &PointSet, progress: &Progress) -> Result<AmgHierarchy, AmgError> {
+        let ms = decompose(points, &self.options(), progress)?;
+        let texel = match self.texel {
+            Texel::Spacings(s) => s * ms.default_texel(),
+            Texel::Length(t) => t,
+        };
+        Ok(AmgHierarchy::new(ms, texel))
+    }
+}
+
 /// Why a decomposition did not run.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum AmgError {
@@ -146,13 +217,19 @@ pub fn write_matrix_market(ms: &Multiscale, out: &mut impl std::io::Write) -> st
 pub fn point_set(model: &Model) -> Option<PointSet> {
     match model {
         Model::Points(p) => Some(p.clone()),
-        Model::Mesh(m) => Some(PointSet {
-            positions: m.positions.clone(),
-            normals: m.normals.clone(),
-            colors: m.colors.clone(),
-            radii: None,
-        }),
+        Model::Mesh(m) => Some(mesh_points(m)),
         _ => None,
+    }
+}
+
+/// A mesh's vertices as the points AMG decomposes (their radii follow
+/// from their neighbours).
+pub fn mesh_points(mesh: &crate::geom::TriMesh) -> PointSet {
+    PointSet {
+        positions: mesh.positions.clone(),
+        normals: mesh.normals.clone(),
+        colors: mesh.colors.clone(),
+        radii: None,
     }
 }
 
@@ -304,6 +381,11 @@ impl AmgHierarchy {
         &self.multiscale
     }
 
+    /// The texel size of its primitives, in model units.
+    pub fn texel(&self) -> f32 {
+        self.texel
+    }
+
     /// Fixes the drawn level (`None`: chosen by the tolerance).
     pub fn set_level(&mut self, level: Option<usize>) {
         self.level = level.map(|l| l.min(self.multiscale.levels() - 1));
@@ -410,6 +492,16 @@ impl Hierarchy for AmgHierarchy {
     }
 
     /// The level to draw, or `None` for the tolerance's choice.
+    /// A fixed level chooses the cut instead of the tolerance.
+    fn controls(&self) -> crate::lod::Controls {
+        use crate::lod::Knob;
+        crate::lod::Controls {
+            knobs: &[Knob::AmgLevel],
+            overridden_by: self.level.map(|_| Knob::AmgLevel),
+            has_levels: true,
+        }
+    }
+
     fn set_knobs(&mut self, knobs: &crate::lod::Knobs) -> bool {
         let before = self.level;
         self.set_level(knobs.amg_level);

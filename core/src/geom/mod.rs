@@ -125,6 +125,14 @@ impl Model {
             Model::Volume(_) => "volume",
         }
     }
+
+    pub fn bounds(&self) -> Aabb {
+        match self {
+            Model::Mesh(m) => m.bounds(),
+            Model::Points(p) => p.bounds(),
+            Model::Volume(v) => v.bounds(),
+        }
+    }
 }
 
 /// A triangle mesh with optional per-vertex attributes and a per-triangle part id

@@ -49,16 +49,19 @@ pub const KAPPA_RANGE: RangeInclusive<f32> = 0.0..=64.0;
 pub const TAU_RANGE: RangeInclusive<f32> = 0.01..=100.0;
 
 /// Parameters of the hybrid build (§5.1, §5.3).
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(default)]
 pub struct HybridOptions {
     /// Performance ratio κ of points to triangles; κ ≤ 1 never replaces.
     pub kappa: f32,
     /// Transition factor τ scaling the triangle operations' values (≥ 1 introduces points sooner).
     pub tau: f32,
+    #[serde(flatten)]
     pub collapse: CollapseOptions,
 }
 
 impl Default for HybridOptions {
+    /// The paper's κ = 3 (§7) and τ = 1.
     fn default() -> Self {
         Self {
             kappa: 3.0,
@@ -74,24 +77,11 @@ impl HybridOptions {
         Self { kappa: 1.0, ..self }
     }
 
-    pub fn validate(&self) -> Result<(), String> {
-        if !KAPPA_RANGE.contains(&self.kappa) {
-            return Err(format!(
-                "kappa must be in {}..={}, got {}",
-                KAPPA_RANGE.start(),
-                KAPPA_RANGE.end(),
-                self.kappa
-            ));
-        }
-        if !TAU_RANGE.contains(&self.tau) {
-            return Err(format!(
-                "tau must be in {}..={}, got {}",
-                TAU_RANGE.start(),
-                TAU_RANGE.end(),
-                self.tau
-            ));
-        }
-        Ok(())
+    pub fn validate(&self) -> Result<(), crate::lod::ParamError> {
+        use crate::lod::in_range;
+        in_range("kappa", self.kappa, &KAPPA_RANGE)?;
+        in_range("tau", self.tau, &TAU_RANGE)?;
+        self.collapse.validate()
     }
 }
 

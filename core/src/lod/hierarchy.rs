@@ -1,11 +1,15 @@
 //! What every hierarchy answers: given a view and a tolerance, which
 //! primitives to draw (DESIGN.md).
 
+use std::any::Any;
+
 use super::DrawSet;
 use crate::view::{Tolerance, View};
 
-/// A built LOD hierarchy.
-pub trait Hierarchy: Send + Sync {
+/// A built LOD hierarchy. `Any`, so a caller that built one through
+/// `lod::build` can read its method's own structure (the inspector, the
+/// CLI's reports) with [`downcast_ref`](dyn Hierarchy::downcast_ref).
+pub trait Hierarchy: Any + Send + Sync {
     /// The method that built it.
     fn method(&self) -> super::Method;
     /// Bounding-box diagonal of the model it was built from (what relative
@@ -35,10 +39,31 @@ pub trait Hierarchy: Send + Sync {
     fn has_levels(&self) -> bool {
         true
     }
+    /// The knobs its cuts read, and the one that overrides the tolerance
+    /// now (as the last [`set_knobs`](Hierarchy::set_knobs) left it); the
+    /// default reads none and follows the tolerance.
+    fn controls(&self) -> super::Controls {
+        super::Controls {
+            knobs: &[],
+            overridden_by: None,
+            has_levels: self.has_levels(),
+        }
+    }
     /// The built hierarchy in a saved-hierarchy file with `params` (see
     /// `io::hierarchy_file`); `None` for hierarchies that do not save.
     fn save(&self, _params: &serde_json::Value) -> Option<Vec<u8>> {
         None
+    }
+}
+
+impl dyn Hierarchy {
+    /// The built structure as its own type, when it is a `T`.
+    pub fn downcast_ref<T: Hierarchy>(&self) -> Option<&T> {
+        (self as &dyn Any).downcast_ref()
+    }
+
+    pub fn downcast_mut<T: Hierarchy>(&mut self) -> Option<&mut T> {
+        (self as &mut dyn Any).downcast_mut()
     }
 }
 

@@ -1,6 +1,8 @@
 //! Run-time knobs: what changes a cut without a rebuild, typed. The studio
-//! hands every live hierarchy the same [`Knobs`]; each method reads its own
-//! and says whether its cut may change.
+//! hands every live hierarchy the same [`Knobs`]; each method reads its own,
+//! says whether its cut may change, and says which knobs it reads and
+//! whether one of them overrides the tolerance ([`Controls`]), so the studio
+//! shows only live controls and never a threshold that does nothing.
 
 /// Which view-dependent criteria refine or coarsen beyond the screen-space
 /// projection (§3). Each multiplies the pixel threshold of a node.
@@ -48,4 +50,36 @@ pub struct Knobs {
     pub amg_level: Option<usize>,
     /// Edge collapse: a prefix target instead of the tolerance.
     pub collapse: Option<PrefixTarget>,
+}
+
+/// One run-time knob (a field of [`Knobs`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Knob {
+    /// [`Knobs::criteria`].
+    Criteria,
+    /// [`Knobs::pyramid_position`].
+    PyramidPosition,
+    /// [`Knobs::amg_level`].
+    AmgLevel,
+    /// [`Knobs::collapse`].
+    CollapseTarget,
+}
+
+/// What chooses a hierarchy's cut at run time, as its last knobs left it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Controls {
+    /// The knobs its cuts read.
+    pub knobs: &'static [Knob],
+    /// The knob that chooses the cut instead of the tolerance, when one does.
+    pub overridden_by: Option<Knob>,
+    /// Whether it has cuts to choose between at all (a single extracted
+    /// level has one: no tolerance or knob changes it).
+    pub has_levels: bool,
+}
+
+impl Controls {
+    /// Whether the tolerance chooses the cut now.
+    pub fn follows_tolerance(&self) -> bool {
+        self.has_levels && self.overridden_by.is_none()
+    }
 }

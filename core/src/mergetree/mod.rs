@@ -36,14 +36,27 @@ pub const NONE: u32 = u32::MAX;
 /// 0.2 stalled the tree at 12k, 25k and 42k of its 436k vertices.
 pub const DEFAULT_MIN_QUALITY: f32 = 0.0;
 
+/// How few vertices a tree may stop at (§4.1 (a)): a tetrahedron's four up
+/// to the point where a deeper tree is no longer worth its levels.
+pub const MIN_VERTICES_RANGE: std::ops::RangeInclusive<usize> = 4..=100_000;
+
 /// How the tree is built.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(default)]
 pub struct MergeTreeOptions {
     /// §4.1 (a): stop once this few vertices are left.
     pub min_vertices: usize,
     /// Legality of each collapse: fold guard, and the §6 sliver guard
     /// (`min_quality`, eq. 3) on the triangles it makes.
+    #[serde(flatten)]
     pub collapse: CollapseOptions,
+}
+
+impl MergeTreeOptions {
+    pub fn validate(&self) -> Result<(), crate::lod::ParamError> {
+        crate::lod::in_range("min_vertices", self.min_vertices, &MIN_VERTICES_RANGE)?;
+        self.collapse.validate()
+    }
 }
 
 impl Default for MergeTreeOptions {

@@ -451,6 +451,15 @@ impl Hierarchy for MergeTreeView {
     }
 
     /// The criteria switches (§3).
+    /// The criteria scale the tolerance per node (§3); they never replace it.
+    fn controls(&self) -> crate::lod::Controls {
+        crate::lod::Controls {
+            knobs: &[crate::lod::Knob::Criteria],
+            overridden_by: None,
+            has_levels: true,
+        }
+    }
+
     fn set_knobs(&mut self, knobs: &crate::lod::Knobs) -> bool {
         let changed = self.criteria != knobs.criteria;
         self.criteria = knobs.criteria;

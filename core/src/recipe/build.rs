@@ -6,14 +6,13 @@
 //! same chain. LODs are ordered by certified bound and switch where the next
 //! one's bound projects to the recipe's pixel tolerance.
 
-use std::sync::Arc;
 use std::time::Instant;
 
-use super::{Recipe, Row, RowTolerance};
-use crate::geom::{Model, PointSet, TriMesh};
+use super::{Recipe, RowTolerance};
+use crate::geom::{Model, TriMesh};
 use crate::io::gltf_writer::write_lod_chain;
 use crate::lod::chain::{ChainItem, choose, lod_screen_coverages};
-use crate::lod::{DrawSet, Hierarchy, Method};
+use crate::lod::{self, BuildError, DrawSet, Hierarchy, Method, Params};
 use crate::progress::{Cancelled, Progress};
 use crate::simplify::{self, CollapseOptions, SimplifyError, Target};
 use crate::view::View;
@@ -149,33 +148,29 @@ pub fn build_chain(
         }
         progress.stage(&format!("row {}: {}", first + 1, row.method.name()));
         let start = Instant::now();
-        let sets = match (row.method, mesh) {
-            (Method::EdgeCollapse, Some(mesh)) => {
-                simplify_rows(recipe, &group, mesh, pixels_to_error, progress)?
+        let sets = match (recipe.row_params(first), mesh) {
+            (Params::EdgeCollapse(p), Some(mesh)) => {
+                simplify_rows(recipe, &group, mesh, p.collapse, pixels_to_error, progress)?
             }
-            (Method::Amg, _) => {
-                let owned;
-                let points = match points {
-                    Some(p) => p,
-                    None => {
-                        owned = crate::amg::point_set(model).expect("a mesh has vertices");
-                        &owned
+            (params @ Params::Amg(_), _) | (params, Some(_)) => {
+                // What ratio rows count: triangles, AMG's points.
+                let input = match (params.method(), mesh, points) {
+                    (Method::Amg, _, Some(p)) => p.positions.len(),
+                    (Method::Amg, _, None) => {
+                        crate::amg::point_set(model).map_or(0, |p| p.positions.len())
                     }
+                    (_, m, _) => m.map_or(0, |m| m.triangles.len()),
                 };
-                let input = points.positions.len();
-                let h = amg_hierarchy(points, first, progress)?;
+                let h = lod::build(&params, model, progress).map_err(|e| match e {
+                    BuildError::Cancelled => ChainError::Cancelled,
+                    e => ChainError::BadInput(format!("rows[{first}]: {e}")),
+                })?;
                 hierarchy_rows(recipe, &group, h, input, pixels_to_error)?
             }
-            (method, Some(mesh)) => {
-                let input = mesh.triangles.len();
-                let h = mesh_hierarchy(row, first, mesh, progress)?;
-                debug_assert_eq!(h.method(), method);
-                hierarchy_rows(recipe, &group, h, input, pixels_to_error)?
-            }
-            (method, None) => {
+            (params, None) => {
                 return Err(ChainError::BadInput(format!(
                     "rows[{first}] ({}) needs a triangle mesh, not a point set (only amg rows take points)",
-                    method.tag()
+                    params.method().tag()
                 )));
             }
         };
@@ -227,6 +222,7 @@ fn simplify_rows(
     recipe: &Recipe,
     group: &[usize],
     mesh: &TriMesh,
+    collapse: CollapseOptions,
     pixels_to_error: impl Fn(f32) -> f32,
     progress: &Progress,
 ) -> Result<Vec<DrawSet>, ChainError> {
@@ -250,10 +246,6 @@ fn simplify_rows(
             }
         })
         .collect::<Result<_, _>>()?;
-    let collapse = CollapseOptions {
-        lock_borders: recipe.locks_borders(),
-        ..Default::default()
-    };
     let results = simplify::simplify_chain(mesh, &targets, collapse, false, progress).map_err(
         |e| match e {
             SimplifyError::BadTarget(m) => ChainError::BadInput(format!("rows[{}]: {m}", group[0])),
@@ -268,64 +260,6 @@ fn simplify_rows(
             ..Default::default()
         })
         .collect())
-}
-
-/// The hierarchy a mesh row of `row`'s method and parameters builds.
-fn mesh_hierarchy(
-    row: &Row,
-    index: usize,
-    mesh: &TriMesh,
-    progress: &Progress,
-) -> Result<Box<dyn Hierarchy>, ChainError> {
-    Ok(match row.method {
-        Method::Hybrid => {
-            let opts = crate::hybrid::HybridOptions {
-                kappa: row.kappa(),
-                tau: row.tau(),
-                ..Default::default()
-            };
-            opts.validate()
-                .map_err(|m| ChainError::BadInput(format!("rows[{index}]: {m}")))?;
-            let mrg = crate::hybrid::build(mesh, &opts, progress)?;
-            Box::new(crate::hybrid::HybridCut::new(Arc::new(mrg)))
-        }
-        Method::MergeTree => {
-            let tree = crate::mergetree::build(mesh, &Default::default(), progress)?;
-            Box::new(crate::mergetree::MergeTreeView::new(
-                Arc::new(tree),
-                Default::default(),
-            ))
-        }
-        Method::Voxel => {
-            use crate::voxel::{Filter, Pyramid, Source, pyramid::PyramidCut};
-            let solid = crate::implicit::MeshSolid::new(mesh);
-            let source = Source::Solid(&solid);
-            crate::voxel::check_resolution_budget(row.resolution())
-                .map_err(ChainError::BadInput)?;
-            let mut pyramid =
-                Pyramid::build(source, row.resolution(), 1.0, Filter::Gaussian, progress)?;
-            pyramid.post = row.post();
-            // Each level certified against the input surface.
-            pyramid.certify(source.surface(), progress)?;
-            Box::new(PyramidCut::new(pyramid, None))
-        }
-        Method::EdgeCollapse | Method::Amg => unreachable!("built by their own rows"),
-    })
-}
-
-/// The AMG multiscale of the points, splats at the median radius.
-fn amg_hierarchy(
-    points: &PointSet,
-    index: usize,
-    progress: &Progress,
-) -> Result<Box<dyn Hierarchy>, ChainError> {
-    use crate::amg::{self, AmgError, AmgOptions};
-    let ms = amg::decompose(points, &AmgOptions::default(), progress).map_err(|e| match e {
-        AmgError::BadInput(m) => ChainError::BadInput(format!("rows[{index}]: {m}")),
-        AmgError::Cancelled => ChainError::Cancelled,
-    })?;
-    let texel = ms.default_texel();
-    Ok(Box::new(amg::AmgHierarchy::new(ms, texel)))
 }
 
 /// Rows of one hierarchy: an LOD per row chosen from it in object space
@@ -376,7 +310,7 @@ fn hierarchy_rows(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::recipe::parse_lods;
+    use crate::recipe::{Row, parse_lods};
 
     fn torus() -> Model {
         Model::Mesh(crate::builtins::torus(1.0, 0.3, 48, 24))

@@ -14,7 +14,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::geom::Weld;
 use crate::io::gltf_writer::PointsAs;
-use crate::lod::Method;
+use crate::lod::{Method, Params};
 use crate::voxel::PostSimplify;
 
 /// What the `format` field says, so a recipe is told from other JSON.
@@ -91,38 +91,78 @@ pub struct Row {
     pub post: Option<PostSpec>,
 }
 
-/// Hybrid's defaults (the paper's κ = 3, τ = 1) and the voxel pyramid's.
-pub const DEFAULT_KAPPA: f32 = 3.0;
-pub const DEFAULT_TAU: f32 = 1.0;
-pub const DEFAULT_RESOLUTION: usize = 64;
-
 impl Row {
     /// A row of `method` at `tolerance` with its method's default parameters
     /// written out (so a saved recipe says what it ran with).
     pub fn new(method: Method, tolerance: RowTolerance) -> Row {
-        let (hybrid, voxel) = (method == Method::Hybrid, method == Method::Voxel);
-        Row {
+        let mut row = Row {
             method,
             tolerance,
-            kappa: hybrid.then_some(DEFAULT_KAPPA),
-            tau: hybrid.then_some(DEFAULT_TAU),
-            resolution: voxel.then_some(DEFAULT_RESOLUTION),
-            post: voxel.then_some(PostSpec::from(PostSimplify::HALF_VOXEL)),
+            kappa: None,
+            tau: None,
+            resolution: None,
+            post: None,
+        };
+        match Params::default_for(method) {
+            Params::Hybrid(h) => (row.kappa, row.tau) = (Some(h.kappa), Some(h.tau)),
+            Params::Voxel(v) => {
+                (row.resolution, row.post) = (Some(v.resolution), Some(v.post.into()))
+            }
+            _ => {}
         }
+        row
+    }
+
+    /// What the row builds: its method's defaults with the row's own
+    /// fields over them. Voxel rows keep the whole pyramid (their LODs are
+    /// its cuts); `lock_borders` is the recipe's, for edge collapse.
+    pub fn params(&self, lock_borders: bool) -> Params {
+        let mut params = Params::default_for(self.method);
+        match &mut params {
+            Params::EdgeCollapse(p) => p.collapse.lock_borders = lock_borders,
+            Params::Hybrid(h) => {
+                h.kappa = self.kappa.unwrap_or(h.kappa);
+                h.tau = self.tau.unwrap_or(h.tau);
+            }
+            Params::Voxel(v) => {
+                v.resolution = self.resolution.unwrap_or(v.resolution);
+                v.post = self.post.map_or(v.post, PostSimplify::from);
+                v.pyramid = true;
+            }
+            Params::MergeTree(_) | Params::Amg(_) => {}
+        }
+        params
     }
 
     pub fn kappa(&self) -> f32 {
-        self.kappa.unwrap_or(DEFAULT_KAPPA)
+        self.hybrid().kappa
     }
     pub fn tau(&self) -> f32 {
-        self.tau.unwrap_or(DEFAULT_TAU)
+        self.hybrid().tau
     }
     pub fn resolution(&self) -> usize {
-        self.resolution.unwrap_or(DEFAULT_RESOLUTION)
+        self.voxel().resolution
     }
-    pub fn post(&self) -> PostSimplify {
-        self.post
-            .map_or(PostSimplify::HALF_VOXEL, PostSimplify::from)
+
+    /// The row's hybrid parameters (the defaults for other methods' rows).
+    fn hybrid(&self) -> crate::hybrid::HybridOptions {
+        let d = crate::hybrid::HybridOptions::default();
+        crate::hybrid::HybridOptions {
+            kappa: self.kappa.unwrap_or(d.kappa),
+            tau: self.tau.unwrap_or(d.tau),
+            ..d
+        }
+    }
+
+    /// The row's voxel parameters (the defaults for other methods' rows).
+    fn voxel(&self) -> crate::voxel::VoxelParams {
+        let d = crate::voxel::VoxelParams::default();
+        crate::voxel::VoxelParams {
+            resolution: self.resolution.unwrap_or(d.resolution),
+            post: self.post.map_or(d.post, PostSimplify::from),
+            pyramid: true,
+            ..d
+        }
     }
 
     /// The row as `--lods` writes it: "hybrid:2%".
@@ -132,11 +172,7 @@ impl Row {
 
     /// Rows that build the same hierarchy (same method, same parameters).
     pub fn same_hierarchy(&self, other: &Row) -> bool {
-        self.method == other.method
-            && self.kappa() == other.kappa()
-            && self.tau() == other.tau()
-            && self.resolution() == other.resolution()
-            && self.post() == other.post()
+        self.params(false) == other.params(false)
     }
 }
 
@@ -411,6 +447,11 @@ impl Recipe {
     pub fn locks_borders(&self) -> bool {
         self.lock_borders || self.keep_seams
     }
+
+    /// What row `j` builds (see [`Row::params`]).
+    pub fn row_params(&self, j: usize) -> Params {
+        self.rows[j].params(self.locks_borders())
+    }
 }
 
 impl Row {
@@ -442,25 +483,10 @@ impl Row {
         if !value {
             return Err(("tolerance", format!("{} is out of range", self.tolerance)));
         }
-        let kappa = crate::hybrid::KAPPA_RANGE;
-        if !kappa.contains(&self.kappa()) {
-            return Err((
-                "kappa",
-                format!("must be in {kappa:?}, got {}", self.kappa()),
-            ));
-        }
-        let tau = crate::hybrid::TAU_RANGE;
-        if !tau.contains(&self.tau()) {
-            return Err(("tau", format!("must be in {tau:?}, got {}", self.tau())));
-        }
-        let resolutions = crate::voxel::RESOLUTION_RANGE;
-        if !resolutions.contains(&self.resolution()) {
-            return Err((
-                "resolution",
-                format!("must be in {resolutions:?}, got {}", self.resolution()),
-            ));
-        }
-        self.post().check().map_err(|m| ("post", m))
+        self.hybrid()
+            .validate()
+            .and_then(|()| self.voxel().validate())
+            .map_err(|e| (e.field, e.message))
     }
 }
 

@@ -23,8 +23,12 @@ use super::queue::CollapseQueue;
 use crate::distance::closest_point_on_triangle;
 use crate::geom::{Adjacency, Materials, MeshArrays, TriMesh, Wedges};
 
+/// The sliver and fold guards' range (a quality, a cosine; 0 turns either off).
+pub const GUARD_RANGE: std::ops::RangeInclusive<f32> = 0.0..=1.0;
+
 /// Legality rules for collapses.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(default)]
 pub struct CollapseOptions {
     /// Border (and part-seam, non-manifold) vertices never move.
     pub lock_borders: bool,
@@ -45,6 +49,15 @@ impl Default for CollapseOptions {
             min_quality: 0.0,
             min_normal_cos: 0.7,
         }
+    }
+}
+
+impl CollapseOptions {
+    /// Both guards inside [`GUARD_RANGE`].
+    pub fn validate(&self) -> Result<(), crate::lod::ParamError> {
+        use crate::lod::in_range;
+        in_range("min_quality", self.min_quality, &GUARD_RANGE)?;
+        in_range("min_normal_cos", self.min_normal_cos, &GUARD_RANGE)
     }
 }
 

@@ -63,6 +63,40 @@ pub struct Progressive {
 
 const INPUT: u32 = u32::MAX;
 
+/// The share of the input a record collapses down to unless told otherwise:
+/// 0.1 %, past every budget users ask of a progressive mesh.
+pub const FLOOR_RATIO: f32 = 0.001;
+
+/// What an edge-collapse hierarchy is built with: the collapses' legality
+/// and how far the record goes.
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+#[serde(default)]
+pub struct ProgressiveOptions {
+    #[serde(flatten)]
+    pub collapse: CollapseOptions,
+    /// Record down to this many triangles; `None`: [`FLOOR_RATIO`] of the input.
+    pub floor: Option<usize>,
+}
+
+impl ProgressiveOptions {
+    pub fn validate(&self) -> Result<(), crate::lod::ParamError> {
+        self.collapse.validate()
+    }
+
+    /// The triangles a record of `input` triangles stops at.
+    pub fn floor(&self, input: usize) -> usize {
+        self.floor
+            .unwrap_or((f64::from(FLOOR_RATIO) * input as f64) as usize)
+    }
+
+    /// Records `mesh`'s collapses down to the floor, cut live.
+    pub fn build(&self, mesh: &TriMesh, progress: &Progress) -> Result<ProgressiveCut, Cancelled> {
+        let floor = self.floor(mesh.triangles.len());
+        let recorded = record(mesh, self.collapse, floor, progress)?;
+        Ok(ProgressiveCut::new(Arc::new(recorded)))
+    }
+}
+
 /// Collapses `mesh` down to `floor` triangles (or as far as collapses go)
 /// with `opts`, as `simplify` would, and bounds every collapse.
 pub fn record(
@@ -366,6 +400,17 @@ impl Hierarchy for ProgressiveCut {
     }
 
     /// The prefix target, or `None` to follow the tolerance.
+    /// A prefix target (ratio, triangles, error) chooses the cut instead of
+    /// the tolerance.
+    fn controls(&self) -> crate::lod::Controls {
+        use crate::lod::Knob;
+        crate::lod::Controls {
+            knobs: &[Knob::CollapseTarget],
+            overridden_by: self.target.map(|_| Knob::CollapseTarget),
+            has_levels: true,
+        }
+    }
+
     fn set_knobs(&mut self, knobs: &crate::lod::Knobs) -> bool {
         let changed = self.target != knobs.collapse;
         self.target = knobs.collapse;

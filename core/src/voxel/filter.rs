@@ -13,14 +13,24 @@ use crate::geom::Volume;
 use crate::progress::{Cancelled, Progress};
 
 /// Which low-pass filter of §2 to apply.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
 pub enum Filter {
     /// The "higher-order" Gaussian of §2, σ = R/3, truncated at R; separable, so
     /// it costs about 3·(2R+1) multiply-adds per voxel.
+    #[default]
     Gaussian,
     /// The hyper-cone of eq. 3, h(r) ∝ (R − r) for r < R. Not separable: a direct
     /// convolution with about (4/3)πR³ taps per voxel (R in voxels).
     Cone,
+}
+
+impl Filter {
+    pub fn name(self) -> &'static str {
+        match self {
+            Filter::Gaussian => "Gaussian",
+            Filter::Cone => "Cone",
+        }
+    }
 }
 
 /// Applies `filter` with support radius `radius` (world units) to `volume`.

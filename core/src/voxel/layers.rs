@@ -225,6 +225,10 @@ pub struct Layered {
     /// surface ([`Layered::certify`]); infinite while there is none (an
     /// implicit solid or a volume has no surface to measure against).
     pub error_bound: f32,
+    /// The level proper and the plan of its layers, when built from them
+    /// ([`Layered::of`]): what reports show of the build.
+    pub level: Option<Box<super::VoxelLevel>>,
+    pub plan: Option<LayerPlan>,
 }
 
 impl Layered {
@@ -235,6 +239,18 @@ impl Layered {
             origin: density.origin,
             spacing: density.spacing,
             error_bound: f32::INFINITY,
+            level: None,
+            plan: None,
+        }
+    }
+
+    /// A built level's layers on the grid of `density`, keeping the level and
+    /// its plan; not certified yet.
+    pub fn of(built: LayeredLevel, density: &Volume) -> Layered {
+        Layered {
+            level: Some(Box::new(built.level)),
+            plan: Some(built.plan),
+            ..Layered::new(built.layers, density)
         }
     }
 

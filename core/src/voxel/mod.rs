@@ -14,6 +14,7 @@
 pub mod filter;
 pub mod layers;
 pub mod marching_cubes;
+pub mod params;
 pub mod post_simplify;
 pub mod pyramid;
 pub mod sampling;
@@ -21,6 +22,7 @@ pub mod scanline;
 
 pub use filter::Filter;
 pub use marching_cubes::{DENSITY_ISO, marching_cubes};
+pub use params::VoxelParams;
 pub use post_simplify::{PostSimplify, post_simplify};
 pub use pyramid::{Pyramid, Source};
 

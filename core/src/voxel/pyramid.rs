@@ -347,6 +347,16 @@ impl Hierarchy for PyramidCut {
 
     /// The continuous position to show (0 = finest), or `None` to follow
     /// the tolerance.
+    /// A fixed position chooses the level instead of the tolerance.
+    fn controls(&self) -> crate::lod::Controls {
+        use crate::lod::Knob;
+        crate::lod::Controls {
+            knobs: &[Knob::PyramidPosition],
+            overridden_by: self.position.map(|_| Knob::PyramidPosition),
+            has_levels: true,
+        }
+    }
+
     fn set_knobs(&mut self, knobs: &crate::lod::Knobs) -> bool {
         let changed = self.position != knobs.pyramid_position;
         self.position = knobs.pyramid_position;
