@@ -47,7 +47,7 @@ impl StudioApp {
         }
         // A chain row or the switch preview, when one is asked for.
         if self.view.shows_lod()
-            && let Some(scene) = self.chain_scene()
+            && let Some(scene) = self.chain.scene(self.viewport.camera.distance)
         {
             self.viewport.swap_scene(&scene);
             return;

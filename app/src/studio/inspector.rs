@@ -1,7 +1,7 @@
 //! The right panel: the model's summary, the build's rows and plots, and the
 //! live cut's counts, bound, timings and picked primitive.
 
-use super::StudioApp;
+use super::{StudioApp, chain};
 use crate::{build, heatmap};
 
 impl StudioApp {
@@ -93,7 +93,7 @@ impl StudioApp {
                     heatmap::legend(ui, &build::length(live.stats.error_bound));
                 }
             }
-            self.chain_inspector(ui);
+            chain::ui::inspector_ui(&self.chain, ui, self.viewport.camera.distance);
         });
     }
 }

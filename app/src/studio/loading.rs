@@ -214,7 +214,7 @@ impl StudioApp {
                     summary.format.name()
                 ));
                 self.forget_result();
-                self.forget_chain();
+                self.chain.forget();
                 if volume.is_some() && self.threshold_volume.as_ref() != Some(&path) {
                     self.methods.voxel.threshold = None;
                     self.threshold_volume = Some(path.clone());

@@ -9,6 +9,7 @@
 
 mod building;
 mod chain;
+mod chain_glue;
 mod cut;
 mod inspector;
 mod left_panel;
@@ -135,7 +136,7 @@ pub struct StudioApp {
     heat: bool,
     export: Option<Job<Saved>>,
     /// The LOD chain: its rows, their build, the switch preview.
-    chain: chain::ChainView,
+    chain: chain::ChainState,
     /// The GPU device the viewports draw with, for off-screen renders.
     render_state: Option<egui_wgpu::RenderState>,
     autosave: Autosave,
@@ -250,7 +251,7 @@ impl StudioApp {
             view: View::Simplified,
             heat: false,
             export: None,
-            chain: chain::ChainView::default(),
+            chain: chain::ChainState::default(),
             render_state: render_state.cloned(),
             autosave: Autosave::off(),
         }
@@ -396,7 +397,7 @@ impl StudioApp {
         );
 
         self.error_window(&ctx);
-        self.difference_window(&ctx);
+        chain::ui::difference_window(&mut self.chain, &ctx, self.viewport.camera.distance);
         drop_hint(&ctx);
         if self.job.is_some()
             || self.picker.is_some()

@@ -1,0 +1,82 @@
+//! What the chain hands the studio: lines for its log, and what its panel
+//! asks the studio to do (the chain has no access to the studio itself).
+
+use std::fmt;
+use std::path::PathBuf;
+
+use super::ChainError;
+use crate::export::Saved;
+
+/// What the chain tells the user through the studio's log.
+#[derive(Debug)]
+pub enum ChainEvent {
+    Built {
+        lods: usize,
+        seconds: f64,
+    },
+    /// The user cancelled the build.
+    BuildStopped,
+    RecipeOpened(PathBuf),
+    NoRecipeChosen,
+    /// The build failed (its reason is also noted on the panel).
+    NotBuilt(ChainError),
+    DifferenceFailed(ChainError),
+    /// The rows stay as they were; the studio also shows it in its error
+    /// window, as it does a model that did not open.
+    RecipeNotOpened(ChainError),
+    /// A worker or dialog that did not start, an export of a stale chain.
+    Failed(ChainError),
+}
+
+impl ChainEvent {
+    /// Whether the log shows it as an error.
+    pub fn is_error(&self) -> bool {
+        !matches!(
+            self,
+            ChainEvent::Built { .. }
+                | ChainEvent::BuildStopped
+                | ChainEvent::RecipeOpened(_)
+                | ChainEvent::NoRecipeChosen
+        )
+    }
+}
+
+impl fmt::Display for ChainEvent {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            ChainEvent::Built { lods, seconds } => {
+                write!(f, "Built a chain of {lods} LODs in {seconds:.2} s")
+            }
+            ChainEvent::BuildStopped => f.write_str("Stopped building the chain"),
+            ChainEvent::RecipeOpened(path) => write!(f, "Opened the recipe {}", path.display()),
+            ChainEvent::NoRecipeChosen => f.write_str("No recipe chosen"),
+            ChainEvent::NotBuilt(e) => write!(f, "Chain not built: {e}"),
+            ChainEvent::DifferenceFailed(e) => write!(f, "Visual difference failed: {e}"),
+            ChainEvent::RecipeNotOpened(e) => write!(f, "Recipe not opened: {e}"),
+            ChainEvent::Failed(e) => write!(f, "{e}"),
+        }
+    }
+}
+
+/// A file write the studio runs on its save worker (one save at a time,
+/// with its other exports).
+pub type SaveWork = Box<dyn FnOnce() -> Saved + Send>;
+
+/// What the chain panel asks of the studio.
+pub enum ChainRequest {
+    /// Build the chain of the model on screen.
+    Build,
+    /// Measure the visual difference with the viewport's renderer.
+    MeasureDifference,
+    Save(SaveWork),
+    Report(ChainEvent),
+}
+
+impl From<Result<SaveWork, ChainError>> for ChainRequest {
+    fn from(save: Result<SaveWork, ChainError>) -> Self {
+        match save {
+            Ok(work) => ChainRequest::Save(work),
+            Err(e) => ChainRequest::Report(ChainEvent::Failed(e)),
+        }
+    }
+}

@@ -1,0 +1,269 @@
+//! The LOD chain, the studio's main object: rows from any method built on a
+//! worker by the builder `lodstudio export` uses (`recipe::build_chain`, so
+//! the studio's chain export is byte for byte the CLI's), a row shown on
+//! click, the switch preview (a dolly from near to far drawing the LOD the
+//! chain uses there, with the bound in pixels at each switch), the visual
+//! difference of its LODs, and the chain's export and recipe files.
+//!
+//! A component of its own: [`ChainState`] holds all of it and makes its
+//! transitions without a window (so they are tested without one), [`ui`]
+//! draws it, and what either needs of the studio comes back as a
+//! [`ChainEvent`] to log or a [`ChainRequest`]. `studio/chain_glue.rs` wires
+//! it into the studio.
+
+mod built;
+mod difference;
+mod dolly;
+mod error;
+mod event;
+mod files;
+mod preview;
+pub mod ui;
+
+use std::path::PathBuf;
+use std::sync::Arc;
+use std::sync::mpsc::Receiver;
+
+use lodstudio_core::Progress;
+use lodstudio_core::io::Loaded;
+use lodstudio_core::progress::Cancelled;
+use lodstudio_core::recipe::Recipe;
+
+pub use self::built::BuiltChain;
+pub use self::difference::LodDifference;
+pub use self::error::ChainError;
+pub use self::event::{ChainEvent, ChainRequest, SaveWork};
+pub use self::files::Target;
+use crate::job::{Job, Poll};
+use crate::render::{Camera, Offscreen, Scene};
+use crate::settings::chain::ChainSettings;
+
+/// The model a chain is built from.
+pub struct Source {
+    pub loaded: Arc<Loaded>,
+    /// Where it was opened from: reopened when the recipe welds otherwise.
+    pub path: PathBuf,
+}
+
+/// The switch preview: the camera's distance (in bounding radii) picks the
+/// LOD a loader would draw there.
+#[derive(Debug, Clone, Copy, Default)]
+struct SwitchPreview {
+    on: bool,
+    /// egui time the dolly started at, while it runs.
+    dolly_from: Option<f64>,
+}
+
+/// The chain: its rows, their build, the switch preview, the visual
+/// difference and the recipe files.
+#[derive(Default)]
+pub struct ChainState {
+    /// The rows and the Auto chain rule (what Save recipe… writes).
+    pub settings: ChainSettings,
+    pub recent_recipes: Vec<PathBuf>,
+    job: Option<Job<Result<BuiltChain, ChainError>>>,
+    built: Option<BuiltChain>,
+    /// The recipe row whose LOD is shown.
+    selected: Option<usize>,
+    preview: SwitchPreview,
+    picker: Option<Receiver<Option<PathBuf>>>,
+    /// Why the last chain build failed, shown on the panel.
+    note: Option<String>,
+    /// The visual difference of every LOD, measuring or measured.
+    measuring: Option<Job<Result<Vec<LodDifference>, ChainError>>>,
+    differences: Option<Vec<LodDifference>>,
+    /// The shown LOD's difference image, uploaded once.
+    difference_image: Option<(usize, egui::TextureHandle)>,
+}
+
+impl ChainState {
+    /// Replaces the rows (as opening a recipe does); the built chain stays,
+    /// stale until built again.
+    pub fn set_recipe(&mut self, recipe: Recipe) {
+        self.settings.recipe = recipe;
+        self.selected = None;
+    }
+
+    /// Builds the rows on `source` on a worker, replacing any chain build;
+    /// returns what to log. Without a model the reason is noted on the panel.
+    pub fn start_build(
+        &mut self,
+        source: Option<Source>,
+        ctx: &egui::Context,
+    ) -> Option<ChainEvent> {
+        self.note = None;
+        // A measurement of the chain being replaced would land on the new one.
+        self.measuring = None;
+        let Some(Source { loaded, path }) = source else {
+            self.note = Some(ChainError::NoModel.to_string());
+            return None;
+        };
+        let recipe = self.settings.recipe.clone();
+        let work = move |progress: &Progress| BuiltChain::build(&loaded, &path, &recipe, progress);
+        match spawn("chain", "Chain", "the chain build", ctx, work) {
+            Ok(job) => {
+                self.job = Some(job);
+                None
+            }
+            Err(e) => Some(ChainEvent::Failed(e)),
+        }
+    }
+
+    /// Stops the chain build; the last chain built stays.
+    pub fn cancel_build(&mut self) -> ChainEvent {
+        self.job = None;
+        ChainEvent::BuildStopped
+    }
+
+    pub fn is_building(&self) -> bool {
+        self.job.is_some()
+    }
+
+    /// The last chain built for the model on screen.
+    pub fn built(&self) -> Option<&BuiltChain> {
+        self.built.as_ref()
+    }
+
+    /// The built chain, when it was built with the rows as they are.
+    fn fresh(&self) -> Option<&BuiltChain> {
+        self.built
+            .as_ref()
+            .filter(|b| b.recipe() == &self.settings.recipe)
+    }
+
+    /// Renders every LOD of the built chain and `original` off-screen with
+    /// `renderer`, from `camera` and from 8 views around, on a worker;
+    /// returns what to log.
+    pub fn start_measuring(
+        &mut self,
+        ctx: &egui::Context,
+        renderer: Option<&egui_wgpu::RenderState>,
+        original: Option<&Arc<Scene>>,
+        camera: Camera,
+    ) -> Option<ChainEvent> {
+        let (Some(renderer), Some(built), Some(original)) = (renderer, &self.built, original)
+        else {
+            return Some(ChainEvent::Failed(ChainError::NothingToMeasure));
+        };
+        let mut offscreen = Offscreen::new(renderer);
+        let original = Arc::clone(original);
+        let lods = built.scenes.clone();
+        let cameras = difference::cameras(camera, &original);
+        let work = move |progress: &Progress| {
+            difference::measure(&mut offscreen, &original, &lods, &cameras, progress)
+        };
+        match spawn(
+            "difference",
+            "Visual difference",
+            "the visual difference",
+            ctx,
+            work,
+        ) {
+            Ok(job) => {
+                self.measuring = Some(job);
+                None
+            }
+            Err(e) => Some(ChainEvent::Failed(e)),
+        }
+    }
+
+    pub fn is_measuring(&self) -> bool {
+        self.measuring.is_some()
+    }
+
+    /// Stops measuring (nothing to log).
+    pub fn cancel_measuring(&mut self) {
+        self.measuring = None;
+    }
+
+    /// The last visual difference of the built chain's LODs.
+    pub fn differences(&self) -> Option<&[LodDifference]> {
+        self.differences.as_deref()
+    }
+
+    /// Closes the visual difference (its window).
+    pub fn close_differences(&mut self) {
+        self.differences = None;
+        self.difference_image = None;
+    }
+
+    /// A new model: its chain is still to be built.
+    pub fn forget(&mut self) {
+        self.job = None;
+        self.built = None;
+        self.measuring = None;
+        self.close_differences();
+        self.selected = None;
+        self.preview = SwitchPreview::default();
+    }
+
+    /// Takes what the recipe dialog, the build and the measurement finished;
+    /// returns what to log, in that order.
+    pub fn poll(&mut self) -> Vec<ChainEvent> {
+        [
+            self.poll_picker(),
+            self.poll_build(),
+            self.poll_difference(),
+        ]
+        .into_iter()
+        .flatten()
+        .collect()
+    }
+
+    fn poll_build(&mut self) -> Option<ChainEvent> {
+        let job = self.job.as_ref()?;
+        let outcome = match job.poll() {
+            Poll::Running => return None,
+            Poll::Done(outcome) => outcome,
+            Poll::Lost => Err(ChainError::Lost("chain build")),
+        };
+        let seconds = job.elapsed().as_secs_f64();
+        self.job = None;
+        Some(match outcome {
+            Ok(built) => {
+                self.measuring = None;
+                self.close_differences();
+                let lods = built.chain.lods.len();
+                self.built = Some(built);
+                ChainEvent::Built { lods, seconds }
+            }
+            Err(e) => {
+                self.note = Some(e.to_string());
+                ChainEvent::NotBuilt(e)
+            }
+        })
+    }
+
+    fn poll_difference(&mut self) -> Option<ChainEvent> {
+        let outcome = match self.measuring.as_ref()?.poll() {
+            Poll::Running => return None,
+            Poll::Done(outcome) => outcome,
+            Poll::Lost => Err(ChainError::Lost("visual difference")),
+        };
+        self.measuring = None;
+        match outcome {
+            Ok(d) => {
+                self.differences = Some(d);
+                self.difference_image = None;
+                None
+            }
+            Err(e) => Some(ChainEvent::DifferenceFailed(e)),
+        }
+    }
+}
+
+/// Runs `work` on a thread; a run the user cancelled sends nothing (see
+/// [`Job`]), whatever it answered.
+fn spawn<T: Send + 'static>(
+    thread: &str,
+    label: &str,
+    task: &'static str,
+    ctx: &egui::Context,
+    work: impl FnOnce(&Progress) -> Result<T, ChainError> + Send + 'static,
+) -> Result<Job<Result<T, ChainError>>, ChainError> {
+    let work = move |progress: &Progress| match work(progress) {
+        Err(ChainError::Cancelled) => Err(Cancelled),
+        answer => Ok(answer),
+    };
+    Job::spawn(thread, label.into(), ctx, work).map_err(|source| ChainError::Spawn { task, source })
+}
