@@ -18,6 +18,8 @@ mod error;
 mod event;
 mod files;
 mod preview;
+#[cfg(test)]
+mod tests;
 pub mod ui;
 
 use std::path::PathBuf;
