@@ -20,7 +20,7 @@ use std::path::PathBuf;
 /// # Errors
 /// A one-line message (never a panic) when there is no display or no usable
 /// graphics adapter.
-pub fn run_studio(initial: Option<PathBuf>) -> Result<(), String> {
+pub fn run_studio(initial: Option<PathBuf>) -> Result<(), eframe::Error> {
     let options = eframe::NativeOptions {
         renderer: eframe::Renderer::Wgpu,
         viewport: egui::ViewportBuilder::default()
@@ -41,5 +41,4 @@ pub fn run_studio(initial: Option<PathBuf>) -> Result<(), String> {
         options,
         Box::new(|cc| Ok(Box::new(studio::StudioApp::new(cc, initial)))),
     )
-    .map_err(|e| format!("cannot open the studio window: {e}"))
 }

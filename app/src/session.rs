@@ -103,7 +103,7 @@ impl Autosave {
 
     /// The saved session: `Ok(None)` when there is none, `Err` when the file is
     /// unreadable or damaged (the studio then starts afresh and says so).
-    pub fn load(&self) -> Result<Option<Session>, String> {
+    pub fn load(&self) -> Result<Option<Session>, SessionError> {
         let Some(file) = &self.file else {
             return Ok(None);
         };
@@ -111,18 +111,15 @@ impl Autosave {
             Ok(json) => json,
             Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(None),
             Err(e) => {
-                return Err(format!(
-                    "cannot read the last session {}: {e}",
-                    file.display()
-                ));
+                return Err(SessionError::Read {
+                    file: file.clone(),
+                    reason: e.to_string(),
+                });
             }
         };
-        Session::from_json(&json).map(Some).ok_or_else(|| {
-            format!(
-                "the last session {} is damaged; starting afresh",
-                file.display()
-            )
-        })
+        Session::from_json(&json)
+            .map(Some)
+            .ok_or_else(|| SessionError::Damaged { file: file.clone() })
     }
 
     /// Time left before the next check, zero when one is due; `None` when off.
@@ -136,7 +133,7 @@ impl Autosave {
     /// Hands `session` to a writer thread when it differs from the last one
     /// written (and the previous write is done), and restarts the interval.
     /// Returns the error of a previous write, if it failed.
-    pub fn offer(&mut self, session: &Session) -> Result<(), String> {
+    pub fn offer(&mut self, session: &Session) -> Result<(), SessionError> {
         let Some(file) = self.file.clone() else {
             return Ok(());
         };
@@ -145,7 +142,8 @@ impl Autosave {
             return Ok(()); // a slow disk: the next check writes the newest state
         }
         let done = self.finish();
-        let json = serde_json::to_string_pretty(session).map_err(|e| e.to_string())?;
+        let json = serde_json::to_string_pretty(session)
+            .map_err(|e| SessionError::Encode(e.to_string()))?;
         if json != self.written {
             self.written = json.clone();
             self.writer = Some(std::thread::spawn(move || {
@@ -159,14 +157,14 @@ impl Autosave {
     }
 
     /// Writes `session` now and waits for it (on exit).
-    pub fn save_now(&mut self, session: &Session) -> Result<(), String> {
+    pub fn save_now(&mut self, session: &Session) -> Result<(), SessionError> {
         self.finish()?;
         self.offer(session)?;
         self.finish()
     }
 
     /// Waits for the write under way; its error, if it failed.
-    pub fn finish(&mut self) -> Result<(), String> {
+    pub fn finish(&mut self) -> Result<(), SessionError> {
         let Some(writer) = self.writer.take() else {
             return Ok(());
         };
@@ -175,14 +173,29 @@ impl Autosave {
             Ok(Ok(())) => Ok(()),
             Ok(Err(e)) => {
                 self.written.clear(); // try again at the next check
-                Err(format!(
-                    "cannot autosave the session to {}: {e}",
-                    file.display()
-                ))
+                Err(SessionError::Write {
+                    file: file.to_path_buf(),
+                    reason: e.to_string(),
+                })
             }
-            Err(_) => Err("the autosave writer stopped".to_string()),
+            Err(_) => Err(SessionError::WriterStopped),
         }
     }
+}
+
+/// Why the last session was not read or the current one not saved.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum SessionError {
+    #[error("cannot read the last session {}: {reason}", file.display())]
+    Read { file: PathBuf, reason: String },
+    #[error("the last session {} is damaged; starting afresh", file.display())]
+    Damaged { file: PathBuf },
+    #[error("cannot encode the session: {0}")]
+    Encode(String),
+    #[error("cannot autosave the session to {}: {reason}", file.display())]
+    Write { file: PathBuf, reason: String },
+    #[error("the autosave writer stopped")]
+    WriterStopped,
 }
 
 impl Drop for Autosave {
@@ -229,7 +242,10 @@ mod tests {
         assert_eq!(autosave.load(), Ok(Some(session)));
 
         std::fs::write(&file, "{ damaged").unwrap();
-        assert!(autosave.load().unwrap_err().contains("damaged"));
+        assert!(matches!(
+            autosave.load(),
+            Err(SessionError::Damaged { file }) if Some(file.as_path()) == autosave.file()
+        ));
         let odd = r#"{"methods": {"edge_collapse": {"ratio": 7.0}}, "volume_threshold": ["/v.nrrd", 1e40]}"#;
         let restored = Session::from_json(odd).expect("partial sessions parse");
         assert_eq!(

@@ -55,11 +55,12 @@ pub fn run(args: CompareArgs) -> Result<(), CliError> {
             .map_err(|e| CliError::BadInput(format!("{}: cannot create: {e}", dir.display())))?;
     }
     let start = std::time::Instant::now();
-    let mut offscreen = Offscreen::headless().map_err(CliError::Failure)?;
+    let fail = |e: lodstudio::render::offscreen::RenderError| CliError::Failure(e.to_string());
+    let mut offscreen = Offscreen::headless().map_err(fail)?;
     let cameras = Camera::views_around(a.sphere(), args.views as usize, 1.0);
     let views = offscreen
         .compare(&a, &b, &cameras, [args.size; 2])
-        .map_err(CliError::Failure)?;
+        .map_err(fail)?;
     if let Some(dir) = &args.save_diff {
         for (i, view) in views.iter().enumerate() {
             write_output(&diff_path(dir, i), &io::image::encode_png(&view.image))?;

@@ -132,11 +132,11 @@ pub fn run(args: ExportArgs) -> Result<(), CliError> {
         (None, None) => None,
     };
     if let Some(entries) = entries {
-        let outcome = batch::run(&args, &recipe, entries)?;
+        let ran = batch::run(&args, &recipe, entries)?;
         // The batch ran (whatever became of its models): its recipe is kept.
         save()?;
         super::outputs::commit()?;
-        return outcome;
+        return ran.into_result();
     }
     let file = args.file.as_deref().expect("a file when no manifest");
     let format = output_format(&args.output).ok_or_else(|| {

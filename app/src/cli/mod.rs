@@ -381,7 +381,8 @@ fn dispatch(command: Option<Command>) -> Result<(), CliError> {
 }
 
 fn studio(file: Option<PathBuf>) -> Result<(), CliError> {
-    lodstudio::run_studio(file).map_err(CliError::Failure)
+    lodstudio::run_studio(file)
+        .map_err(|e| CliError::Failure(format!("cannot open the studio window: {e}")))
 }
 
 impl InputArgs {

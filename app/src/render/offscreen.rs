@@ -37,6 +37,23 @@ pub struct ViewComparison {
     pub image: Texture,
 }
 
+/// Why an off-screen render did not give images.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum RenderError {
+    #[error("no GPU adapter to render with ({0}); WGPU_BACKEND chooses one")]
+    NoAdapter(String),
+    #[error("cannot open the GPU device ({0})")]
+    NoDevice(String),
+    #[error("the model is too large for this GPU's buffers")]
+    TooLarge,
+    #[error("no render target")]
+    NoTarget,
+    #[error("the GPU did not finish ({0})")]
+    Unfinished(String),
+    #[error("cannot read the render back ({0})")]
+    ReadBack(String),
+}
+
 impl Offscreen {
     /// On the studio's device; its pipelines are its own, so the viewports'
     /// uploads and images are left alone.
@@ -53,7 +70,7 @@ impl Offscreen {
     ///
     /// # Errors
     /// When no adapter or device is available, saying so.
-    pub fn headless() -> Result<Self, String> {
+    pub fn headless() -> Result<Self, RenderError> {
         let instance =
             wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
         let adapter =
@@ -64,15 +81,13 @@ impl Offscreen {
                     ..Default::default()
                 }),
             )
-            .map_err(|e| {
-                format!("no GPU adapter to render with ({e}); WGPU_BACKEND chooses one")
-            })?;
+            .map_err(|e| RenderError::NoAdapter(e.to_string()))?;
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
             label: Some("lodstudio offscreen"),
             required_limits: adapter.limits(),
             ..Default::default()
         }))
-        .map_err(|e| format!("cannot open the GPU device ({e})"))?;
+        .map_err(|e| RenderError::NoDevice(e.to_string()))?;
         Ok(Offscreen::on(device, queue, &adapter))
     }
 
@@ -98,14 +113,14 @@ impl Offscreen {
         cameras: &[Camera],
         clip: Sphere,
         size: [u32; 2],
-    ) -> Result<Vec<Render>, String> {
+    ) -> Result<Vec<Render>, RenderError> {
         let (device, queue, res) = (&self.device, &self.queue, &mut self.resources);
         res.ensure_target(device, size);
         if !res.upload(device, queue, Some(scene)) {
-            return Err("the model is too large for this GPU's buffers".into());
+            return Err(RenderError::TooLarge);
         }
         let Some(target) = &res.target else {
-            return Err("no render target".into());
+            return Err(RenderError::NoTarget);
         };
         let [w, h] = target.size;
         let row = (4 * w).next_multiple_of(ROW_ALIGN);
@@ -159,7 +174,7 @@ impl Offscreen {
         b: &Scene,
         cameras: &[Camera],
         size: [u32; 2],
-    ) -> Result<Vec<ViewComparison>, String> {
+    ) -> Result<Vec<ViewComparison>, RenderError> {
         let clip = a.sphere().enclosing(b.sphere());
         let first = self.render(a, cameras, clip, size)?;
         let second = self.render(b, cameras, clip, size)?;
@@ -182,24 +197,24 @@ fn read_back(
     buffer: &wgpu::Buffer,
     [w, h]: [u32; 2],
     row: u32,
-) -> Result<Render, String> {
+) -> Result<Render, RenderError> {
     let (tx, rx) = std::sync::mpsc::channel();
     buffer.map_async(wgpu::MapMode::Read, .., move |r| {
         let _ = tx.send(r);
     });
     device
         .poll(wgpu::PollType::wait_indefinitely())
-        .map_err(|e| format!("the GPU did not finish ({e})"))?;
+        .map_err(|e| RenderError::Unfinished(e.to_string()))?;
     rx.recv()
         .map_err(|e| e.to_string())
         .and_then(|r| r.map_err(|e| e.to_string()))
-        .map_err(|e| format!("cannot read the render back ({e})"))?;
+        .map_err(RenderError::ReadBack)?;
     let mut rgba = Vec::with_capacity((w * h) as usize);
     let mut coverage = Vec::with_capacity((w * h) as usize);
     {
         let bytes = buffer
             .get_mapped_range(..)
-            .map_err(|e| format!("cannot read the render back ({e})"))?;
+            .map_err(|e| RenderError::ReadBack(e.to_string()))?;
         for line in bytes.chunks_exact(row as usize) {
             for p in line[..(4 * w) as usize].chunks_exact(4) {
                 rgba.push([p[0], p[1], p[2], 255]);

@@ -182,7 +182,7 @@ impl StudioApp {
                 }
             }
             Ok(None) => {}
-            Err(e) => self.error(e),
+            Err(e) => self.error(e.to_string()),
         }
         self.autosave = autosave;
     }
@@ -210,7 +210,7 @@ impl StudioApp {
             Some(wait) if wait.is_zero() => {
                 let session = self.session();
                 if let Err(e) = self.autosave.offer(&session) {
-                    self.error(e);
+                    self.error(e.to_string());
                 }
             }
             Some(wait) => ctx.request_repaint_after(wait),

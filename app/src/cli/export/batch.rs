@@ -87,7 +87,8 @@ impl BatchArgs {
 struct Job {
     entry: Entry,
     output: String,
-    recipe: Result<Recipe, String>,
+    /// Its recipe, or why the manifest's overrides give none (bad input).
+    recipe: Result<Recipe, CliError>,
     /// Why the input may not be read at all (a link out of the asset root,
     /// a special file, a glTF naming a file outside it): bad input, and
     /// nothing of it is read.
@@ -116,14 +117,28 @@ struct ChildOptions<'a> {
 
 use crate::cli::outputs::io_error;
 
+/// How a batch that ran ended.
+#[derive(Debug)]
+pub enum Ran {
+    /// Every model of this shard was exported (or found in the cache).
+    AllExported,
+    /// Some failed: the error the command exits with.
+    Failed(CliError),
+}
+
+impl Ran {
+    pub fn into_result(self) -> Result<(), CliError> {
+        match self {
+            Ran::AllExported => Ok(()),
+            Ran::Failed(e) => Err(e),
+        }
+    }
+}
+
 /// Runs the batch: `Err` when it was refused before any model ran (bad
-/// options, a clash of outputs, an output folder holding inputs), else the
-/// run's outcome (failed models).
-pub fn run(
-    args: &ExportArgs,
-    recipe: &Recipe,
-    entries: Vec<Entry>,
-) -> Result<Result<(), CliError>, CliError> {
+/// options, a clash of outputs, an output folder holding inputs), else how
+/// the run ended.
+pub fn run(args: &ExportArgs, recipe: &Recipe, entries: Vec<Entry>) -> Result<Ran, CliError> {
     let b = &args.shards;
     let shard = b.shard()?;
     let threads = b
@@ -273,7 +288,7 @@ pub fn run(
         );
     }
     if failed == 0 && report_error.is_none() {
-        return Ok(Ok(()));
+        return Ok(Ran::AllExported);
     }
     let mut message = String::new();
     if let Some(first) = failures.first() {
@@ -305,7 +320,7 @@ pub fn run(
             }
         )
     });
-    Ok(Err(if any_bad {
+    Ok(Ran::Failed(if any_bad {
         CliError::BadInput(message)
     } else {
         CliError::Failure(message)
@@ -494,14 +509,15 @@ impl Drop for FileLock<'_> {
 }
 
 /// The recipe of one entry: the batch's, or the manifest's overrides.
-fn entry_recipe(recipe: &Recipe, entry: &Entry) -> Result<Recipe, String> {
+fn entry_recipe(recipe: &Recipe, entry: &Entry) -> Result<Recipe, CliError> {
     let mut r = match &entry.recipe {
-        Some(path) => read_recipe(path).map_err(|e| e.message().to_string())?,
+        Some(path) => read_recipe(path)?,
         None => recipe.clone(),
     };
     if let Some(lods) = &entry.lods {
-        r.rows = parse_lods(lods, Some(r.rows[0].method))?;
-        r.check().map_err(|e| format!("lods={lods}: {e}"))?;
+        r.rows = parse_lods(lods, Some(r.rows[0].method)).map_err(CliError::BadInput)?;
+        r.check()
+            .map_err(|e| CliError::BadInput(format!("lods={lods}: {e}")))?;
     }
     Ok(r)
 }
@@ -542,7 +558,7 @@ fn build(args: &ExportArgs, cache: &Cache, job: &Job, child: &ChildOptions) -> O
     };
     let recipe = match &job.recipe {
         Ok(r) => r,
-        Err(e) => return bad(e.clone()),
+        Err(e) => return bad(e.message().to_string()),
     };
     if let Some(e) = &job.refused {
         return bad(e.clone());

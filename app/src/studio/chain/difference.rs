@@ -47,9 +47,7 @@ pub(super) fn measure(
     for (k, lod) in lods.iter().enumerate() {
         progress.check()?;
         progress.set_fraction(k as f32 / lods.len() as f32);
-        let views = offscreen
-            .compare(original, lod, cameras, SIZE)
-            .map_err(ChainError::Render)?;
+        let views = offscreen.compare(original, lod, cameras, SIZE)?;
         let around = &views[1..];
         let mean = |f: fn(&Difference) -> f64| {
             around.iter().map(|v| f(&v.difference)).sum::<f64>() / around.len() as f64

@@ -34,8 +34,8 @@ pub enum ChainError {
     #[error("{0}")]
     Recipe(String),
     /// The off-screen renderer failed.
-    #[error("{0}")]
-    Render(String),
+    #[error(transparent)]
+    Render(#[from] crate::render::offscreen::RenderError),
     /// The worker of the named task ended without an answer (it panicked).
     #[error("the {0} stopped unexpectedly (internal error)")]
     Lost(&'static str),
