@@ -372,7 +372,8 @@ fn voxel_surfaces_write_their_own_normals_and_nothing_else() {
             "--method",
             "voxel",
             "--lods",
-            "6%,12%",
+            // Two levels of the pyramid at the default filter radius (2 voxels).
+            "6%,30%",
             "--resolution",
             "48",
             "-o",
