@@ -10,6 +10,7 @@
 set -uo pipefail
 old=$1 new=$2
 work=${3:-$(mktemp -d)}
+mkdir -p "$work"
 m=$(cd "$(dirname "$0")/../../shared/models" && pwd)
 
 run_all() {

@@ -23,16 +23,6 @@ pub struct CutStyle {
     pub wireframe: bool,
 }
 
-/// What "colour by region" means for each method's cuts, if anything.
-pub fn region_name(method: Method) -> Option<&'static str> {
-    match method {
-        Method::MergeTree => Some("merge-tree level"),
-        Method::Amg => Some("AMG domain"),
-        Method::Voxel => Some("voxel layer"),
-        Method::EdgeCollapse | Method::Hybrid => None,
-    }
-}
-
 /// Colours of the primitive types (linear RGB); splats keep their textures.
 const TRIANGLE_COLOR: glam::Vec3 = glam::Vec3::new(0.85, 0.55, 0.25);
 const POINT_COLOR: glam::Vec3 = glam::Vec3::new(0.25, 0.55, 0.95);
@@ -222,6 +212,11 @@ impl LiveCut {
     /// (and so something to save).
     pub fn has_levels(&self) -> bool {
         self.hierarchy.has_levels()
+    }
+
+    /// What "colour by region" colours the cut by, when its cuts have regions.
+    pub fn regions(&self) -> Option<&'static str> {
+        self.hierarchy.regions()
     }
 
     /// Which knobs the cut reads and whether the threshold chooses it now.

@@ -1456,6 +1456,48 @@ fn the_threshold_moves_every_method_live() {
     }
 }
 
+/// The threshold is shown only where it chooses the cut (issue 45): a knob
+/// that chooses instead (edge collapse's ratio target, AMG's fixed level)
+/// hides it behind a note saying what to change, and letting the threshold
+/// choose brings it back and moves the cut.
+#[test]
+fn the_threshold_shows_only_where_it_chooses_the_cut() {
+    use lodstudio::panels::threshold::overridden;
+    use lodstudio_core::lod::Knob;
+    let mut harness = studio(None);
+    wait_for_load(&mut harness);
+    let slider = |h: &Harness<'_, StudioApp>| {
+        h.query_all_by_role_and_label(egui::Role::Slider, "error threshold")
+            .next()
+            .is_some()
+    };
+    for (method, knob) in [
+        (Method::EdgeCollapse, Knob::CollapseTarget),
+        (Method::Amg, Knob::AmgLevel),
+    ] {
+        let mut methods = *harness.state().methods();
+        methods.method = method;
+        methods.auto_rebuild = false;
+        methods.edge_collapse.mode = TargetMode::Ratio;
+        methods.amg.auto_level = false;
+        harness.state_mut().set_methods(methods);
+        harness.state_mut().build();
+        wait_for_build(&mut harness);
+        harness.run();
+        harness.run();
+        assert!(!slider(&harness), "{method:?}: the knob chooses");
+        assert!(has_label(&harness, overridden(knob)), "{method:?}");
+        methods.edge_collapse.mode = TargetMode::Threshold;
+        methods.amg.auto_level = true;
+        harness.state_mut().set_methods(methods);
+        harness.run();
+        harness.run();
+        assert!(slider(&harness), "{method:?}: the threshold chooses");
+        assert!(!has_label(&harness, overridden(knob)), "{method:?}");
+        assert!(!harness.state().is_building(), "{method:?}: no rebuild");
+    }
+}
+
 /// The textured milk truck of the shared models.
 fn shared_truck() -> PathBuf {
     PathBuf::from(concat!(

@@ -4,8 +4,9 @@
 use std::path::Path;
 
 use lodstudio_core::io::{LoadError, Location, ParseError};
-use lodstudio_core::lod::Hierarchy;
+use lodstudio_core::lod::{Hierarchy, Params};
 use lodstudio_core::view::{Tolerance, View};
+use lodstudio_core::voxel::VoxelParams;
 
 use super::{Built, Row};
 use crate::live_cut::LiveCut;
@@ -38,46 +39,32 @@ pub fn reopen(path: &Path) -> Result<Reopened, LoadError> {
 impl Reopened {
     /// `methods` with the saved method chosen and its saved parameters.
     pub fn apply(&self, mut methods: MethodSettings) -> MethodSettings {
-        let number = |key: &str| self.params.get(key).and_then(|v| v.as_f64());
         methods.method = self.method;
-        match self.method {
-            Method::Hybrid => {
-                methods.hybrid.kappa =
-                    number("kappa").unwrap_or(methods.hybrid.kappa as f64) as f32;
-                methods.hybrid.tau = number("tau").unwrap_or(methods.hybrid.tau as f64) as f32;
-                methods.hybrid = methods.hybrid.sanitized();
-            }
-            Method::MergeTree => {
-                let mt = &mut methods.merge_tree;
-                mt.min_vertices = number("min_vertices").map_or(mt.min_vertices, |v| v as usize);
-                mt.min_quality = number("min_quality").unwrap_or(mt.min_quality as f64) as f32;
-                methods.merge_tree = methods.merge_tree.sanitized();
-            }
-            Method::Voxel => {
-                let v = &mut methods.voxel;
-                v.pyramid = true;
-                v.resolution = number("resolution").map_or(v.resolution, |r| r as usize);
-                v.radius = number("radius").unwrap_or(v.radius as f64) as f32;
-                methods.voxel = methods.voxel.sanitized();
-            }
-            Method::Amg => {
-                methods.amg.k = number("k").map_or(methods.amg.k, |k| k as usize);
-                methods.amg = methods.amg.sanitized();
-            }
-            Method::EdgeCollapse => {
-                let ec = &mut methods.edge_collapse;
-                ec.lock_borders = self
-                    .params
-                    .get("lock_borders")
-                    .and_then(|v| v.as_bool())
-                    .unwrap_or(ec.lock_borders);
-                ec.min_quality = number("min_quality").unwrap_or(ec.min_quality as f64) as f32;
-                ec.min_normal_cos =
-                    number("min_normal_cos").unwrap_or(ec.min_normal_cos as f64) as f32;
-                methods.edge_collapse = methods.edge_collapse.sanitized();
+        methods.set_params(&self.saved_params());
+        methods
+    }
+
+    /// The saved parameters over the method's defaults: each field the file
+    /// names with a value of the default's kind (a CLI save names a few; the
+    /// AMG texel it names in model units, which the studio's spacings do not
+    /// take, keeps its default). A saved voxel hierarchy is its pyramid.
+    fn saved_params(&self) -> Params {
+        let defaults = Params::default_for(self.method);
+        let mut merged = serde_json::to_value(defaults).unwrap_or_default();
+        if let (Some(fields), Some(saved)) = (merged.as_object_mut(), self.params.as_object()) {
+            for (key, value) in saved {
+                if let Some(field) = fields.get_mut(key)
+                    && key != "method"
+                    && std::mem::discriminant(field) == std::mem::discriminant(value)
+                {
+                    *field = value.clone();
+                }
             }
         }
-        methods
+        match serde_json::from_value(merged).unwrap_or(defaults) {
+            Params::Voxel(v) => Params::Voxel(VoxelParams { pyramid: true, ..v }),
+            params => params,
+        }
     }
 
     /// The result the studio shows: the hierarchy cut live, built with

@@ -87,6 +87,45 @@ impl MethodSettings {
 }
 
 impl MethodSettings {
+    /// Shows `params` (a reopened hierarchy's): its method's settings take
+    /// its values, in range; run-time settings stay.
+    pub fn set_params(&mut self, params: &Params) {
+        self.method = params.method();
+        match params {
+            Params::EdgeCollapse(p) => {
+                let ec = &mut self.edge_collapse;
+                ec.lock_borders = p.collapse.lock_borders;
+                ec.min_quality = p.collapse.min_quality;
+                ec.min_normal_cos = p.collapse.min_normal_cos;
+            }
+            Params::Voxel(p) => {
+                let v = &mut self.voxel;
+                v.resolution = p.resolution;
+                v.radius = p.radius;
+                v.filter = p.filter;
+                v.iso = p.iso;
+                v.layers_error = p.layers_error;
+                v.simplify = p.post != lodstudio_core::voxel::PostSimplify::Off;
+                v.pyramid = p.pyramid;
+            }
+            Params::MergeTree(p) => {
+                self.merge_tree.min_vertices = p.min_vertices;
+                self.merge_tree.min_quality = p.collapse.min_quality;
+            }
+            Params::Hybrid(p) => {
+                self.hybrid.kappa = p.kappa;
+                self.hybrid.tau = p.tau;
+            }
+            Params::Amg(p) => {
+                self.amg.k = p.k;
+                if let lodstudio_core::amg::Texel::Spacings(s) = p.texel {
+                    self.amg.texel = s;
+                }
+            }
+        }
+        *self = self.sanitized();
+    }
+
     /// What changes a cut at run time, for a model of `input_triangles`.
     pub fn knobs(&self, input_triangles: usize) -> Knobs {
         Knobs {

@@ -5,7 +5,6 @@ use std::path::PathBuf;
 use super::StudioApp;
 use crate::export::{self, Saved};
 use crate::job::{Job, Poll};
-use crate::settings::Method;
 
 /// Why Save hierarchy has nothing to write.
 const NOTHING_TO_SAVE: &str = "Nothing to save: build a hierarchy first (a single voxel \
@@ -41,28 +40,12 @@ impl StudioApp {
         self.start_export(ctx, move |set| export::choose_and_write(set, &name));
     }
 
-    /// The running result's hierarchy as saved-hierarchy bytes, with the shown
-    /// parameters of its method.
+    /// The running result's hierarchy as saved-hierarchy bytes, with the
+    /// parameters it was built with.
     fn hierarchy_bytes(&self) -> Option<Vec<u8>> {
-        let live = &self.result.as_ref()?.live;
-        let m = &self.methods;
-        let params = match m.method {
-            Method::Hybrid => serde_json::json!({"kappa": m.hybrid.kappa, "tau": m.hybrid.tau}),
-            Method::MergeTree => serde_json::json!({
-                "min_vertices": m.merge_tree.min_vertices,
-                "min_quality": m.merge_tree.min_quality,
-            }),
-            Method::Voxel => {
-                serde_json::json!({"resolution": m.voxel.resolution, "radius": m.voxel.radius})
-            }
-            Method::Amg => serde_json::json!({"k": m.amg.k}),
-            Method::EdgeCollapse => serde_json::json!({
-                "lock_borders": m.edge_collapse.lock_borders,
-                "min_quality": m.edge_collapse.min_quality,
-                "min_normal_cos": m.edge_collapse.min_normal_cos,
-            }),
-        };
-        live.save(&params)
+        let built = self.result.as_ref()?;
+        let params = serde_json::to_value(built.params).ok()?;
+        built.live.save(&params)
     }
 
     /// Saves the built hierarchy to `path` on a worker (no dialog).

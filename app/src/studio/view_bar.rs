@@ -1,7 +1,6 @@
 //! The bar above the viewport: which version is shown and how it is coloured.
 
 use super::StudioApp;
-use crate::live_cut;
 
 /// Which version of the model the viewport shows.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -73,7 +72,7 @@ impl StudioApp {
                     .on_disabled_hover_text("Build a hierarchy first.");
                     let region = self.result.as_ref().and_then(|b| {
                         let live = &b.live;
-                        live_cut::region_name(live.method()).filter(|_| live.has_regions())
+                        live.regions().filter(|_| live.has_regions())
                     });
                     ui.add_enabled(
                         region.is_some(),

@@ -492,6 +492,10 @@ impl Hierarchy for AmgHierarchy {
     }
 
     /// The level to draw, or `None` for the tolerance's choice.
+    fn regions(&self) -> Option<&'static str> {
+        Some("AMG domain")
+    }
+
     /// A fixed level chooses the cut instead of the tolerance.
     fn controls(&self) -> crate::lod::Controls {
         use crate::lod::Knob;

@@ -6,44 +6,18 @@ use std::io::Read;
 use std::path::Path;
 use std::sync::{Condvar, Mutex};
 
-use crate::lod::Method;
 use crate::recipe::Recipe;
 
-/// Bytes of memory per parsed input byte that the heaviest method of
-/// `recipe` may reach at its peak, from BENCHMARKS.md's dragon figures (peak
-/// RSS over the PLY's bytes: hybrid 2.0 GB, AMG 0.8 GB, edge collapse
-/// 0.33 GB, merge tree 0.24 GB of a 32 MB file), plus the voxel grids.
-/// `parsed_bytes`: what the readers parse, a gzip input's inflated size
-/// ([`parsed_size`]), not the bytes on disk.
+/// Bytes of memory the heaviest row of `recipe` may reach at its peak
+/// ([`Params::peak_bytes`](crate::lod::Params::peak_bytes)), and what the
+/// process holds besides. `parsed_bytes`: what the readers parse, a gzip
+/// input's inflated size ([`parsed_size`]), not the bytes on disk.
 pub fn estimate_peak(parsed_bytes: u64, recipe: &Recipe) -> u64 {
-    let bytes = parsed_bytes;
-    let per_byte = |m: Method| -> u64 {
-        match m {
-            Method::Hybrid => 64,
-            Method::Amg => 26,
-            Method::EdgeCollapse => 11,
-            Method::MergeTree => 8,
-            Method::Voxel => 8,
-        }
-    };
-    let heaviest = recipe
-        .rows
-        .iter()
-        .map(|r| per_byte(r.method))
+    let heaviest = (0..recipe.rows.len())
+        .map(|j| recipe.row_params(j).peak_bytes(parsed_bytes))
         .max()
-        .unwrap_or(1);
-    // A voxel pyramid keeps a few float grids of resolution³ (sampled,
-    // filtered, and the coarser levels).
-    let grids = recipe
-        .rows
-        .iter()
-        .filter(|r| r.method == Method::Voxel)
-        .map(|r| (r.resolution() as u64).pow(3) * 4 * 4)
-        .max()
-        .unwrap_or(0);
-    (64u64 << 20)
-        .saturating_add(bytes.saturating_mul(heaviest))
-        .saturating_add(grids)
+        .unwrap_or(parsed_bytes);
+    (64u64 << 20).saturating_add(heaviest)
 }
 
 /// The bytes a reader parses from the file at `path`: its length, or for a

@@ -25,12 +25,14 @@ use crate::progress::{Cancelled, Progress};
 use crate::simplify::progressive::ProgressiveOptions;
 use crate::voxel::{Source, VoxelParams};
 
-/// What a build of one method is made with besides its input.
+/// What a build of one method is made with besides its input; in files,
+/// tagged with the method's tag ([`Method::tag`]).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(tag = "method", rename_all = "snake_case")]
+#[serde(tag = "method", rename_all = "lowercase")]
 pub enum Params {
     /// The collapses' legality and the record's floor (the target chooses a
     /// prefix at run time).
+    #[serde(rename = "simplify")]
     EdgeCollapse(ProgressiveOptions),
     Voxel(VoxelParams),
     /// The tree's build options (its criteria apply at run time).
@@ -60,6 +62,23 @@ impl Params {
             Params::Hybrid(_) => Method::Hybrid,
             Params::Amg(_) => Method::Amg,
         }
+    }
+
+    /// Bytes of memory a build may reach at its peak for an input that
+    /// parses from `parsed_bytes` bytes (what batch runs schedule by): per
+    /// parsed byte, from BENCHMARKS.md's dragon figures (peak RSS over the
+    /// PLY's bytes: hybrid 2.0 GB, AMG 0.8 GB, edge collapse 0.33 GB, merge
+    /// tree 0.24 GB of a 32 MB file), plus a voxel pyramid's few float grids
+    /// of resolution³ (sampled, filtered, the coarser levels).
+    pub fn peak_bytes(&self, parsed_bytes: u64) -> u64 {
+        let (per_byte, grids) = match self {
+            Params::Hybrid(_) => (64, 0),
+            Params::Amg(_) => (26, 0),
+            Params::EdgeCollapse(_) => (11, 0),
+            Params::MergeTree(_) => (8, 0),
+            Params::Voxel(v) => (8, (v.resolution as u64).pow(3) * 4 * 4),
+        };
+        parsed_bytes.saturating_mul(per_byte).saturating_add(grids)
     }
 
     /// Every value inside its range, or the first one that is not, by name.
@@ -190,6 +209,16 @@ pub fn accepts(method: Method, input: Input<'_>) -> Result<(), BuildError> {
     }
 }
 
+/// What `method`'s budgets count of `input` (a recipe's ratio rows):
+/// triangles, AMG's points.
+pub fn input_primitives(method: Method, input: Input<'_>) -> usize {
+    match (method, input) {
+        (Method::Amg, Input::Points(points)) => points.positions.len(),
+        (Method::Amg, Input::Mesh(mesh)) => mesh.positions.len(),
+        _ => mesh_of(input).map_or(0, |m| m.triangles.len()),
+    }
+}
+
 /// The triangle mesh a mesh method works on, if the input has one.
 fn mesh_of(input: Input<'_>) -> Option<&TriMesh> {
     let mesh = match input {
@@ -237,7 +266,7 @@ mod tests {
             params.validate().expect("defaults are in range");
             let json = serde_json::to_string(&params).expect("serialises");
             assert!(
-                json.contains(&format!("\"method\":\"{}\"", snake(method))),
+                json.contains(&format!("\"method\":\"{}\"", method.tag())),
                 "{json}"
             );
             let back: Params = serde_json::from_str(&json).expect("parses");
@@ -270,16 +299,6 @@ mod tests {
             ..Default::default()
         });
         assert_eq!(voxel.validate().unwrap_err().field, "resolution");
-    }
-
-    fn snake(method: Method) -> &'static str {
-        match method {
-            Method::EdgeCollapse => "edge_collapse",
-            Method::Voxel => "voxel",
-            Method::MergeTree => "merge_tree",
-            Method::Hybrid => "hybrid",
-            Method::Amg => "amg",
-        }
     }
 
     #[test]

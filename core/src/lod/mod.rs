@@ -23,7 +23,7 @@ mod method;
 mod params;
 mod pick;
 
-pub use build::{BuildError, Input, Params, accepts, build};
+pub use build::{BuildError, Input, Params, accepts, build, input_primitives};
 pub use draw_set::{BoundKind, CutPoint, DrawSet, Layer, Splat, Texture};
 pub use hierarchy::{Hierarchy, select_triangles};
 pub use knobs::{Controls, Criteria, Knob, Knobs, PrefixTarget};

@@ -153,14 +153,7 @@ pub fn build_chain(
                 simplify_rows(recipe, &group, mesh, p.collapse, pixels_to_error, progress)?
             }
             (params @ Params::Amg(_), _) | (params, Some(_)) => {
-                // What ratio rows count: triangles, AMG's points.
-                let input = match (params.method(), mesh, points) {
-                    (Method::Amg, _, Some(p)) => p.positions.len(),
-                    (Method::Amg, _, None) => {
-                        crate::amg::point_set(model).map_or(0, |p| p.positions.len())
-                    }
-                    (_, m, _) => m.map_or(0, |m| m.triangles.len()),
-                };
+                let input = lod::input_primitives(params.method(), model.into());
                 let h = lod::build(&params, model, progress).map_err(|e| match e {
                     BuildError::Cancelled => ChainError::Cancelled,
                     e => ChainError::BadInput(format!("rows[{first}]: {e}")),

@@ -316,6 +316,10 @@ impl Hierarchy for Layered {
     fn has_levels(&self) -> bool {
         false
     }
+
+    fn regions(&self) -> Option<&'static str> {
+        Some("voxel layer")
+    }
 }
 
 #[cfg(test)]
