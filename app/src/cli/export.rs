@@ -62,14 +62,14 @@ pub struct ExportArgs {
     output: PathBuf,
     /// Pixel tolerance for the MSFT_screencoverage thresholds: a LOD is shown
     /// only where its error bound projects to at most this many pixels.
-    #[arg(long, value_name = "P", default_value_t = 1.0)]
+    #[arg(long, value_name = "P", default_value_t = Recipe::new(Vec::new()).pixels)]
     pixels: f32,
     /// Viewport height in pixels, for the thresholds and for "px" tolerances.
-    #[arg(long, value_name = "H", default_value_t = 1080.0)]
+    #[arg(long, value_name = "H", default_value_t = Recipe::new(Vec::new()).viewport_height)]
     viewport_height: f32,
     /// Screen coverage (object height / viewport height) at which "px" tolerances
     /// are converted to object space: e = px · diagonal / (H · coverage).
-    #[arg(long, value_name = "C", default_value_t = 1.0)]
+    #[arg(long, value_name = "C", default_value_t = Recipe::new(Vec::new()).coverage)]
     coverage: f32,
     /// Border, seam and non-manifold vertices never move.
     #[arg(long)]
