@@ -37,18 +37,10 @@ pub fn choose_and_write(set: &DrawSet, file_name: &str) -> Saved {
     save_dialog("Export the LOD", file_name, &filters).map_or(Saved::NoFile, |p| write(set, &p))
 }
 
-/// A save dialog (which asks before replacing a file); `None` when it was
-/// closed without a choice or there is no dialog service.
+/// A save dialog (which asks before replacing a file): the desktop's or the
+/// in-app one; `None` when it was closed without a choice.
 fn save_dialog(title: &str, file_name: &str, filters: &[(&str, &[&str])]) -> Option<PathBuf> {
-    filters
-        .iter()
-        .fold(
-            rfd::FileDialog::new()
-                .set_title(title)
-                .set_file_name(file_name),
-            |dialog, (name, extensions)| dialog.add_filter(*name, extensions),
-        )
-        .save_file()
+    crate::file_dialog::save_file(title, file_name, filters)
 }
 
 /// Asks where to save a built hierarchy (suggesting `file_name`), then

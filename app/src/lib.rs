@@ -2,6 +2,7 @@
 
 pub mod build;
 pub mod export;
+pub mod file_dialog;
 pub mod frame_stats;
 pub mod heatmap;
 pub mod job;

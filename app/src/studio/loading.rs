@@ -79,11 +79,7 @@ pub(super) fn pick_file(
     std::thread::Builder::new()
         .name("file dialog".into())
         .spawn(move || {
-            let dialog = filters.iter().fold(
-                rfd::FileDialog::new().set_title(title),
-                |dialog, (name, extensions)| dialog.add_filter(*name, extensions),
-            );
-            let _ = tx.send(dialog.pick_file());
+            let _ = tx.send(crate::file_dialog::pick_file(title, filters));
             ctx.request_repaint();
         })?;
     Ok(rx)

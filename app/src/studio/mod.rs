@@ -140,6 +140,8 @@ pub struct StudioApp {
     /// The GPU device the viewports draw with, for off-screen renders.
     render_state: Option<egui_wgpu::RenderState>,
     autosave: Autosave,
+    /// The in-app file browser, where the desktop has no dialog.
+    file_dialog: crate::file_dialog::InApp,
 }
 
 impl StudioApp {
@@ -254,6 +256,7 @@ impl StudioApp {
             chain: chain::ChainState::default(),
             render_state: render_state.cloned(),
             autosave: Autosave::off(),
+            file_dialog: Default::default(),
         }
     }
 
@@ -398,6 +401,7 @@ impl StudioApp {
 
         self.error_window(&ctx);
         chain::ui::difference_window(&mut self.chain, &ctx, self.viewport.camera.distance);
+        self.file_dialog.ui(&ctx);
         drop_hint(&ctx);
         if self.job.is_some()
             || self.picker.is_some()
