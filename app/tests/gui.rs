@@ -1498,6 +1498,31 @@ fn the_threshold_shows_only_where_it_chooses_the_cut() {
     }
 }
 
+/// The threshold slider spans its useful range logarithmically (issue 46):
+/// its middle is the geometric mean of 0.1 and 64 px (2.5 px), not 32 px.
+#[test]
+fn the_threshold_slider_is_logarithmic() {
+    let mut harness = studio(None);
+    wait_for_load(&mut harness);
+    let mut methods = *harness.state().methods();
+    methods.method = Method::Hybrid;
+    methods.auto_rebuild = false;
+    methods.threshold.in_pixels = true;
+    harness.state_mut().set_methods(methods);
+    harness.state_mut().build();
+    wait_for_build(&mut harness);
+    harness.run();
+    harness
+        .get_by_role_and_label(egui::Role::Slider, "error threshold")
+        .click();
+    harness.run();
+    let px = harness.state().methods().threshold.pixels;
+    assert!(
+        (1.5..4.5).contains(&px),
+        "the middle of the slider: {px} px"
+    );
+}
+
 /// The textured milk truck of the shared models.
 fn shared_truck() -> PathBuf {
     PathBuf::from(concat!(

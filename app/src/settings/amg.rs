@@ -30,7 +30,8 @@ impl Default for AmgSettings {
             k: AmgParams::default().k,
             texel: DEFAULT_TEXEL_SPACINGS,
             level: 3,
-            auto_level: false,
+            // The threshold chooses the level unless the user pins one.
+            auto_level: true,
         }
     }
 }

@@ -8,10 +8,13 @@ use serde::{Deserialize, Serialize};
 
 use super::clamp_or;
 
-/// Screen-space thresholds, in pixels.
-pub const PIXELS_RANGE: RangeInclusive<f32> = 0.0..=64.0;
-/// Object-space thresholds, in percent of the bounding-box diagonal.
-pub const PERCENT_RANGE: RangeInclusive<f32> = 0.0..=20.0;
+/// Screen-space thresholds, in pixels: the slider is logarithmic, so its
+/// travel spans what is useful (below a tenth of a pixel no cut differs
+/// from the finest on screen).
+pub const PIXELS_RANGE: RangeInclusive<f32> = 0.1..=64.0;
+/// Object-space thresholds, in percent of the bounding-box diagonal (the
+/// finest certified bounds are about 0.01 %).
+pub const PERCENT_RANGE: RangeInclusive<f32> = 0.01..=20.0;
 
 /// The error threshold of a cut, as the slider sets it.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
