@@ -1456,46 +1456,67 @@ fn the_threshold_moves_every_method_live() {
     }
 }
 
-/// The threshold is shown only where it chooses the cut (issue 45): a knob
-/// that chooses instead (edge collapse's ratio target, AMG's fixed level)
-/// hides it behind a note saying what to change, and letting the threshold
-/// choose brings it back and moves the cut.
+/// Every control of the cut is live or visibly not applicable (issues 45,
+/// 46): edge collapse's ratio is a unit of the cut section, whose pixels
+/// unit hands the cut to the threshold; a pinned AMG level disables the
+/// threshold, saying why, until the level follows it again.
 #[test]
-fn the_threshold_shows_only_where_it_chooses_the_cut() {
-    use lodstudio::panels::threshold::overridden;
-    use lodstudio_core::lod::Knob;
+fn the_threshold_is_live_or_says_why_not() {
+    use lodstudio::panels::threshold::not_applicable;
+    use lodstudio_core::lod::{Controls, Knob};
     let mut harness = studio(None);
     wait_for_load(&mut harness);
-    let slider = |h: &Harness<'_, StudioApp>| {
+    let threshold = |h: &Harness<'_, StudioApp>| {
         h.query_all_by_role_and_label(egui::Role::Slider, "error threshold")
             .next()
-            .is_some()
+            .map(|n| !egui_kittest::kittest::NodeT::accesskit_node(&n).is_disabled())
     };
-    for (method, knob) in [
-        (Method::EdgeCollapse, Knob::CollapseTarget),
-        (Method::Amg, Knob::AmgLevel),
-    ] {
-        let mut methods = *harness.state().methods();
-        methods.method = method;
-        methods.auto_rebuild = false;
-        methods.edge_collapse.mode = TargetMode::Ratio;
-        methods.amg.auto_level = false;
-        harness.state_mut().set_methods(methods);
-        harness.state_mut().build();
-        wait_for_build(&mut harness);
-        harness.run();
-        harness.run();
-        assert!(!slider(&harness), "{method:?}: the knob chooses");
-        assert!(has_label(&harness, overridden(knob)), "{method:?}");
-        methods.edge_collapse.mode = TargetMode::Threshold;
-        methods.amg.auto_level = true;
-        harness.state_mut().set_methods(methods);
-        harness.run();
-        harness.run();
-        assert!(slider(&harness), "{method:?}: the threshold chooses");
-        assert!(!has_label(&harness, overridden(knob)), "{method:?}");
-        assert!(!harness.state().is_building(), "{method:?}: no rebuild");
-    }
+    let mut methods = *harness.state().methods();
+    methods.method = Method::EdgeCollapse;
+    methods.auto_rebuild = false;
+    methods.edge_collapse.mode = TargetMode::Ratio;
+    harness.state_mut().set_methods(methods);
+    harness.state_mut().build();
+    wait_for_build(&mut harness);
+    harness.run();
+    assert!(
+        harness
+            .query_all_by_role_and_label(egui::Role::Slider, "ratio")
+            .next()
+            .is_some(),
+        "the ratio is the cut's unit"
+    );
+    assert_eq!(threshold(&harness), None);
+    harness.get_by_label("pixels").click();
+    harness.run();
+    harness.run();
+    assert_eq!(
+        harness.state().methods().edge_collapse.mode,
+        TargetMode::Threshold
+    );
+    assert_eq!(threshold(&harness), Some(true), "the threshold chooses");
+
+    let pinned = Controls {
+        knobs: &[Knob::AmgLevel],
+        overridden_by: Some(Knob::AmgLevel),
+        has_levels: true,
+    };
+    let mut methods = *harness.state().methods();
+    methods.method = Method::Amg;
+    methods.amg.auto_level = false;
+    harness.state_mut().set_methods(methods);
+    harness.state_mut().build();
+    wait_for_build(&mut harness);
+    harness.run();
+    harness.run();
+    assert_eq!(threshold(&harness), Some(false), "the pinned level chooses");
+    assert!(has_label(&harness, not_applicable(&pinned)));
+    methods.amg.auto_level = true;
+    harness.state_mut().set_methods(methods);
+    harness.run();
+    harness.run();
+    assert_eq!(threshold(&harness), Some(true));
+    assert!(!harness.state().is_building(), "no rebuild");
 }
 
 /// The threshold slider spans its useful range logarithmically (issue 46):
@@ -1566,8 +1587,9 @@ fn the_textured_truck_and_its_lod_look_alike() {
     harness.run();
     let original = viewport_image(&mut harness, "truck-original");
     let textured = colourful(&original);
-    methods.edge_collapse.mode = TargetMode::Error;
-    methods.edge_collapse.error_percent = 0.5;
+    methods.edge_collapse.mode = TargetMode::Threshold;
+    methods.threshold.in_pixels = false;
+    methods.threshold.percent = 0.5;
     harness.state_mut().set_methods(methods);
     harness.state_mut().build();
     wait_for_build(&mut harness);

@@ -1,25 +1,21 @@
-//! Controls of edge collapse: the target that chooses a prefix of the
-//! recorded collapses, and the legality rules, explained in the papers' terms.
+//! Controls of edge collapse: the legality rules of its build, and the
+//! budgets (a ratio, a triangle count) that choose a prefix of the recorded
+//! collapses as units of the cut section's threshold, explained in the
+//! papers' terms.
 
 use crate::settings::simplify::{
-    ERROR_PERCENT_RANGE, EdgeCollapseSettings, GUARD_RANGE, MAX_TRIANGLES, RATIO_RANGE, TargetMode,
+    EdgeCollapseSettings, GUARD_RANGE, MAX_TRIANGLES, RATIO_RANGE, TargetMode,
 };
 
-const TARGET_HINT: &str = "Where to stop collapsing edges. Edges collapse in order of \
+pub const TARGET_HINT: &str = "Where to stop collapsing edges. Edges collapse in order of \
     quadric error; each collapse merges an edge's two vertices into one and removes the \
     triangles on that edge. The build records every collapse down to 0.1 % of the \
     triangles, each step with its certified bound, so moving the target needs no rebuild.";
 
-const RATIO_HINT: &str = "Keep this fraction of the input's triangles.";
+pub const RATIO_HINT: &str = "Keep this fraction of the input's triangles.";
 
-const TRIANGLES_HINT: &str = "Collapse until at most this many triangles remain (fewer \
+pub const TRIANGLES_HINT: &str = "Collapse until at most this many triangles remain (fewer \
     are possible only if no legal collapse is left).";
-
-const ERROR_HINT: &str = "As few triangles as possible while the certified two-sided \
-    Hausdorff bound stays within this percentage of the bounding-box diagonal.";
-
-const THRESHOLD_HINT: &str = "Follow the view's error threshold (object space, or pixels \
-    at the camera) like every other hierarchy: the coarsest step within it.";
 
 const LOCK_HINT: &str = "Border vertices never move, so open boundaries, seams between \
     parts and non-manifold edges keep their exact shape. Off: they may still only slide \
@@ -35,30 +31,29 @@ const FOLD_HINT: &str = "Fold guard: reject a collapse that turns any triangle's
     itself. 0 rejects only turns beyond 90°; higher is stricter.";
 
 impl EdgeCollapseSettings {
-    /// The controls; `input_triangles` (the open mesh's count) turns a ratio
-    /// into the count it means. True when any value changed.
-    pub fn ui(&mut self, ui: &mut egui::Ui, input_triangles: Option<usize>) -> bool {
+    /// The build's controls; true when any value changed.
+    pub fn ui(&mut self, ui: &mut egui::Ui) -> bool {
         let before = *self;
-        ui.label("Target").on_hover_text(TARGET_HINT);
-        ui.horizontal(|ui| {
-            for (mode, name, hint) in [
-                (TargetMode::Ratio, "Ratio", RATIO_HINT),
-                (TargetMode::Triangles, "Triangles", TRIANGLES_HINT),
-                (TargetMode::Error, "Error", ERROR_HINT),
-                (TargetMode::Threshold, "Threshold", THRESHOLD_HINT),
-            ] {
-                ui.selectable_value(&mut self.mode, mode, name)
-                    .on_hover_text(hint);
-            }
-        });
+        ui.checkbox(&mut self.lock_borders, "Lock borders")
+            .on_hover_text(LOCK_HINT);
+        ui.add(egui::Slider::new(&mut self.min_quality, GUARD_RANGE).text("sliver guard"))
+            .on_hover_text(QUALITY_HINT);
+        ui.add(egui::Slider::new(&mut self.min_normal_cos, GUARD_RANGE).text("fold guard"))
+            .on_hover_text(FOLD_HINT);
+        let degrees = self.min_normal_cos.clamp(-1.0, 1.0).acos().to_degrees();
+        ui.weak(format!("normals may turn up to {degrees:.0}°"));
+        *self != before
+    }
+
+    /// The budget the cut section shows in `mode`'s unit (ratio or
+    /// triangles; `input_triangles` turns a ratio into the count it means).
+    pub fn budget_ui(&mut self, ui: &mut egui::Ui, input_triangles: Option<usize>) {
         match self.mode {
             TargetMode::Ratio => {
-                ui.add(
-                    egui::Slider::new(&mut self.ratio, RATIO_RANGE)
-                        .logarithmic(true)
-                        .text("ratio"),
-                )
-                .on_hover_text(RATIO_HINT);
+                let name = ui.label("ratio");
+                ui.add(egui::Slider::new(&mut self.ratio, RATIO_RANGE).logarithmic(true))
+                    .labelled_by(name.id)
+                    .on_hover_text(RATIO_HINT);
                 if let Some(n) = input_triangles {
                     let kept = (f64::from(self.ratio) * n as f64).round() as usize;
                     ui.weak(format!("≈ {kept} of {n} triangles"));
@@ -78,28 +73,7 @@ impl EdgeCollapseSettings {
                     };
                 });
             }
-            TargetMode::Error => {
-                ui.add(
-                    egui::Slider::new(&mut self.error_percent, ERROR_PERCENT_RANGE)
-                        .logarithmic(true)
-                        .suffix(" %")
-                        .text("error"),
-                )
-                .on_hover_text(ERROR_HINT);
-                ui.weak("of the bounding-box diagonal");
-            }
-            TargetMode::Threshold => {
-                ui.weak("the error threshold below chooses");
-            }
+            TargetMode::Threshold => {}
         }
-        ui.checkbox(&mut self.lock_borders, "Lock borders")
-            .on_hover_text(LOCK_HINT);
-        ui.add(egui::Slider::new(&mut self.min_quality, GUARD_RANGE).text("sliver guard"))
-            .on_hover_text(QUALITY_HINT);
-        ui.add(egui::Slider::new(&mut self.min_normal_cos, GUARD_RANGE).text("fold guard"))
-            .on_hover_text(FOLD_HINT);
-        let degrees = self.min_normal_cos.clamp(-1.0, 1.0).acos().to_degrees();
-        ui.weak(format!("normals may turn up to {degrees:.0}°"));
-        *self != before
     }
 }

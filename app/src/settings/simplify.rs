@@ -12,22 +12,22 @@ use serde::{Deserialize, Serialize};
 
 use super::clamp_or;
 
-/// Which prefix of the recorded collapses is shown; each mode keeps its own
-/// value so switching back restores it.
+/// Which prefix of the recorded collapses is shown: the cut section's unit
+/// (a budget of triangles, or the error threshold in pixels or % of the
+/// diagonal); each keeps its own value so switching back restores it.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
 pub enum TargetMode {
     #[default]
     Ratio,
     Triangles,
-    Error,
-    /// The view's error threshold, as for every other hierarchy.
+    /// The view's error threshold, as for every other hierarchy (an older
+    /// session's error target is the threshold in % of the diagonal).
+    #[serde(alias = "Error")]
     Threshold,
 }
 
 /// Down to the floor a build records.
 pub const RATIO_RANGE: RangeInclusive<f32> = FLOOR_RATIO..=1.0;
-/// Error targets as a percentage of the bounding-box diagonal.
-pub const ERROR_PERCENT_RANGE: RangeInclusive<f32> = 0.001..=10.0;
 /// DragValue needs a finite upper end; no model comes close.
 pub const MAX_TRIANGLES: usize = 1_000_000_000;
 
@@ -39,8 +39,6 @@ pub struct EdgeCollapseSettings {
     /// Fraction of the input's triangles to keep.
     pub ratio: f32,
     pub triangles: usize,
-    /// Largest certified error, in percent of the bounding-box diagonal.
-    pub error_percent: f32,
     pub lock_borders: bool,
     /// Smallest triangle quality a collapse may create (0 disables the guard).
     pub min_quality: f32,
@@ -55,7 +53,6 @@ impl Default for EdgeCollapseSettings {
             mode: TargetMode::Ratio,
             ratio: 0.1,
             triangles: 1000,
-            error_percent: 0.5,
             lock_borders: collapse.lock_borders,
             min_quality: collapse.min_quality,
             min_normal_cos: collapse.min_normal_cos,
@@ -71,7 +68,6 @@ impl EdgeCollapseSettings {
             mode: self.mode,
             ratio: clamp_or(self.ratio, RATIO_RANGE, d.ratio),
             triangles: self.triangles.clamp(1, MAX_TRIANGLES),
-            error_percent: clamp_or(self.error_percent, ERROR_PERCENT_RANGE, d.error_percent),
             lock_borders: self.lock_borders,
             min_quality: clamp_or(self.min_quality, GUARD_RANGE, d.min_quality),
             min_normal_cos: clamp_or(self.min_normal_cos, GUARD_RANGE, d.min_normal_cos),
@@ -107,7 +103,6 @@ impl EdgeCollapseSettings {
                 Some(PrefixTarget::Triangles(n as usize))
             }
             TargetMode::Triangles => Some(PrefixTarget::Triangles(s.triangles)),
-            TargetMode::Error => Some(PrefixTarget::RelativeError(s.error_percent / 100.0)),
             TargetMode::Threshold => None,
         }
     }
@@ -122,14 +117,11 @@ mod tests {
         let mut s = EdgeCollapseSettings {
             ratio: 0.25,
             triangles: 500,
-            error_percent: 1.0,
             ..Default::default()
         };
         assert_eq!(s.runtime(1000), Some(PrefixTarget::Triangles(250)));
         s.mode = TargetMode::Triangles;
         assert_eq!(s.runtime(1000), Some(PrefixTarget::Triangles(500)));
-        s.mode = TargetMode::Error;
-        assert_eq!(s.runtime(1000), Some(PrefixTarget::RelativeError(0.01)));
         s.mode = TargetMode::Threshold;
         assert_eq!(s.runtime(1000), None);
         let moved = EdgeCollapseSettings { ratio: 0.5, ..s };
@@ -140,5 +132,8 @@ mod tests {
             CollapseOptions::default().min_normal_cos
         );
         assert_eq!(s.params().floor(100_000), 100, "the ratio slider's low end");
+        // An older session's error target is the threshold now.
+        let old: EdgeCollapseSettings = serde_json::from_str(r#"{"mode": "Error"}"#).unwrap();
+        assert_eq!(old.mode, TargetMode::Threshold);
     }
 }

@@ -3,12 +3,19 @@
 
 use lodstudio_core::builtins;
 
+use lodstudio_core::lod::{Controls, Knob};
+
 use super::{Current, StudioApp};
 use crate::settings::Method;
 
 impl StudioApp {
-    /// The model section, then the method section, scrolling together.
+    /// The model section, then the method section, scrolling together
+    /// above Build / Export / Save, which stay in view however long the
+    /// parameters grow.
     pub(super) fn left_panel(&mut self, ui: &mut egui::Ui) {
+        egui::Panel::bottom("build bar")
+            .show_separator_line(true)
+            .show(ui, |ui| self.build_bar(ui));
         egui::ScrollArea::vertical().show(ui, |ui| {
             self.model_section(ui);
             ui.separator();
@@ -50,7 +57,7 @@ impl StudioApp {
             });
     }
 
-    /// The method list, its parameters, and Build / Export.
+    /// The method list, its parameters and the cut.
     fn method_section(&mut self, ui: &mut egui::Ui) {
         ui.heading("Method");
         let mut changed = self.methods.method_list(ui);
@@ -62,7 +69,7 @@ impl StudioApp {
             .map(|m| m.triangles.len());
         match self.methods.method {
             Method::EdgeCollapse => {
-                changed |= self.methods.edge_collapse.ui(ui, input_triangles);
+                changed |= self.methods.edge_collapse.ui(ui);
             }
             Method::Voxel => {
                 let volume = self.current.as_ref().and_then(|c| c.volume);
@@ -86,23 +93,32 @@ impl StudioApp {
                 changed |= self.methods.merge_tree.ui(ui).0;
             }
         }
-        // The threshold only where it chooses the cut: a hierarchy of one
-        // level has none to choose, and a knob may choose instead.
-        let controls = self.result.as_ref().map(|b| b.live.controls());
-        if let Some(controls) = controls.filter(|c| c.has_levels) {
-            ui.add_space(4.0);
-            ui.label("Cut").on_hover_text(
-                "The built hierarchy is cut live for the camera: no rebuild needed.",
-            );
-            match controls.overridden_by {
-                None => {
-                    self.methods.threshold.ui(ui);
-                }
-                Some(knob) => {
-                    ui.weak(crate::panels::threshold::overridden(knob));
-                }
-            }
-        }
+        // The cut: its threshold (or, for edge collapse, a budget as the
+        // threshold's unit), disabled saying why where it chooses nothing;
+        // before a build, what the chosen method's cut will read.
+        let controls = match &self.result {
+            Some(built) => built.live.controls(),
+            None => Controls {
+                knobs: match self.methods.method {
+                    Method::EdgeCollapse => &[Knob::CollapseTarget],
+                    _ => &[],
+                },
+                overridden_by: None,
+                has_levels: true,
+            },
+        };
+        ui.add_space(4.0);
+        ui.label("Cut")
+            .on_hover_text("The built hierarchy is cut live for the camera: no rebuild needed.");
+        let collapse = controls
+            .knobs
+            .contains(&Knob::CollapseTarget)
+            .then_some((&mut self.methods.edge_collapse, input_triangles));
+        // Run-time settings re-cut a result; before the first build they
+        // start it (with auto rebuild).
+        let cut_changed =
+            crate::panels::threshold::cut_ui(ui, &mut self.methods.threshold, collapse, &controls);
+        changed |= cut_changed && self.result.is_none();
         ui.add_space(4.0);
         let auto = ui
             .checkbox(&mut self.methods.auto_rebuild, "Auto rebuild")
@@ -110,6 +126,11 @@ impl StudioApp {
         if changed || (auto.changed() && self.methods.auto_rebuild && self.result_is_stale()) {
             self.parameters_changed();
         }
+    }
+
+    /// Build, Export and Save hierarchy, and why a build cannot start or
+    /// is out of date.
+    fn build_bar(&mut self, ui: &mut egui::Ui) {
         let input = self.input_check();
         let can_build = matches!(input, Some(Ok(())));
         ui.horizontal(|ui| {

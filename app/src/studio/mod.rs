@@ -365,9 +365,7 @@ impl StudioApp {
             .show(ui, |ui| self.status_panel(ui));
         egui::Panel::left("model")
             .default_size(250.0)
-            .show(ui, |ui| {
-                egui::ScrollArea::vertical().show(ui, |ui| self.left_panel(ui));
-            });
+            .show(ui, |ui| self.left_panel(ui));
         egui::Panel::right("inspector")
             .default_size(260.0)
             .show(ui, |ui| {

@@ -29,13 +29,12 @@ impl Default for Criteria {
 }
 
 /// What chooses an edge collapse's prefix instead of the view's tolerance
-/// (the studio's ratio / triangles / error target).
+/// (the studio's ratio and triangle budgets; an error target is the
+/// tolerance itself).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum PrefixTarget {
     /// The first prefix with at most this many triangles.
     Triangles(usize),
-    /// The coarsest prefix within this fraction of the diagonal.
-    RelativeError(f32),
 }
 
 /// Every method's run-time knobs.

@@ -346,7 +346,6 @@ impl ProgressiveCut {
         let p = &self.progressive;
         match self.target {
             Some(PrefixTarget::Triangles(n)) => p.prefix_for_triangles(n),
-            Some(PrefixTarget::RelativeError(f)) => p.prefix_within(view, Tolerance::Relative(f)),
             None => p.prefix_within(view, tolerance),
         }
     }
