@@ -47,7 +47,9 @@ impl StudioApp {
         }
         // A chain row or the switch preview, when one is asked for.
         if self.view.shows_lod()
-            && let Some(scene) = self.chain.scene(self.viewport.camera.distance)
+            && let Some(scene) = self
+                .chain
+                .scene(self.viewport.camera.distance, self.wireframe)
         {
             self.viewport.swap_scene(&scene);
             return;

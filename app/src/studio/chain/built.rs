@@ -19,11 +19,25 @@ pub struct BuiltChain {
     pub chain: Arc<Chain>,
     /// One scene per LOD, made on the worker.
     pub(super) scenes: Vec<Arc<Scene>>,
+    /// The same with their wireframes, made the first time one is shown.
+    pub(super) wire_scenes: Vec<std::sync::OnceLock<Arc<Scene>>>,
     /// Per recipe row: its LOD and its table cells.
     pub(super) figures: Vec<RowFigures>,
 }
 
 impl BuiltChain {
+    /// LOD `k`'s scene, with its wireframe when asked.
+    pub(super) fn scene(&self, k: usize, wireframe: bool) -> Option<Arc<Scene>> {
+        let scene = self.scenes.get(k)?;
+        if !wireframe {
+            return Some(Arc::clone(scene));
+        }
+        let wire = self.wire_scenes.get(k)?.get_or_init(|| {
+            Arc::new(Scene::clone(scene).with_wireframe(&self.chain.lods[k].set.mesh))
+        });
+        Some(Arc::clone(wire))
+    }
+
     /// The recipe it was built with.
     pub fn recipe(&self) -> &Recipe {
         &self.chain.recipe
@@ -58,6 +72,7 @@ impl BuiltChain {
             .collect();
         let figures = figures(&chain);
         BuiltChain {
+            wire_scenes: chain.lods.iter().map(|_| Default::default()).collect(),
             chain: Arc::new(chain),
             scenes,
             figures,

@@ -27,9 +27,13 @@ pub struct LodDifference {
     pub image: Texture,
 }
 
-/// The viewport's camera, then the fixed views around `original`.
+/// The viewport's direction framing `original` (never from wherever a
+/// dolly, a zoom or the switch preview left the camera: a LOD seen from far
+/// differs by nothing), then the fixed views around it.
 pub(super) fn cameras(camera: Camera, original: &Scene) -> Vec<Camera> {
-    let mut cameras = vec![camera];
+    let mut framing = camera;
+    framing.frame(original.sphere(), SIZE[0] as f32 / SIZE[1] as f32);
+    let mut cameras = vec![framing];
     cameras.extend(Camera::views_around(original.sphere(), VIEWS, 1.0));
     cameras
 }
@@ -62,4 +66,30 @@ pub(super) fn measure(
         });
     }
     Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Wherever the dolly left the camera, the difference is measured from
+    /// the same framing view in its direction (issue 46).
+    #[test]
+    fn the_difference_is_measured_from_the_framing_camera() {
+        let original = Scene::from_mesh(&lodstudio_core::builtins::torus(1.0, 0.3, 24, 12));
+        let mut near = Camera::default();
+        near.frame(original.sphere(), 1.6);
+        let mut far = near;
+        far.distance *= 60.0;
+        let (a, b) = (cameras(near, &original), cameras(far, &original));
+        assert_eq!(a.len(), 1 + VIEWS);
+        assert!(a[0].same_view(&b[0]), "{:?} vs {:?}", a[0], b[0]);
+        assert!(a[0].distance < 10.0 * original.sphere().radius);
+        let mut turned = near;
+        turned.orbit(glam::Vec2::new(80.0, 0.0));
+        assert!(
+            !cameras(turned, &original)[0].same_view(&a[0]),
+            "its direction kept"
+        );
+    }
 }

@@ -69,10 +69,11 @@ impl ChainState {
         }
     }
 
-    /// The scene a chain row or the switch preview shows, if any.
-    pub fn scene(&self, camera_distance: f32) -> Option<Arc<Scene>> {
+    /// The scene a chain row or the switch preview shows, if any, with its
+    /// wireframe when the view asks for one.
+    pub fn scene(&self, camera_distance: f32, wireframe: bool) -> Option<Arc<Scene>> {
         let k = self.shown_lod(camera_distance)?;
-        self.built.as_ref()?.scenes.get(k).cloned()
+        self.built.as_ref()?.scene(k, wireframe)
     }
 
     /// Starts the dolly at egui time `now`: the preview, from near to far.

@@ -114,7 +114,7 @@ fn forgetting_drops_the_chain_its_preview_and_a_running_build() {
     state.forget();
     assert!(state.built().is_none());
     assert!(state.switch_lod(camera.distance).is_none());
-    assert!(state.scene(camera.distance).is_none());
+    assert!(state.scene(camera.distance, false).is_none());
 
     let ctx = egui::Context::default();
     assert!(state.start_build(Some(torus()), &ctx).is_none());
@@ -135,10 +135,13 @@ fn changed_rows_leave_the_chain_built_but_stale() {
     let mut view = View::Original;
     state.select_row(1, &mut view);
     assert_eq!(view, View::Simplified);
-    let shown = state.scene(0.0).expect("the row's LOD");
+    let shown = state.scene(0.0, false).expect("the row's LOD");
     assert!(Arc::ptr_eq(&shown, &state.built().unwrap().scenes[1]));
     state.set_recipe(recipe("simplify:2%"));
-    assert!(state.scene(0.0).is_none(), "row 1 is another row now");
+    assert!(
+        state.scene(0.0, false).is_none(),
+        "row 1 is another row now"
+    );
     assert!(Arc::ptr_eq(&chain_of(&state), &before));
     assert!(state.fresh().is_none());
     let refused = state.export(Target::File("unused.glb".into()));
@@ -218,15 +221,32 @@ fn the_switch_distance_picks_the_lod_whose_coverage_range_holds_it() {
         let (shown, name) = state.switch_lod(camera.distance).expect("a preview");
         assert_eq!(shown, k, "coverage {c} in {:?}", chain.coverages);
         assert!(name.starts_with(&format!("LOD{k} simplify:")), "{name}");
-        let scene = state.scene(camera.distance).expect("a scene");
+        let scene = state.scene(camera.distance, false).expect("a scene");
         assert!(Arc::ptr_eq(&scene, &state.built().unwrap().scenes[k]));
+        // The wireframe draws every edge of the LOD shown once, over it.
+        let wire = state.scene(camera.distance, true).expect("a scene");
+        let lod = &chain.lods[k].set.mesh;
+        let mut edges: Vec<(u32, u32)> = lod
+            .triangles
+            .iter()
+            .flat_map(|&[a, b, c]| [(a, b), (b, c), (c, a)])
+            .map(|(a, b)| (a.min(b), a.max(b)))
+            .collect();
+        edges.sort_unstable();
+        edges.dedup();
+        assert_eq!(
+            wire.line_count(),
+            scene.line_count() + edges.len(),
+            "LOD{k}"
+        );
+        assert_eq!(wire.triangle_count(), scene.triangle_count());
     }
     let beyond = distance_at_coverage(0.5 * chain.coverages[2]);
     state.set_switch_distance(Some(beyond), &mut camera, &mut view);
     assert_eq!(state.switch_lod(camera.distance).unwrap().0, 2);
     state.set_switch_distance(None, &mut camera, &mut view);
     assert!(state.switch_lod(camera.distance).is_none());
-    assert!(state.scene(camera.distance).is_none());
+    assert!(state.scene(camera.distance, false).is_none());
 }
 
 /// The dolly takes the camera from near to far through every LOD in order,
