@@ -343,6 +343,10 @@ fn the_truck_chain_is_drawn_textured_row_by_row() {
     let original = colourful(&viewport_image(&mut harness, "truck-chain-original"));
     let recipe = Recipe::new(parse_lods("simplify:0.5%,simplify:2%,amg:15%", None).unwrap());
     harness.state_mut().set_chain_recipe(recipe);
+    // A method's result too: its live cut is not what a chain row shows.
+    harness.state_mut().build();
+    wait_while(&mut harness, "building", StudioApp::is_building);
+    assert!(harness.query_by_label("cut triangles").is_some());
     built_chain(&mut harness);
     for row in [0, 1] {
         harness
@@ -363,6 +367,16 @@ fn the_truck_chain_is_drawn_textured_row_by_row() {
             Some(lod),
             "row {row} is drawn"
         );
+        // The inspector describes what is drawn: the LOD, not a live cut.
+        assert!(
+            harness.query_by_label("cut triangles").is_none(),
+            "row {row}: no live cut described"
+        );
+        let shown = harness.get_by_label("LOD triangles");
+        let value = harness
+            .get_all_by_label(&lod.to_string())
+            .any(|n| n.rect().center().y == shown.rect().center().y);
+        assert!(value, "row {row}: the inspector says {lod} triangles");
         let textured = colourful(&viewport_image(
             &mut harness,
             &format!("truck-chain-lod{row}"),

@@ -62,6 +62,12 @@ impl StudioApp {
                 let live = &built.live;
                 ui.separator();
                 ui.label(egui::RichText::new("Cut").strong());
+                let distance = self.viewport.camera.distance;
+                if self.view.shows_lod() && self.chain.shown_lod(distance).is_some() {
+                    ui.weak("The viewport shows a chain LOD: see the LOD chain below.");
+                    chain::ui::inspector_ui(&self.chain, ui, distance);
+                    return;
+                }
                 let st = live.stats;
                 let pixels = self.viewport.core_view().pixels(
                     st.error_bound,

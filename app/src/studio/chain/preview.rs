@@ -61,7 +61,7 @@ impl ChainState {
     }
 
     /// The LOD on screen: the switch preview's, else the clicked row's.
-    pub(super) fn shown_lod(&self, camera_distance: f32) -> Option<usize> {
+    pub fn shown_lod(&self, camera_distance: f32) -> Option<usize> {
         match (self.switch_lod(camera_distance), self.selected) {
             (Some((k, _)), _) => Some(k),
             (None, Some(row)) => Some(self.built.as_ref()?.figures.get(row)?.lod),

@@ -341,6 +341,25 @@ pub fn inspector_ui(state: &ChainState, ui: &mut egui::Ui, camera_distance: f32)
                 ui.end_row();
             };
             row("LODs", chain.lods.len().to_string(), "LODs of the last chain built (rows met by one cut share it).");
+            // What the viewport draws when it draws a chain LOD: the inspector
+            // describes exactly that, not the method's live cut.
+            if let Some(k) = state.shown_lod(camera_distance) {
+                let set = &chain.lods[k].set;
+                row("shown", format!("LOD{k} {}", chain.lods[k].labels.join(",")), "The chain LOD the viewport draws (a clicked row, or the switch preview).");
+                row("LOD triangles", set.mesh.triangles.len().to_string(), "Triangles of the LOD shown.");
+                row("LOD points", set.points.len().to_string(), "Point primitives of the LOD shown.");
+                row("LOD splats", set.splats.len().to_string(), "Textured domain primitives of the LOD shown.");
+                row(
+                    "LOD bound",
+                    format!(
+                        "{} ({:.3} %, {})",
+                        crate::build::length(set.error_bound),
+                        100.0 * set.error_bound / chain.diagonal.max(f32::MIN_POSITIVE),
+                        set.error_bound_kind.name()
+                    ),
+                    "The LOD's error bound in object space (certified, or AMG's estimate).",
+                );
+            }
             row(
                 "switch tolerance",
                 format!("{} px on {} px", chain.recipe.pixels, chain.recipe.viewport_height),
