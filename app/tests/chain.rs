@@ -260,12 +260,8 @@ fn the_panel_edits_rows_and_refuses_bad_recipes() {
         .collect();
     assert_eq!(
         labels,
-        [
-            "simplify:0.5",
-            "simplify:0.25",
-            "simplify:0.125",
-            "simplify:0.0625"
-        ]
+        ["source", "simplify:0.5", "simplify:0.25", "simplify:0.125"],
+        "LOD0 is the source (issue 46)"
     );
     built_chain(&mut harness);
     let chain = &harness.state().built_chain().unwrap().chain;
@@ -275,6 +271,9 @@ fn the_panel_edits_rows_and_refuses_bad_recipes() {
         .map(|l| l.set.mesh.triangles.len())
         .collect();
     assert!(triangles.windows(2).all(|w| w[1] < w[0]), "{triangles:?}");
+    let source = harness.state().summary().map(|s| s.triangles);
+    assert_eq!(Some(triangles[0]), source, "LOD0 has every triangle");
+    assert_eq!(chain.lods[0].bound(), 0.0);
 
     let bad = tmp.path().join("bad-recipe.json");
     std::fs::write(

@@ -14,7 +14,8 @@ pub const MAX_ROWS: usize = 12;
 
 const TOLERANCE_HINT: &str = "% of the bounding-box diagonal, pixels on the recipe's viewport \
     height, or a ratio of the input's primitives. The row's LOD is the coarsest cut within an \
-    error, the finest within a ratio; LODs are ordered by certified bound.";
+    error, the finest within a ratio; LODs are ordered by certified bound. \"source\" is the \
+    input itself (bound 0), LOD0 as engines expect it.";
 
 /// What a built row shows in the table, formatted once when the chain is built.
 #[derive(Debug, Clone, PartialEq)]
@@ -182,9 +183,13 @@ impl ChainSettings {
                 rule_name,
             );
             choose(ui, &mut a.method, Method::ALL, Method::tag);
-            let first = match a.rule {
-                AutoRule::HalveTriangles => "LOD0 ratio",
-                AutoRule::DoublePixels => "LOD0 px",
+            ui.checkbox(&mut a.source, "source first")
+                .on_hover_text("LOD0 is the source itself (bound 0), as engines expect; the rule's rows follow it.");
+            let first = match (a.rule, a.source) {
+                (AutoRule::HalveTriangles, false) => "LOD0 ratio",
+                (AutoRule::HalveTriangles, true) => "LOD1 ratio",
+                (AutoRule::DoublePixels, false) => "LOD0 px",
+                (AutoRule::DoublePixels, true) => "LOD1 px",
             };
             let range = a.first_range();
             ui.add(
@@ -249,6 +254,7 @@ fn coarser(row: &Row) -> Row {
         RowTolerance::Percent(p) => RowTolerance::Percent((2.0 * p).min(100.0)),
         RowTolerance::Pixels(p) => RowTolerance::Pixels(2.0 * p),
         RowTolerance::Ratio(r) => RowTolerance::Ratio((0.5 * r).max(1e-4)),
+        RowTolerance::Source => RowTolerance::Ratio(0.5),
     };
     Row {
         tolerance,
@@ -272,6 +278,7 @@ fn tolerance_ui(ui: &mut egui::Ui, row: &mut Row) {
             RowTolerance::Percent(v) => (v, 0),
             RowTolerance::Pixels(v) => (v, 1),
             RowTolerance::Ratio(v) => (v, 2),
+            RowTolerance::Source => (1.0, 3),
         };
         // Dragging stays in these ranges; a value from a recipe outside them
         // (any the recipe accepts) is shown as it is, not clamped.
@@ -280,17 +287,22 @@ fn tolerance_ui(ui: &mut egui::Ui, row: &mut Row) {
             1 => 0.0..=10_000.0,
             _ => 1e-6..=1.0,
         };
-        ui.add(
-            egui::DragValue::new(&mut value)
-                .range(range)
-                .clamp_existing_to_range(false)
-                .speed(0.01)
-                .max_decimals(6),
-        )
-        .on_hover_text(TOLERANCE_HINT);
+        if unit != 3 {
+            ui.add(
+                egui::DragValue::new(&mut value)
+                    .range(range)
+                    .clamp_existing_to_range(false)
+                    .speed(0.01)
+                    .max_decimals(6),
+            )
+            .on_hover_text(TOLERANCE_HINT);
+        }
         let mut new_unit = unit;
-        choose(ui, &mut new_unit, 0..3, |u| ["%", "px", "ratio"][u]);
+        choose(ui, &mut new_unit, 0..4, |u| {
+            ["%", "px", "ratio", "source"][u]
+        });
         row.tolerance = match (new_unit, new_unit == unit) {
+            (3, _) => RowTolerance::Source,
             (0, true) => RowTolerance::Percent(value),
             (1, true) => RowTolerance::Pixels(value),
             (_, true) => RowTolerance::Ratio(value),

@@ -41,6 +41,8 @@ pub struct AutoChain {
     pub rows: usize,
     /// Close the chain with an AMG splat impostor.
     pub impostor: bool,
+    /// LOD0 is the source itself (engines expect it), the rule's rows after it.
+    pub source: bool,
 }
 
 impl Default for AutoChain {
@@ -51,6 +53,7 @@ impl Default for AutoChain {
             first: 0.5,
             rows: 4,
             impostor: false,
+            source: true,
         }
     }
 }
@@ -79,20 +82,23 @@ impl AutoChain {
         s
     }
 
-    /// The rows of the rule: LOD0 at `first`, each next halved or doubled.
+    /// The rows of the rule: the source as LOD0 (when asked), then `first`,
+    /// each next halved or doubled.
     pub fn make(&self) -> Vec<Row> {
         let s = self.sanitized();
-        let own = s.rows - usize::from(s.impostor);
-        let mut rows: Vec<Row> = (0..own)
-            .map(|i| {
-                let step = 2f32.powi(i as i32);
-                let tolerance = match s.rule {
-                    AutoRule::HalveTriangles => RowTolerance::Ratio(s.first / step),
-                    AutoRule::DoublePixels => RowTolerance::Pixels(s.first * step),
-                };
-                Row::new(s.method, tolerance)
-            })
-            .collect();
+        let own = s.rows - usize::from(s.impostor) - usize::from(s.source);
+        let source = s
+            .source
+            .then(|| Row::new(Method::EdgeCollapse, RowTolerance::Source));
+        let mut rows: Vec<Row> = source.into_iter().collect();
+        rows.extend((0..own).map(|i| {
+            let step = 2f32.powi(i as i32);
+            let tolerance = match s.rule {
+                AutoRule::HalveTriangles => RowTolerance::Ratio(s.first / step),
+                AutoRule::DoublePixels => RowTolerance::Pixels(s.first * step),
+            };
+            Row::new(s.method, tolerance)
+        }));
         if s.impostor {
             rows.push(Row::new(
                 Method::Amg,
@@ -113,8 +119,8 @@ pub struct ChainSettings {
 
 impl Default for ChainSettings {
     fn default() -> Self {
-        let rows =
-            parse_lods("simplify:0.5%,simplify:2%,amg:15%", None).expect("the default rows parse");
+        let rows = parse_lods("source,simplify:0.5%,simplify:2%,amg:15%", None)
+            .expect("the default rows parse");
         ChainSettings {
             recipe: Recipe::new(rows),
             auto: AutoChain::default(),
@@ -152,7 +158,8 @@ mod tests {
         let labels: Vec<String> = rows.iter().map(Row::label).collect();
         assert_eq!(
             labels,
-            ["simplify:0.5", "simplify:0.25", "simplify:0.125", "amg:15%"]
+            ["source", "simplify:0.5", "simplify:0.25", "amg:15%"],
+            "LOD0 is the source by default"
         );
         let double = AutoChain {
             rule: AutoRule::DoublePixels,
@@ -160,6 +167,7 @@ mod tests {
             first: 1.0,
             rows: 3,
             impostor: false,
+            source: false,
         };
         let labels: Vec<String> = double.make().iter().map(Row::label).collect();
         assert_eq!(labels, ["hybrid:1px", "hybrid:2px", "hybrid:4px"]);

@@ -140,8 +140,17 @@ pub fn build_chain(
             continue;
         }
         let row = &recipe.rows[first];
+        if row.tolerance == RowTolerance::Source {
+            done[first] = true;
+            lods.push(source_lod(recipe, first, mesh)?);
+            continue;
+        }
         let group: Vec<usize> = (first..recipe.rows.len())
-            .filter(|&j| !done[j] && recipe.rows[j].same_hierarchy(row))
+            .filter(|&j| {
+                !done[j]
+                    && recipe.rows[j].tolerance != RowTolerance::Source
+                    && recipe.rows[j].same_hierarchy(row)
+            })
             .collect();
         for &j in &group {
             done[j] = true;
@@ -210,6 +219,26 @@ pub fn build_chain(
     })
 }
 
+/// A source row's LOD: the mesh as loaded, its bound 0 (nothing simplified).
+fn source_lod(recipe: &Recipe, j: usize, mesh: Option<&TriMesh>) -> Result<ChainLod, ChainError> {
+    let mesh = mesh.ok_or_else(|| {
+        ChainError::BadInput(format!(
+            "rows[{j}] (source) needs a triangle mesh, not a point set"
+        ))
+    })?;
+    Ok(ChainLod {
+        rows: vec![j],
+        labels: vec![recipe.rows[j].label()],
+        method: recipe.rows[j].method,
+        set: DrawSet {
+            mesh: mesh.clone(),
+            error_bound: 0.0,
+            ..Default::default()
+        },
+        build_seconds: 0.0,
+    })
+}
+
 /// Edge-collapse rows: one progressive collapse to all their targets.
 fn simplify_rows(
     recipe: &Recipe,
@@ -226,6 +255,7 @@ fn simplify_rows(
                 RowTolerance::Percent(p) => Target::RelativeError(p / 100.0),
                 RowTolerance::Pixels(p) => Target::Error(pixels_to_error(p)),
                 RowTolerance::Ratio(r) => Target::Ratio(r),
+                RowTolerance::Source => Target::Ratio(1.0),
             };
             match target {
                 // A finite tolerance can still overflow in object space.
@@ -278,6 +308,8 @@ fn hierarchy_rows(
                 RowTolerance::Ratio(r) => {
                     ChainItem::Primitives((r as f64 * input as f64).ceil() as usize)
                 }
+                // Never grouped (`source_lod`); as a budget, the whole input.
+                RowTolerance::Source => ChainItem::Primitives(input),
             };
             let set = choose(hierarchy.as_mut(), &view, wanted);
             if let ChainItem::Error(f) = wanted
@@ -366,6 +398,33 @@ mod tests {
         );
         let b = build_chain(&torus(), &recipe, &Progress::new()).unwrap();
         assert_eq!(a.glb(), b.glb());
+    }
+
+    /// A source row is LOD0: the mesh as loaded, bound 0, whatever the
+    /// other rows; on a point set it is refused by row.
+    #[test]
+    fn a_source_row_is_the_input_itself() {
+        let rows = parse_lods("simplify:0.5,source,hybrid:1%", None).unwrap();
+        assert_eq!(rows[1].tolerance, RowTolerance::Source);
+        assert_eq!(rows[1].label(), "source");
+        let recipe = Recipe::new(rows);
+        let model = torus();
+        let chain = build_chain(&model, &recipe, &Progress::new()).unwrap();
+        let Model::Mesh(mesh) = &model else {
+            unreachable!()
+        };
+        assert_eq!(chain.lods.len(), 3);
+        assert_eq!(chain.lods[0].rows, [1], "the source is LOD0");
+        assert_eq!(chain.lods[0].set.mesh, *mesh);
+        assert_eq!(chain.lods[0].bound(), 0.0);
+        assert!(chain.lods[1].bound() > 0.0);
+        // The recipe file round-trips it.
+        let back = Recipe::from_json(&recipe.to_json()).unwrap();
+        assert_eq!(back.rows[1].tolerance, RowTolerance::Source);
+        let points = Model::Points(crate::amg::point_set(&model).unwrap());
+        let only = Recipe::new(parse_lods("source,amg:20%", None).unwrap());
+        let e = build_chain(&points, &only, &Progress::new()).unwrap_err();
+        assert!(e.to_string().starts_with("rows[0] (source)"), "{e}");
     }
 
     /// Rows a model cannot answer are refused by row: a mesh method on points,

@@ -167,7 +167,10 @@ impl Row {
 
     /// The row as `--lods` writes it: "hybrid:2%".
     pub fn label(&self) -> String {
-        format!("{}:{}", self.method.tag(), self.tolerance)
+        match self.tolerance {
+            RowTolerance::Source => self.tolerance.to_string(),
+            t => format!("{}:{t}", self.method.tag()),
+        }
     }
 
     /// Rows that build the same hierarchy (same method, same parameters).
@@ -186,6 +189,9 @@ pub enum RowTolerance {
     Pixels(f32),
     /// Fraction of the input's primitives ("0.25").
     Ratio(f32),
+    /// The input itself ("source"): LOD0 as engines expect it, the mesh as
+    /// loaded, with a bound of 0.
+    Source,
 }
 
 impl std::fmt::Display for RowTolerance {
@@ -194,6 +200,7 @@ impl std::fmt::Display for RowTolerance {
             RowTolerance::Percent(p) => write!(f, "{p}%"),
             RowTolerance::Pixels(p) => write!(f, "{p}px"),
             RowTolerance::Ratio(r) => write!(f, "{r}"),
+            RowTolerance::Source => write!(f, "source"),
         }
     }
 }
@@ -202,6 +209,9 @@ impl std::str::FromStr for RowTolerance {
     type Err = String;
     fn from_str(item: &str) -> Result<Self, String> {
         let item = item.trim();
+        if item == "source" {
+            return Ok(RowTolerance::Source);
+        }
         let number = |s: &str| {
             s.trim()
                 .parse::<f32>()
@@ -232,7 +242,7 @@ impl TryFrom<String> for RowTolerance {
     type Error = String;
     fn try_from(s: String) -> Result<Self, String> {
         s.parse()
-            .map_err(|e| format!("{e} (expected 1%, 8px or a triangle ratio 0.25)"))
+            .map_err(|e| format!("{e} (expected 1%, 8px, a triangle ratio 0.25 or source)"))
     }
 }
 
@@ -479,6 +489,7 @@ impl Row {
         let value = match self.tolerance {
             RowTolerance::Percent(v) | RowTolerance::Pixels(v) => v.is_finite() && v >= 0.0,
             RowTolerance::Ratio(r) => r > 0.0 && r <= 1.0,
+            RowTolerance::Source => true,
         };
         if !value {
             return Err(("tolerance", format!("{} is out of range", self.tolerance)));
@@ -496,7 +507,7 @@ impl Row {
 pub fn parse_lods(list: &str, method: Option<Method>) -> Result<Vec<Row>, String> {
     let bad = |item: &str, why: &str| {
         format!(
-            "--lods: {} {why} (expected items like 1%, 8px, a triangle ratio 0.25, or METHOD:1%)",
+            "--lods: {} {why} (expected items like source, 1%, 8px, a triangle ratio 0.25, or METHOD:1%)",
             crate::io::confine::excerpt(item)
         )
     };
@@ -508,6 +519,11 @@ pub fn parse_lods(list: &str, method: Option<Method>) -> Result<Vec<Row>, String
     for item in list.split(',').map(str::trim) {
         if item.is_empty() {
             return Err(bad(list, "has an empty item"));
+        }
+        if item == "source" {
+            // The input itself: no method builds it.
+            rows.push(Row::new(Method::EdgeCollapse, RowTolerance::Source));
+            continue;
         }
         let (m, tolerance) = match item.split_once(':') {
             Some((tag, t)) => {
@@ -527,7 +543,7 @@ pub fn parse_lods(list: &str, method: Option<Method>) -> Result<Vec<Row>, String
         };
         let tolerance = tolerance.parse::<RowTolerance>().map_err(|e| {
             format!(
-                "--lods: {} (expected items like 1%, 8px, a triangle ratio 0.25, or METHOD:1%)",
+                "--lods: {} (expected items like source, 1%, 8px, a triangle ratio 0.25, or METHOD:1%)",
                 crate::io::confine::shorten(&e)
             )
         })?;
