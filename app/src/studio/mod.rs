@@ -376,9 +376,7 @@ impl StudioApp {
             egui::Panel::bottom("chain")
                 .resizable(true)
                 .default_size(240.0)
-                .show(ui, |ui| {
-                    egui::ScrollArea::vertical().show(ui, |ui| self.chain_panel(ui));
-                });
+                .show(ui, |ui| self.chain_panel(ui));
             self.view_bar(ui);
             self.update_cut();
             self.sync_view();

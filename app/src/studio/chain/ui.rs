@@ -118,31 +118,36 @@ pub fn panel_ui(
     {
         state.cancel_measuring();
     }
-    ui.horizontal(|ui| {
-        if state.settings.auto_ui(ui) {
-            state.selected = None;
-        }
-    });
-    switch_preview_ui(state, ui, camera, view);
-    // Solid scroll bars: floating ones would lie over the last row.
-    ui.style_mut().spacing.scroll = egui::style::ScrollStyle::solid();
-    egui::ScrollArea::horizontal().show(ui, |ui| {
-        let figures = state
-            .built
-            .as_ref()
-            .filter(|b| b.recipe() == &state.settings.recipe)
-            .map(|b| b.figures.as_slice());
-        let response = state.settings.rows_ui(ui, figures, state.selected);
-        if let Some(row) = response.clicked {
-            state.select_row(row, view);
-        }
-        if response.changed {
-            state.selected = None;
-        }
-    });
-    if state.settings.add_row_ui(ui) {
-        state.selected = None;
-    }
+    // The toolbar above stays in view; the rows scroll under it.
+    egui::ScrollArea::vertical()
+        .id_salt("chain rows")
+        .show(ui, |ui| {
+            ui.horizontal(|ui| {
+                if state.settings.auto_ui(ui) {
+                    state.selected = None;
+                }
+            });
+            switch_preview_ui(state, ui, camera, view);
+            // Solid scroll bars: floating ones would lie over the last row.
+            ui.style_mut().spacing.scroll = egui::style::ScrollStyle::solid();
+            egui::ScrollArea::horizontal().show(ui, |ui| {
+                let figures = state
+                    .built
+                    .as_ref()
+                    .filter(|b| b.recipe() == &state.settings.recipe)
+                    .map(|b| b.figures.as_slice());
+                let response = state.settings.rows_ui(ui, figures, state.selected);
+                if let Some(row) = response.clicked {
+                    state.select_row(row, view);
+                }
+                if response.changed {
+                    state.selected = None;
+                }
+            });
+            if state.settings.add_row_ui(ui) {
+                state.selected = None;
+            }
+        });
     requests
 }
 
