@@ -42,12 +42,17 @@ use crate::settings::MethodSettings;
 use crate::settings::voxel::VolumeGrid;
 
 /// How often the UI refreshes the progress bar while a worker runs (input
-/// still draws at once; the worker also wakes the UI the moment it ends).
+/// still draws at once; the worker also wakes the UI the moment it ends);
+/// a build running longer than [`LONG_BUILD`] refreshes at [`LONG_POLL_INTERVAL`].
 /// Under a software renderer a frame costs ~55 ms of CPU, so polling at 20 Hz
 /// took both cores from the build (horse edge collapse 26.6 s in the studio
 /// against 4.65 s on the CLI); at 4 Hz it takes 5.2–5.6 s
 /// (benchmarks/studio.md, "Builds against the CLI").
 const POLL_INTERVAL: Duration = Duration::from_millis(250);
+/// Past this, a build's progress moves slowly: a frame a second shows it,
+/// and each frame less gives the build ~55 ms of CPU under lavapipe.
+const LONG_BUILD: Duration = Duration::from_secs(2);
+const LONG_POLL_INTERVAL: Duration = Duration::from_secs(1);
 
 /// The model on screen.
 struct Current {
@@ -399,14 +404,20 @@ impl StudioApp {
         chain::ui::difference_window(&mut self.chain, &ctx, self.viewport.camera.distance);
         self.file_dialog.ui(&ctx);
         drop_hint(&ctx);
-        if self.job.is_some()
+        let quick = self.job.is_some()
             || self.picker.is_some()
-            || self.build.is_some()
             || self.export.is_some()
-            || self.is_building_chain()
-            || self.is_measuring_difference()
-        {
-            ctx.request_repaint_after(POLL_INTERVAL);
+            || self.is_measuring_difference();
+        let builds = [
+            self.build.as_ref().map(Job::elapsed),
+            self.chain.building_for(),
+        ];
+        let long = builds.iter().flatten().all(|t| *t > LONG_BUILD);
+        match builds.iter().flatten().next() {
+            _ if quick => ctx.request_repaint_after(POLL_INTERVAL),
+            Some(_) if long => ctx.request_repaint_after(LONG_POLL_INTERVAL),
+            Some(_) => ctx.request_repaint_after(POLL_INTERVAL),
+            None => {}
         }
     }
 

@@ -117,6 +117,11 @@ impl ChainState {
         ChainEvent::BuildStopped
     }
 
+    /// How long the running build has run, if one runs.
+    pub fn building_for(&self) -> Option<std::time::Duration> {
+        self.job.as_ref().map(Job::elapsed)
+    }
+
     pub fn is_building(&self) -> bool {
         self.job.is_some()
     }
