@@ -93,7 +93,7 @@ fn a_mixed_chain_builds_previews_and_exports_as_the_cli_does() {
     assert!(!chain.lods[2].set.splats.is_empty());
     // The table names each row's LOD.
     harness.run();
-    for label in ["row 0: LOD0", "row 1: LOD1", "row 2: LOD2"] {
+    for label in ["0: LOD0", "1: LOD1", "2: LOD2"] {
         assert!(harness.query_by_label(label).is_some(), "{label}");
     }
 
@@ -238,13 +238,14 @@ fn the_panel_edits_rows_and_refuses_bad_recipes() {
     click(&mut harness, "Add row");
     harness.run();
     assert_eq!(rows(&harness), before + 1);
-    harness
-        .get_all_by_label("Duplicate")
-        .next()
-        .unwrap()
-        .click();
+    // Each row's moves are in its Edit menu.
+    click(&mut harness, "Edit");
+    harness.run();
+    click(&mut harness, "Duplicate");
     harness.run();
     assert_eq!(rows(&harness), before + 2);
+    click(&mut harness, "Edit");
+    harness.run();
     click(&mut harness, "Remove");
     harness.run();
     assert_eq!(rows(&harness), before + 1);
@@ -348,9 +349,7 @@ fn the_truck_chain_is_drawn_textured_row_by_row() {
     assert!(harness.query_by_label("cut triangles").is_some());
     built_chain(&mut harness);
     for row in [0, 1] {
-        harness
-            .get_by_label(&format!("row {row}: LOD{row}"))
-            .click();
+        harness.get_by_label(&format!("{row}: LOD{row}")).click();
         harness.run();
         let lod = harness.state().built_chain().unwrap().chain.lods[row]
             .set

@@ -36,7 +36,7 @@ pub const FIGURE_HEADS: [(&str, &str); 7] = [
     ("splats", "AMG splats of the row's LOD."),
     (
         "bound",
-        "Error bound in % of the diagonal: certified, or ~ for AMG's plane error.",
+        "Error bound in % of the diagonal: certified, or ~ for AMG's plane error (the inspector gives it in model units for the LOD shown).",
     ),
     (
         "px in",
@@ -88,8 +88,8 @@ impl ChainSettings {
                 for (i, row) in self.recipe.rows.iter_mut().enumerate() {
                     let fig = figures.and_then(|f| f.get(i));
                     let name = match fig {
-                        Some(f) => format!("row {i}: LOD{}", f.lod),
-                        None => format!("row {i}"),
+                        Some(f) => format!("{i}: LOD{}", f.lod),
+                        None => format!("{i}"),
                     };
                     if ui
                         .selectable_label(selected == Some(i), name)
@@ -101,34 +101,32 @@ impl ChainSettings {
                     method_menu(ui, row);
                     tolerance_ui(ui, row);
                     parameters_ui(ui, row);
-                    ui.horizontal(|ui| {
-                        let small = |ui: &mut egui::Ui, text: &str, enabled: bool, hint: &str| {
-                            ui.add_enabled(enabled, egui::Button::new(text).small())
-                                .on_hover_text(hint)
-                                .clicked()
-                        };
-                        if small(ui, "Up", i > 0, "Move up") {
-                            action = Some((i, RowAction::Up));
+                    // The row's moves in one menu, so the table fits 1280 px.
+                    ui.menu_button("Edit", |ui| {
+                        for (text, enabled, what) in [
+                            ("Up", i > 0, RowAction::Up),
+                            ("Down", i + 1 < rows, RowAction::Down),
+                            ("Duplicate", rows < MAX_ROWS, RowAction::Duplicate),
+                            ("Remove", rows > 1, RowAction::Remove),
+                        ] {
+                            if ui.add_enabled(enabled, egui::Button::new(text)).clicked() {
+                                action = Some((i, what));
+                                ui.close();
+                            }
                         }
-                        if small(ui, "Down", i + 1 < rows, "Move down") {
-                            action = Some((i, RowAction::Down));
-                        }
-                        if small(ui, "Duplicate", rows < MAX_ROWS, "Duplicate this row") {
-                            action = Some((i, RowAction::Duplicate));
-                        }
-                        if small(ui, "Remove", rows > 1, "Remove this row") {
-                            action = Some((i, RowAction::Remove));
-                        }
-                    });
+                    })
+                    .response
+                    .on_hover_text("Move, duplicate or remove this row.");
                     match fig {
                         Some(f) => {
                             for (c, cell) in f.cells.iter().enumerate() {
+                                // Figures in monospace: columns keep their width.
                                 if c == 3 && f.estimate {
-                                    ui.label(format!("~{cell}")).on_hover_text(
+                                    ui.monospace(format!("~{cell}")).on_hover_text(
                                         "AMG's plane error: an estimate, not a certified bound",
                                     );
                                 } else {
-                                    ui.label(cell);
+                                    ui.monospace(cell);
                                 }
                             }
                         }

@@ -91,13 +91,9 @@ fn figures(chain: &Chain) -> Vec<RowFigures> {
             set.mesh.triangles.len().to_string(),
             set.points.len().to_string(),
             set.splats.len().to_string(),
-            format!(
-                "{} ({:.3}%)",
-                crate::build::length(lod.bound()),
-                100.0 * lod.bound() / chain.diagonal
-            ),
+            format!("{:.3}%", 100.0 * lod.bound() / chain.diagonal),
             format!("{:.2}", chain.pixels_at(k, c_in)),
-            format!("{c_out:.4} · {:.1} r", distance_at_coverage(c_out)),
+            format!("{c_out:.4} {:.1}r", distance_at_coverage(c_out)),
             format!("{:.2} s", lod.build_seconds),
         ];
         let estimate = set.error_bound_kind == lodstudio_core::lod::BoundKind::Estimate;
