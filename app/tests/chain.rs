@@ -152,6 +152,16 @@ fn a_mixed_chain_builds_previews_and_exports_as_the_cli_does() {
         harness.query_by_label("bound at switch").is_some(),
         "the inspector's row"
     );
+    // The viewport names the LOD drawn, its triangles and its screen size.
+    let overlay = format!(
+        "{} · {} triangles · screen size",
+        far.1,
+        chain.lods[2].set.mesh.triangles.len()
+    );
+    assert!(
+        harness.query_by_label_contains(&overlay).is_some(),
+        "the overlay says {overlay}"
+    );
     // For a human: the studio with the impostor previewed (target/tmp).
     let image = harness.render().expect("render the studio");
     save_ppm(

@@ -388,7 +388,14 @@ impl StudioApp {
             if self.view == View::SideBySide && self.has_lod() && self.preview.is_none() {
                 self.show_side_by_side(ui);
             } else {
-                self.viewport.show(ui);
+                let viewport = self.viewport.show(ui);
+                // During the switch preview: which LOD is drawn, over it.
+                if let Some(text) = self.chain.overlay(self.viewport.camera.distance) {
+                    egui::Area::new(egui::Id::unique("lod overlay"))
+                        .fixed_pos(viewport.rect.left_top() + egui::vec2(8.0, 8.0))
+                        .interactable(false)
+                        .show(ui.ctx(), |ui| ui.label(egui::RichText::new(text).strong()));
+                }
             }
             self.pick();
         });

@@ -60,6 +60,22 @@ impl ChainState {
         Some((k, format!("LOD{k} {}", chain.lods[k].labels.join(","))))
     }
 
+    /// What the viewport's overlay says during the switch preview: the LOD
+    /// drawn, its triangles and its screen size (the bounding sphere's height
+    /// over the viewport's, as engines give it).
+    pub fn overlay(&self, camera_distance: f32) -> Option<String> {
+        let (k, name) = self.switch_lod(camera_distance)?;
+        let r = self.radius()?;
+        let built = self.built.as_ref()?;
+        let c = coverage_at_distance(camera_distance / r);
+        let set = &built.chain.lods[k].set;
+        Some(format!(
+            "{name} · {} triangles · screen size {:.1} %",
+            set.mesh.triangles.len(),
+            100.0 * c
+        ))
+    }
+
     /// The LOD on screen: the switch preview's, else the clicked row's.
     pub fn shown_lod(&self, camera_distance: f32) -> Option<usize> {
         match (self.switch_lod(camera_distance), self.selected) {
