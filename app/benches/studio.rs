@@ -13,6 +13,10 @@
 //!   to far one step a frame (goal: the studio's own CPU time, the UI step,
 //!   at most 5 ms).
 //!
+//! - issue 46: with `-- --ratio [MODEL…]`, the same build through the
+//!   studio's frame loop and through the core call in one run, and whether
+//!   an idle studio asks for frames.
+//!
 //! Run with `cargo bench -p lodstudio --bench studio` (horse, engine, dragon)
 //! or name models: `cargo bench -p lodstudio --bench studio -- horse.ply`.
 //! Prints a Markdown table.
@@ -126,6 +130,46 @@ fn method_row(h: &mut Harness<'_, StudioApp>, model: &str, method: Method) {
     );
 }
 
+/// Issue 46: the same build through the studio's frame loop and through the
+/// core call, in one run. The loop draws a frame whenever the studio asks for
+/// one (`StudioApp::poll_interval`: 4 Hz, then 1 Hz past 2 s) and renders it
+/// through lavapipe, as a window does. Then, idle, how many of 10 frames
+/// 100 ms apart the studio asked to repaint.
+fn ratio_row(h: &mut Harness<'_, StudioApp>, model: &str, method: Method) {
+    let mut m = *h.state().methods();
+    m.method = method;
+    m.auto_rebuild = false;
+    h.state_mut().set_methods(m);
+    h.run();
+    let params = h.state().methods().params(None);
+    let loaded = h.state().loaded().expect("a model").model.clone();
+    let t = Instant::now();
+    lodstudio_core::lod::build(&params, &loaded, &lodstudio_core::Progress::new())
+        .expect("the core builds");
+    let core_s = t.elapsed().as_secs_f64();
+    h.state_mut().build();
+    h.step();
+    while h.state().is_building() {
+        let wait = h.state().poll_interval().unwrap_or_default();
+        std::thread::sleep(wait);
+        h.step();
+        h.render().expect("render the studio");
+    }
+    let studio_s = f64::from(h.state().result().expect("a result").seconds);
+    h.run();
+    let mut asked = 0;
+    for _ in 0..10 {
+        std::thread::sleep(std::time::Duration::from_millis(100));
+        h.step();
+        asked += usize::from(h.ctx.has_requested_repaint());
+    }
+    println!(
+        "| {model} | {} | {core_s:.2} | {studio_s:.2} | {:.2} | {asked} of 10 |",
+        method.name(),
+        studio_s / core_s
+    );
+}
+
 /// Builds an LOD chain on the loaded model and runs the switch preview
 /// through it; prints the chain table's row.
 fn chain_row(h: &mut Harness<'_, StudioApp>, model: &str) {
@@ -173,6 +217,30 @@ fn chain_row(h: &mut Harness<'_, StudioApp>, model: &str) {
 
 fn main() {
     let shared = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../shared/models");
+    if std::env::args().any(|a| a == "--ratio") {
+        // `cargo bench -p lodstudio --bench studio -- --ratio [MODEL...]`
+        let models: Vec<String> = std::env::args()
+            .skip(1)
+            .filter(|a| !a.starts_with('-'))
+            .collect();
+        let models = if models.is_empty() {
+            vec!["horse.ply".to_string()]
+        } else {
+            models
+        };
+        println!(
+            "| model | method | core `lod::build` s | in the studio's frame loop s | ratio | idle frames asked |"
+        );
+        println!("|---|---|---|---|---|---|");
+        for model in models {
+            let mut h = studio(Some(shared.join(&model)));
+            wait_while(&mut h, "loading", StudioApp::is_loading);
+            for method in [Method::EdgeCollapse, Method::Hybrid] {
+                ratio_row(&mut h, &model, method);
+            }
+        }
+        return;
+    }
     let args: Vec<String> = std::env::args()
         .skip(1)
         .filter(|a| !a.starts_with('-'))

@@ -326,6 +326,27 @@ impl StudioApp {
     }
 
     /// The last finished build of the model on screen.
+    /// How soon the studio wants its next frame while workers run, with no
+    /// input (`None`: not before the next input): at [`POLL_INTERVAL`], or at
+    /// [`LONG_POLL_INTERVAL`] while only builds older than [`LONG_BUILD`] run.
+    pub fn poll_interval(&self) -> Option<Duration> {
+        let quick = self.job.is_some()
+            || self.picker.is_some()
+            || self.export.is_some()
+            || self.is_measuring_difference();
+        let builds = [
+            self.build.as_ref().map(Job::elapsed),
+            self.chain.building_for(),
+        ];
+        let long = builds.iter().flatten().all(|t| *t > LONG_BUILD);
+        match builds.iter().flatten().next() {
+            _ if quick => Some(POLL_INTERVAL),
+            Some(_) if long => Some(LONG_POLL_INTERVAL),
+            Some(_) => Some(POLL_INTERVAL),
+            None => None,
+        }
+    }
+
     pub fn result(&self) -> Option<&Built> {
         self.result.as_ref()
     }
@@ -411,20 +432,8 @@ impl StudioApp {
         chain::ui::difference_window(&mut self.chain, &ctx, self.viewport.camera.distance);
         self.file_dialog.ui(&ctx);
         drop_hint(&ctx);
-        let quick = self.job.is_some()
-            || self.picker.is_some()
-            || self.export.is_some()
-            || self.is_measuring_difference();
-        let builds = [
-            self.build.as_ref().map(Job::elapsed),
-            self.chain.building_for(),
-        ];
-        let long = builds.iter().flatten().all(|t| *t > LONG_BUILD);
-        match builds.iter().flatten().next() {
-            _ if quick => ctx.request_repaint_after(POLL_INTERVAL),
-            Some(_) if long => ctx.request_repaint_after(LONG_POLL_INTERVAL),
-            Some(_) => ctx.request_repaint_after(POLL_INTERVAL),
-            None => {}
+        if let Some(wait) = self.poll_interval() {
+            ctx.request_repaint_after(wait);
         }
     }
 
