@@ -217,17 +217,22 @@ fn chain_row(h: &mut Harness<'_, StudioApp>, model: &str) {
 
 fn main() {
     let shared = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../shared/models");
-    if std::env::args().any(|a| a == "--ratio") {
+    let ratio = std::env::args().any(|a| a == "--ratio");
+    let args: Vec<String> = std::env::args()
+        .skip(1)
+        .filter(|a| !a.starts_with('-'))
+        .collect();
+    let defaults: &[&str] = match ratio {
+        true => &["horse.ply"],
+        false => &["horse.ply", "2CylinderEngine.gltf", "dragon_vrip.ply.gz"],
+    };
+    let models: Vec<String> = if args.is_empty() {
+        defaults.iter().map(|m| m.to_string()).collect()
+    } else {
+        args
+    };
+    if ratio {
         // `cargo bench -p lodstudio --bench studio -- --ratio [MODEL...]`
-        let models: Vec<String> = std::env::args()
-            .skip(1)
-            .filter(|a| !a.starts_with('-'))
-            .collect();
-        let models = if models.is_empty() {
-            vec!["horse.ply".to_string()]
-        } else {
-            models
-        };
         println!(
             "| model | method | core `lod::build` s | in the studio's frame loop s | ratio | idle frames asked |"
         );
@@ -241,17 +246,6 @@ fn main() {
         }
         return;
     }
-    let args: Vec<String> = std::env::args()
-        .skip(1)
-        .filter(|a| !a.starts_with('-'))
-        .collect();
-    let models: Vec<String> = if args.is_empty() {
-        ["horse.ply", "2CylinderEngine.gltf", "dragon_vrip.ply.gz"]
-            .map(String::from)
-            .to_vec()
-    } else {
-        args
-    };
     println!(
         "| model | method | build s | frames during build | UI step ms (median / max) | frame ms | threshold drag: cut ms | frame ms | orbit: cut ms | frame ms |"
     );

@@ -75,15 +75,19 @@ pub fn native_available() -> bool {
 /// File types a dialog offers: a name and its extensions.
 pub type Filters<'a> = &'a [(&'a str, &'a [&'a str])];
 
+/// The desktop's dialog with `title` and `filters`.
+fn native(title: &str, filters: Filters) -> rfd::FileDialog {
+    filters
+        .iter()
+        .fold(rfd::FileDialog::new().set_title(title), |d, (name, ext)| {
+            d.add_filter(*name, ext)
+        })
+}
+
 /// A file to open, or `None` when the user closed the dialog.
 pub fn pick_file(title: &str, filters: Filters) -> Option<PathBuf> {
     if native_available() {
-        return filters
-            .iter()
-            .fold(rfd::FileDialog::new().set_title(title), |d, (name, ext)| {
-                d.add_filter(*name, ext)
-            })
-            .pick_file();
+        return native(title, filters).pick_file();
     }
     ask(Request::new(title, None, filters))
 }
@@ -92,15 +96,7 @@ pub fn pick_file(title: &str, filters: Filters) -> Option<PathBuf> {
 /// the dialog. Both dialogs ask before replacing a file.
 pub fn save_file(title: &str, file_name: &str, filters: Filters) -> Option<PathBuf> {
     if native_available() {
-        return filters
-            .iter()
-            .fold(
-                rfd::FileDialog::new()
-                    .set_title(title)
-                    .set_file_name(file_name),
-                |d, (name, ext)| d.add_filter(*name, ext),
-            )
-            .save_file();
+        return native(title, filters).set_file_name(file_name).save_file();
     }
     ask(Request::new(title, Some(file_name), filters))
 }

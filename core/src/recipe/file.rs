@@ -13,9 +13,11 @@
 use serde::{Deserialize, Serialize};
 
 use crate::geom::Weld;
+use crate::hybrid::HybridOptions;
 use crate::io::gltf_writer::PointsAs;
 use crate::lod::{Method, Params};
 use crate::voxel::PostSimplify;
+use crate::voxel::VoxelParams;
 
 /// What the `format` field says, so a recipe is told from other JSON.
 pub const FORMAT: &str = "lodstudio-recipe";
@@ -134,35 +136,16 @@ impl Row {
         params
     }
 
+    /// κ, τ and the resolution as the row builds with them (the defaults
+    /// where it gives none), for the panel's fields.
     pub fn kappa(&self) -> f32 {
-        self.hybrid().kappa
+        self.kappa.unwrap_or(HybridOptions::default().kappa)
     }
     pub fn tau(&self) -> f32 {
-        self.hybrid().tau
+        self.tau.unwrap_or(HybridOptions::default().tau)
     }
     pub fn resolution(&self) -> usize {
-        self.voxel().resolution
-    }
-
-    /// The row's hybrid parameters (the defaults for other methods' rows).
-    fn hybrid(&self) -> crate::hybrid::HybridOptions {
-        let d = crate::hybrid::HybridOptions::default();
-        crate::hybrid::HybridOptions {
-            kappa: self.kappa.unwrap_or(d.kappa),
-            tau: self.tau.unwrap_or(d.tau),
-            ..d
-        }
-    }
-
-    /// The row's voxel parameters (the defaults for other methods' rows).
-    fn voxel(&self) -> crate::voxel::VoxelParams {
-        let d = crate::voxel::VoxelParams::default();
-        crate::voxel::VoxelParams {
-            resolution: self.resolution.unwrap_or(d.resolution),
-            post: self.post.map_or(d.post, PostSimplify::from),
-            pyramid: true,
-            ..d
-        }
+        self.resolution.unwrap_or(VoxelParams::default().resolution)
     }
 
     /// The row as `--lods` writes it: "hybrid:2%".
@@ -494,9 +477,10 @@ impl Row {
         if !value {
             return Err(("tolerance", format!("{} is out of range", self.tolerance)));
         }
-        self.hybrid()
+        // Fields of other methods were refused above: what the row builds
+        // is what is checked.
+        self.params(false)
             .validate()
-            .and_then(|()| self.voxel().validate())
             .map_err(|e| (e.field, e.message))
     }
 }
