@@ -36,6 +36,11 @@ pub struct CutStats {
     pub layer_triangles: usize,
     /// Object-space bound of the cut.
     pub error_bound: f32,
+    /// The largest error of a seen, front-facing primitive projected at its
+    /// own depth, where the cut has errors per primitive: what a pixel
+    /// threshold limits in a view-dependent cut (merge tree §5, hybrid §6),
+    /// which coarsens far and hidden parts further.
+    pub screen_pixels: Option<f32>,
     pub error_bound_kind: lodstudio_core::lod::BoundKind,
     /// Time of the last `select` and scene preparation.
     pub cut_ms: f32,
@@ -201,6 +206,7 @@ impl LiveCut {
             layer_triangles: d.layers.iter().map(|l| l.mesh.triangles.len()).sum(),
             error_bound: d.error_bound,
             error_bound_kind: d.error_bound_kind,
+            screen_pixels: screen_pixels(d, view),
             cut_ms: start.elapsed().as_secs_f32() * 1000.0,
             cuts: self.stats.cuts + 1,
         };
@@ -239,6 +245,35 @@ impl LiveCut {
     }
 }
 
+/// [`CutStats::screen_pixels`]: each triangle's bound at its centroid and
+/// each point's at its centre, over those in the view that face the eye.
+fn screen_pixels(d: &DrawSet, view: &View) -> Option<f32> {
+    let test = view.sphere_test();
+    let m = &d.mesh;
+    let triangles = (d.triangle_errors.len() == m.triangles.len()).then(|| {
+        m.triangles
+            .iter()
+            .zip(&d.triangle_errors)
+            .filter_map(|(t, &e)| {
+                let [a, b, c] = t.map(|i| m.positions[i as usize]);
+                let centre = (a + b + c) / 3.0;
+                let faces = (b - a).cross(c - a).dot(view.eye - centre) > 0.0;
+                (faces && test.sees(centre, 0.0)).then(|| test.pixels(e as f64, centre, 0.0))
+            })
+    });
+    let points = d.points.iter().filter_map(|p| {
+        let faces = p.normal.dot(view.eye - p.center) >= 0.0;
+        (faces && test.sees(p.center, p.radius))
+            .then(|| test.pixels(p.error as f64, p.center, p.radius as f64))
+    });
+    let largest = triangles
+        .into_iter()
+        .flatten()
+        .chain(points)
+        .reduce(f64::max);
+    largest.map(|px| px as f32)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -270,5 +305,31 @@ mod tests {
         // Looking from the side flips to another axis.
         assert!(live.update(&View::orbit(glam::Vec3::ZERO, 4.0, 1.5, 0.1), tol));
         assert_eq!(live.stats.cuts, 2);
+    }
+
+    /// A view-dependent cut within t pixels keeps every primitive in view
+    /// within t at its own depth (the merge tree's and the hybrid's §5/§6
+    /// criteria), while its coarsest bound projected at the target is larger:
+    /// the inspector's figure is the one the threshold limits.
+    #[test]
+    fn view_dependent_cuts_keep_what_is_on_screen_within_the_threshold() {
+        use lodstudio_core::lod::{Method, Params, build};
+        let mesh = lodstudio_core::builtins::torus(1.0, 0.3, 96, 48);
+        let view = View::orbit(glam::Vec3::ZERO, 8.0, 0.4, 0.3);
+        for method in [Method::MergeTree, Method::Hybrid] {
+            let mut largest = 0.0f32;
+            for t in [4.0, 16.0, 64.0] {
+                let params = Params::default_for(method);
+                let h = build(&params, &mesh, &Default::default()).unwrap();
+                let live = LiveCut::new(h, &view, Tolerance::Pixels(t));
+                let on_screen = live.stats.screen_pixels.expect("errors per primitive");
+                assert!(
+                    on_screen <= t * 1.001,
+                    "{method:?} at {t} px: {on_screen} px"
+                );
+                largest = largest.max(on_screen);
+            }
+            assert!(largest > 0.0, "{method:?} simplified nothing in view");
+        }
     }
 }

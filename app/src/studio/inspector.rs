@@ -74,6 +74,12 @@ impl StudioApp {
                     self.viewport.camera.target,
                     0.0,
                 );
+                // A view-dependent cut keeps each primitive within the
+                // threshold at its own depth, not its coarsest one at the target.
+                let projected = match st.screen_pixels {
+                    Some(px) => ("largest on screen", px, "The largest bound of a primitive in view and facing the camera, projected at its own depth: what the pixel threshold limits. Far, hidden and off-screen parts may be coarser."),
+                    None => ("bound at target", pixels, "The cut's bound projected at the camera's target distance."),
+                };
                 egui::Grid::new("cut grid").num_columns(2).striped(true).show(ui, |ui| {
                     let diagonal = current.scene.bounds().diagonal().max(f32::MIN_POSITIVE);
                     for (label, value, hint) in [
@@ -83,7 +89,7 @@ impl StudioApp {
                         ("layer triangles", st.layer_triangles.to_string(), "Triangles of the translucent voxel layers."),
                         ("cut bound", bound_text(st.error_bound, diagonal), "The cut's object-space error bound (max over its elements); unbounded where there is no input surface to certify against (an implicit solid, a volume)."),
                         ("bound is", st.error_bound_kind.name().to_string(), "Certified: no point of the cut or of the original lies farther than the bound from the other (a dense measurement never exceeds it). Estimate: a measure of the method's own (AMG: the largest distance of a domain's points to its splat's plane), not a bound on the distance to the original."),
-                        ("bound at target", format!("{pixels:.2} px"), "The cut's bound projected at the camera's target distance."),
+                        (projected.0, format!("{:.2} px", projected.1), projected.2),
                         ("cut time", format!("{:.2} ms", st.cut_ms), "Time of the last re-selection of the cut and its scene."),
                         ("frame time", self.frame_summary(), "Median time between frames of the studio over the last second, and the median CPU time of a frame (layout, cut, tessellation and submitting the draw)."),
                         ("picked", self.picked.clone().unwrap_or_else(|| "click the model".into()), "What the last click in the viewport hit on the cut: its type, index and error bound (or domain, layer)."),
