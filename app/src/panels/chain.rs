@@ -48,7 +48,7 @@ pub const FIGURE_HEADS: [(&str, &str); 7] = [
     ),
     (
         "build",
-        "Seconds spent on the hierarchy behind the row (rows of one method and parameters share one).",
+        "Seconds spent on the hierarchy behind the row (rows of one method and parameters share one); kept: taken from an earlier build or session, nothing rebuilt.",
     ),
 ];
 

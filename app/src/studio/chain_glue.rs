@@ -25,13 +25,26 @@ impl StudioApp {
 
     /// Builds the chain on the model on screen, replacing any chain build.
     pub fn build_chain(&mut self, ctx: &egui::Context) {
-        let source = self.current.as_ref().map(|c| Source {
-            loaded: Arc::clone(&c.loaded),
-            path: c.path.clone(),
-        });
-        if let Some(event) = self.chain.start_build(source, ctx) {
+        if let Some(event) = self.chain.start_build(self.chain_source(), ctx) {
             self.report_chain(event);
         }
+    }
+
+    /// Reopens the chain the last session built on the model on screen with
+    /// the rows on the panel, when its work was kept.
+    pub(super) fn reopen_chain(&mut self, ctx: &egui::Context) {
+        if let Some(source) = self.chain_source()
+            && let Some(event) = self.chain.reopen(source, ctx)
+        {
+            self.report_chain(event);
+        }
+    }
+
+    fn chain_source(&self) -> Option<Source> {
+        self.current.as_ref().map(|c| Source {
+            loaded: Arc::clone(&c.loaded),
+            path: c.path.clone(),
+        })
     }
 
     pub fn is_building_chain(&self) -> bool {

@@ -252,6 +252,7 @@ impl StudioApp {
                     self.result = Some(built);
                     self.show_result();
                 }
+                self.reopen_chain(ctx);
             }
             Err(e) => self.load_failed(e.to_string()),
         }

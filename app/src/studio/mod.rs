@@ -19,7 +19,7 @@ mod saving;
 mod status;
 mod view_bar;
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::sync::mpsc::Receiver;
 use std::time::Duration;
@@ -191,6 +191,9 @@ impl StudioApp {
             Ok(None) => {}
             Err(e) => self.error(e.to_string()),
         }
+        let kept = autosave.file().and_then(Path::parent);
+        self.chain
+            .keep_in(kept.map(|dir| dir.join(chain::kept::FILE_NAME)));
         self.autosave = autosave;
     }
 

@@ -3,11 +3,12 @@
 //! has one.
 
 use glam::Vec3;
+use serde::{Deserialize, Serialize};
 
 use crate::geom::TriMesh;
 
 /// A point primitive: a disc/sphere of `radius` (hybrid paper §5.3).
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct CutPoint {
     pub center: Vec3,
     pub radius: f32,
@@ -18,7 +19,7 @@ pub struct CutPoint {
 }
 
 /// An RGBA8 texture (colour, and Ψ in alpha for AMG domain primitives).
-#[derive(Debug, Clone, PartialEq, Default)]
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
 pub struct Texture {
     pub width: u32,
     pub height: u32,
@@ -26,7 +27,7 @@ pub struct Texture {
 }
 
 /// A textured, alpha-blended quad (AMG paper §3): `center ± axes[0] ± axes[1]`.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Splat {
     pub center: Vec3,
     /// Half-extent vectors along the quad's principal axes.
@@ -57,7 +58,7 @@ impl Splat {
 }
 
 /// A translucent layer mesh (voxel paper §3) with its opacity.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Layer {
     pub mesh: TriMesh,
     pub alpha: f32,
@@ -65,7 +66,7 @@ pub struct Layer {
 }
 
 /// What a cut's `error_bound` is.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
 pub enum BoundKind {
     /// A guarantee: no dense measurement of the two-sided Hausdorff distance
     /// to the original exceeds it (points as balls, splats as their quads).
@@ -87,7 +88,7 @@ impl BoundKind {
 }
 
 /// The primitives on a cut.
-#[derive(Debug, Clone, PartialEq, Default)]
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
 pub struct DrawSet {
     pub mesh: TriMesh,
     /// Per-triangle error bound of `mesh` (object space), when the method has one.

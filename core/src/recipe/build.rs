@@ -8,6 +8,7 @@
 
 use std::time::Instant;
 
+use super::cache::{self, ChainCache, Hit};
 use super::{Recipe, RowTolerance};
 use crate::geom::{Model, TriMesh};
 use crate::io::gltf_writer::write_lod_chain;
@@ -28,6 +29,8 @@ pub struct ChainLod {
     pub set: DrawSet,
     /// Seconds spent on the hierarchy behind it (shared by its rows).
     pub build_seconds: f64,
+    /// Taken from a [`ChainCache`]: this build made nothing for it.
+    pub reused: bool,
 }
 
 impl ChainLod {
@@ -108,6 +111,31 @@ pub fn build_chain(
     recipe: &Recipe,
     progress: &Progress,
 ) -> Result<Chain, ChainError> {
+    build(model, recipe, progress, None)
+}
+
+/// [`build_chain`], taking from `cache` what an earlier build on the same
+/// model made and leaving there what this one makes (`recipe::cache`): the
+/// same chain, bit for bit, without building its unchanged groups again.
+pub fn build_chain_cached(
+    model: &Model,
+    recipe: &Recipe,
+    progress: &Progress,
+    cache: &mut ChainCache,
+) -> Result<Chain, ChainError> {
+    progress.stage("fingerprint");
+    cache.begin(&cache::fingerprint(model));
+    let chain = build(model, recipe, progress, Some(&mut *cache))?;
+    cache.finish();
+    Ok(chain)
+}
+
+fn build(
+    model: &Model,
+    recipe: &Recipe,
+    progress: &Progress,
+    mut cache: Option<&mut ChainCache>,
+) -> Result<Chain, ChainError> {
     recipe
         .check()
         .map_err(|e| ChainError::BadInput(e.to_string()))?;
@@ -156,27 +184,30 @@ pub fn build_chain(
             done[j] = true;
         }
         progress.stage(&format!("row {}: {}", first + 1, row.method.name()));
-        let start = Instant::now();
-        let sets = match (recipe.row_params(first), mesh) {
-            (Params::EdgeCollapse(p), Some(mesh)) => {
-                simplify_rows(recipe, &group, mesh, p.collapse, pixels_to_error, progress)?
-            }
-            (params @ Params::Amg(_), _) | (params, Some(_)) => {
-                let input = lod::input_primitives(params.method(), model.into());
-                let h = lod::build(&params, model, progress).map_err(|e| match e {
-                    BuildError::Cancelled => ChainError::Cancelled,
-                    e => ChainError::BadInput(format!("rows[{first}]: {e}")),
-                })?;
-                hierarchy_rows(recipe, &group, h, input, pixels_to_error)?
-            }
-            (params, None) => {
-                return Err(ChainError::BadInput(format!(
-                    "rows[{first}] ({}) needs a triangle mesh, not a point set (only amg rows take points)",
-                    params.method().tag()
-                )));
+        let key = cache::group_key(recipe, &group);
+        let found = cache.as_deref_mut().and_then(|c| c.group(&key));
+        let reused = found.is_some();
+        let Hit {
+            sets,
+            seconds: build_seconds,
+        } = match found {
+            Some(hit) => hit,
+            None => {
+                let hit = build_group(
+                    recipe,
+                    &group,
+                    model,
+                    mesh,
+                    cache.as_deref_mut(),
+                    progress,
+                    pixels_to_error,
+                )?;
+                if let Some(c) = cache.as_deref_mut() {
+                    c.keep_group(key, hit.sets.clone(), hit.seconds);
+                }
+                hit
             }
         };
-        let build_seconds = start.elapsed().as_secs_f64();
         for (j, set) in group.into_iter().zip(sets) {
             lods.push(ChainLod {
                 rows: vec![j],
@@ -184,6 +215,7 @@ pub fn build_chain(
                 method: recipe.rows[j].method,
                 set,
                 build_seconds,
+                reused,
             });
         }
     }
@@ -236,6 +268,60 @@ fn source_lod(recipe: &Recipe, j: usize, mesh: Option<&TriMesh>) -> Result<Chain
             ..Default::default()
         },
         build_seconds: 0.0,
+        reused: false,
+    })
+}
+
+/// Builds one group's LODs (one per row): its collapse, or its hierarchy
+/// (taken from `cache` when built there before) cut once per row.
+fn build_group(
+    recipe: &Recipe,
+    group: &[usize],
+    model: &Model,
+    mesh: Option<&TriMesh>,
+    cache: Option<&mut ChainCache>,
+    progress: &Progress,
+    pixels_to_error: impl Fn(f32) -> f32,
+) -> Result<Hit, ChainError> {
+    let first = group[0];
+    let start = Instant::now();
+    let sets = match (recipe.row_params(first), mesh) {
+        (Params::EdgeCollapse(p), Some(mesh)) => {
+            simplify_rows(recipe, group, mesh, p.collapse, pixels_to_error, progress)?
+        }
+        (params @ Params::Amg(_), _) | (params, Some(_)) => {
+            let input = lod::input_primitives(params.method(), model.into());
+            let key = cache::hierarchy_key(&params);
+            let kept = match cache {
+                Some(c) => (c.take_hierarchy(&key), Some(c)),
+                None => (None, None),
+            };
+            let (mut h, cache) = match kept {
+                (Some(h), cache) => (h, cache),
+                (None, cache) => (
+                    lod::build(&params, model, progress).map_err(|e| match e {
+                        BuildError::Cancelled => ChainError::Cancelled,
+                        e => ChainError::BadInput(format!("rows[{first}]: {e}")),
+                    })?,
+                    cache,
+                ),
+            };
+            let sets = hierarchy_rows(recipe, group, h.as_mut(), input, pixels_to_error);
+            if let Some(c) = cache {
+                c.keep_hierarchy(key, h);
+            }
+            sets?
+        }
+        (params, None) => {
+            return Err(ChainError::BadInput(format!(
+                "rows[{first}] ({}) needs a triangle mesh, not a point set (only amg rows take points)",
+                params.method().tag()
+            )));
+        }
+    };
+    Ok(Hit {
+        sets,
+        seconds: start.elapsed().as_secs_f64(),
     })
 }
 
@@ -292,7 +378,7 @@ fn simplify_rows(
 fn hierarchy_rows(
     recipe: &Recipe,
     group: &[usize],
-    mut hierarchy: Box<dyn Hierarchy>,
+    hierarchy: &mut dyn Hierarchy,
     input: usize,
     pixels_to_error: impl Fn(f32) -> f32,
 ) -> Result<Vec<DrawSet>, ChainError> {
@@ -311,7 +397,7 @@ fn hierarchy_rows(
                 // Never grouped (`source_lod`); as a budget, the whole input.
                 RowTolerance::Source => ChainItem::Primitives(input),
             };
-            let set = choose(hierarchy.as_mut(), &view, wanted);
+            let set = choose(hierarchy, &view, wanted);
             if let ChainItem::Error(f) = wanted
                 && set.error_bound > f * diag * (1.0 + 1e-6)
             {
@@ -451,5 +537,48 @@ mod tests {
             )
             .is_err()
         );
+    }
+
+    /// A cached rebuild is the fresh chain bit for bit; an edited row
+    /// rebuilds its own group alone (a re-cut where its hierarchy is kept);
+    /// a cache written and read back serves the whole chain; another model
+    /// is never answered from it.
+    #[test]
+    fn cached_builds_rebuild_only_what_an_edit_changes() {
+        let model = torus();
+        let mut recipe =
+            Recipe::new(parse_lods("simplify:0.5,hybrid:1%,hybrid:4%,amg:20%", None).unwrap());
+        let mut cache = ChainCache::default();
+        let p = Progress::new();
+        let first = build_chain_cached(&model, &recipe, &p, &mut cache).unwrap();
+        assert!(first.lods.iter().all(|l| !l.reused));
+        assert_eq!(first.glb(), build_chain(&model, &recipe, &p).unwrap().glb());
+        assert_eq!(cache.groups(), 3);
+        let again = build_chain_cached(&model, &recipe, &p, &mut cache).unwrap();
+        assert!(again.lods.iter().all(|l| l.reused));
+        assert_eq!(again.glb(), first.glb());
+        // One hybrid row edited: its group is cut again from the kept
+        // hierarchy, the others come from the cache.
+        recipe.rows[2] = parse_lods("hybrid:2%", None).unwrap().remove(0);
+        let edited = build_chain_cached(&model, &recipe, &p, &mut cache).unwrap();
+        assert_eq!(
+            edited.glb(),
+            build_chain(&model, &recipe, &p).unwrap().glb()
+        );
+        for lod in &edited.lods {
+            let hybrid = lod.method == Method::Hybrid;
+            assert_eq!(lod.reused, !hybrid, "{:?}", lod.labels);
+        }
+        assert_eq!(cache.groups(), 3, "the old hybrid group is dropped");
+        // Saved and read back: the whole chain without a build.
+        let (saved_recipe, mut reread) = ChainCache::from_bytes(&cache.to_bytes(&recipe)).unwrap();
+        assert_eq!(saved_recipe, recipe);
+        let reopened = build_chain_cached(&model, &recipe, &p, &mut reread).unwrap();
+        assert!(reopened.lods.iter().all(|l| l.reused));
+        assert_eq!(reopened.glb(), edited.glb());
+        // Another model empties it.
+        let other = Model::Mesh(crate::builtins::torus(1.0, 0.25, 48, 24));
+        let fresh = build_chain_cached(&other, &recipe, &p, &mut reread).unwrap();
+        assert!(fresh.lods.iter().all(|l| !l.reused));
     }
 }

@@ -6,12 +6,17 @@
 //!   row and the field;
 //! - `build`: a recipe applied to a model ([`build_chain`]): one hierarchy
 //!   per method and parameters, an LOD per row, its switch coverage from the
-//!   certified bound, and the GLB every consumer writes ([`Chain::glb`]).
+//!   certified bound, and the GLB every consumer writes ([`Chain::glb`]);
+//! - `cache`: what a chain build made, by the model's content hash and each
+//!   group's settings ([`ChainCache`]), so an edited recipe rebuilds only
+//!   what the edit changed.
 
 mod build;
+mod cache;
 mod file;
 
-pub use build::{Chain, ChainError, ChainLod, build_chain};
+pub use build::{Chain, ChainError, ChainLod, build_chain, build_chain_cached};
+pub use cache::{ChainCache, fingerprint};
 pub use file::{
     FORMAT, PostSpec, Recipe, RecipeError, Row, RowTolerance, VERSION, WeldSpec, parse_lods,
 };

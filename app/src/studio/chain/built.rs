@@ -6,9 +6,10 @@ use std::sync::Arc;
 
 use lodstudio_core::Progress;
 use lodstudio_core::io::{LoadOptions, Loaded};
-use lodstudio_core::recipe::{Chain, Recipe, build_chain};
+use lodstudio_core::recipe::{Chain, Recipe, build_chain_cached, fingerprint};
 
 use super::ChainError;
+use super::kept::Kept;
 use crate::panels::chain::RowFigures;
 use crate::render::camera::distance_at_coverage;
 use crate::render::{Scene, SceneStyle};
@@ -23,6 +24,8 @@ pub struct BuiltChain {
     pub(super) wire_scenes: Vec<std::sync::OnceLock<Arc<Scene>>>,
     /// Per recipe row: its LOD and its table cells.
     pub(super) figures: Vec<RowFigures>,
+    /// Why the chain's work could not be saved for the next session.
+    pub(super) kept_error: Option<String>,
 }
 
 impl BuiltChain {
@@ -44,14 +47,19 @@ impl BuiltChain {
     }
 
     /// Builds `recipe` on the model as `lodstudio export` loads it for this
-    /// recipe: `loaded`, or the file at `path` reopened when the recipe welds
-    /// otherwise than the studio loaded it.
+    /// recipe (`loaded`, or the file at `path` reopened when the recipe welds
+    /// otherwise than the studio loaded it), from the work `kept` holds, and
+    /// keeps what it made. An empty cache first takes the work saved for
+    /// this model; with `reopen`, only that work answers: `None` unless it
+    /// holds this recipe's chain (nothing is built).
     pub(super) fn build(
         loaded: &Loaded,
         path: &Path,
         recipe: &Recipe,
         progress: &Progress,
-    ) -> Result<BuiltChain, ChainError> {
+        kept: &Kept,
+        reopen: bool,
+    ) -> Result<Option<BuiltChain>, ChainError> {
         let reloaded;
         let model = if recipe.weld() == LoadOptions::default().repair.weld {
             &loaded.model
@@ -61,10 +69,25 @@ impl BuiltChain {
             reloaded = lodstudio_core::open::open(path, &options, progress)?;
             &reloaded.model
         };
-        Ok(BuiltChain::new(build_chain(model, recipe, progress)?))
+        let mut cache = kept.lock();
+        if reopen || cache.groups() == 0 {
+            let saved = kept.saved(&fingerprint(model));
+            let holds_recipe = saved.as_ref().is_some_and(|(r, _)| r == recipe);
+            if let Some((_, saved)) = saved
+                && cache.groups() == 0
+            {
+                *cache = saved;
+            }
+            if reopen && !holds_recipe {
+                return Ok(None);
+            }
+        }
+        let chain = build_chain_cached(model, recipe, progress, &mut cache)?;
+        let kept_error = kept.save(&cache, recipe).err();
+        Ok(Some(BuiltChain::new(chain, kept_error)))
     }
 
-    fn new(chain: Chain) -> BuiltChain {
+    fn new(chain: Chain, kept_error: Option<String>) -> BuiltChain {
         let scenes = chain
             .lods
             .iter()
@@ -76,6 +99,7 @@ impl BuiltChain {
             chain: Arc::new(chain),
             scenes,
             figures,
+            kept_error,
         }
     }
 }
@@ -94,7 +118,10 @@ fn figures(chain: &Chain) -> Vec<RowFigures> {
             format!("{:.3}%", 100.0 * lod.bound() / chain.diagonal),
             format!("{:.2}", chain.pixels_at(k, c_in)),
             format!("{c_out:.4} {:.1}r", distance_at_coverage(c_out)),
-            format!("{:.2} s", lod.build_seconds),
+            match lod.reused {
+                true => "kept".to_string(),
+                false => format!("{:.2} s", lod.build_seconds),
+            },
         ];
         let estimate = set.error_bound_kind == lodstudio_core::lod::BoundKind::Estimate;
         for &r in &lod.rows {

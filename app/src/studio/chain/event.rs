@@ -12,7 +12,13 @@ use crate::export::Saved;
 pub enum ChainEvent {
     Built {
         lods: usize,
+        /// LODs taken from the kept work (nothing built for them).
+        kept: usize,
         seconds: f64,
+        /// The last session's chain, reopened without a build.
+        reopened: bool,
+        /// Why the work could not be saved for the next session.
+        not_saved: Option<String>,
     },
     /// The user cancelled the build.
     BuildStopped,
@@ -33,8 +39,10 @@ impl ChainEvent {
     pub fn is_error(&self) -> bool {
         !matches!(
             self,
-            ChainEvent::Built { .. }
-                | ChainEvent::BuildStopped
+            ChainEvent::Built {
+                not_saved: None,
+                ..
+            } | ChainEvent::BuildStopped
                 | ChainEvent::RecipeOpened(_)
                 | ChainEvent::NoRecipeChosen
         )
@@ -44,8 +52,25 @@ impl ChainEvent {
 impl fmt::Display for ChainEvent {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
-            ChainEvent::Built { lods, seconds } => {
-                write!(f, "Built a chain of {lods} LODs in {seconds:.2} s")
+            ChainEvent::Built {
+                lods,
+                kept,
+                seconds,
+                reopened,
+                not_saved,
+            } => {
+                match (reopened, kept) {
+                    (true, _) => write!(f, "Reopened the last session's chain of {lods} LODs")?,
+                    (false, 0) => write!(f, "Built a chain of {lods} LODs in {seconds:.2} s")?,
+                    (false, k) => write!(
+                        f,
+                        "Built a chain of {lods} LODs in {seconds:.2} s ({k} kept from the last build)"
+                    )?,
+                }
+                match not_saved {
+                    Some(why) => write!(f, "; not kept for the next session: {why}"),
+                    None => Ok(()),
+                }
             }
             ChainEvent::BuildStopped => f.write_str("Stopped building the chain"),
             ChainEvent::RecipeOpened(path) => write!(f, "Opened the recipe {}", path.display()),

@@ -17,6 +17,7 @@ mod dolly;
 mod error;
 mod event;
 mod files;
+pub mod kept;
 mod preview;
 #[cfg(test)]
 mod tests;
@@ -36,6 +37,7 @@ pub use self::difference::LodDifference;
 pub use self::error::ChainError;
 pub use self::event::{ChainEvent, ChainRequest, SaveWork};
 pub use self::files::Target;
+use self::kept::Kept;
 use crate::job::{Job, Poll};
 use crate::render::{Camera, Offscreen, Scene};
 use crate::settings::chain::ChainSettings;
@@ -63,7 +65,12 @@ pub struct ChainState {
     /// The rows and the Auto chain rule (what Save recipe… writes).
     pub settings: ChainSettings,
     pub recent_recipes: Vec<PathBuf>,
-    job: Option<Job<Result<BuiltChain, ChainError>>>,
+    /// What the chain's builds made, shared by them and saved for the next
+    /// session.
+    kept: Kept,
+    job: Option<Job<Result<Option<BuiltChain>, ChainError>>>,
+    /// The running build only reopens the last session's chain.
+    reopening: bool,
     built: Option<BuiltChain>,
     /// The recipe row whose LOD is shown.
     selected: Option<usize>,
@@ -86,12 +93,35 @@ impl ChainState {
         self.selected = None;
     }
 
+    /// Saves the chain's work into `file` from now on (`None`: nowhere).
+    pub fn keep_in(&mut self, file: Option<PathBuf>) {
+        self.kept = Kept::in_file(file);
+    }
+
     /// Builds the rows on `source` on a worker, replacing any chain build;
     /// returns what to log. Without a model the reason is noted on the panel.
     pub fn start_build(
         &mut self,
         source: Option<Source>,
         ctx: &egui::Context,
+    ) -> Option<ChainEvent> {
+        self.start(source, ctx, false)
+    }
+
+    /// Reopens the chain the last session built on `source` with these rows,
+    /// on a worker, without building anything; nothing when none was saved.
+    pub fn reopen(&mut self, source: Source, ctx: &egui::Context) -> Option<ChainEvent> {
+        match self.kept.has_saved() {
+            true => self.start(Some(source), ctx, true),
+            false => None,
+        }
+    }
+
+    fn start(
+        &mut self,
+        source: Option<Source>,
+        ctx: &egui::Context,
+        reopen: bool,
     ) -> Option<ChainEvent> {
         self.note = None;
         // A measurement of the chain being replaced would land on the new one.
@@ -101,10 +131,14 @@ impl ChainState {
             return None;
         };
         let recipe = self.settings.recipe.clone();
-        let work = move |progress: &Progress| BuiltChain::build(&loaded, &path, &recipe, progress);
+        let kept = self.kept.clone();
+        let work = move |progress: &Progress| {
+            BuiltChain::build(&loaded, &path, &recipe, progress, &kept, reopen)
+        };
         match spawn("chain", "Chain", "the chain build", ctx, work) {
             Ok(job) => {
                 self.job = Some(job);
+                self.reopening = reopen;
                 None
             }
             Err(e) => Some(ChainEvent::Failed(e)),
@@ -197,6 +231,7 @@ impl ChainState {
     /// A new model: its chain is still to be built.
     pub fn forget(&mut self) {
         self.job = None;
+        self.kept = self.kept.emptied();
         self.built = None;
         self.measuring = None;
         self.close_differences();
@@ -227,12 +262,19 @@ impl ChainState {
         let seconds = job.elapsed().as_secs_f64();
         self.job = None;
         Some(match outcome {
-            Ok(built) => {
+            Ok(None) => return None,
+            Ok(Some(built)) => {
                 self.measuring = None;
                 self.close_differences();
-                let lods = built.chain.lods.len();
+                let event = ChainEvent::Built {
+                    lods: built.chain.lods.len(),
+                    kept: built.chain.lods.iter().filter(|l| l.reused).count(),
+                    seconds,
+                    reopened: self.reopening,
+                    not_saved: built.kept_error.clone(),
+                };
                 self.built = Some(built);
-                ChainEvent::Built { lods, seconds }
+                event
             }
             Err(e) => {
                 self.note = Some(e.to_string());

@@ -334,3 +334,95 @@ fn named_saves_write_the_chain_and_remember_the_recipe() {
     assert_eq!(std::fs::read(&first).unwrap(), recipe(ROWS).to_json());
     assert_eq!(state.recent_recipes, [absolute(&first), absolute(&second)]);
 }
+
+/// Rows of three groups: one collapse, one hybrid, one voxel hierarchy.
+const GROUPS: &str = "simplify:1%,hybrid:2%,voxel:5%";
+
+fn reused(state: &ChainState) -> Vec<bool> {
+    let chain = chain_of(state);
+    let mut by_row = vec![false; chain.recipe.rows.len()];
+    for lod in &chain.lods {
+        for &r in &lod.rows {
+            by_row[r] = lod.reused;
+        }
+    }
+    by_row
+}
+
+/// An edited row rebuilds its own group alone: the others' LODs are kept,
+/// the table says so, and the chain is the one a fresh build makes.
+#[test]
+fn an_edited_row_rebuilds_alone() {
+    let mut state = ChainState::default();
+    build(&mut state, GROUPS, torus());
+    assert_eq!(reused(&state), [false, false, false]);
+    let events = build(&mut state, "simplify:2%,hybrid:2%,voxel:5%", torus());
+    assert!(
+        matches!(events[..], [ChainEvent::Built { lods: 3, kept: 2, .. }]),
+        "{events:?}"
+    );
+    assert_eq!(reused(&state), [false, true, true]);
+    let cells: Vec<&str> = (state.built().unwrap().figures.iter())
+        .map(|f| f.cells[6].as_str())
+        .collect();
+    assert_eq!(cells[1..], ["kept", "kept"]);
+    let fresh = build_chain(
+        &torus().loaded.model,
+        &recipe("simplify:2%,hybrid:2%,voxel:5%"),
+        &Progress::new(),
+    )
+    .unwrap();
+    assert_eq!(chain_of(&state).glb(), fresh.glb());
+}
+
+/// The work kept beside the session reopens the last chain in a new studio
+/// without building anything; rows edited since reopen nothing but rebuild
+/// only their own group; a damaged file is no cache.
+#[test]
+fn kept_work_reopens_the_chain_after_a_restart() {
+    let tmp = tempfile::tempdir().unwrap();
+    let file = tmp.path().join(kept::FILE_NAME);
+    let ctx = egui::Context::default();
+    let mut first = ChainState::default();
+    first.keep_in(Some(file.clone()));
+    build(&mut first, GROUPS, torus());
+    let built = chain_of(&first);
+
+    let mut second = ChainState::default();
+    second.keep_in(Some(file.clone()));
+    second.set_recipe(recipe(GROUPS));
+    assert!(second.reopen(torus(), &ctx).is_none());
+    let events = finish(&mut second);
+    assert!(
+        matches!(
+            events[..],
+            [ChainEvent::Built {
+                lods: 3,
+                kept: 3,
+                reopened: true,
+                not_saved: None,
+                ..
+            }]
+        ),
+        "{events:?}"
+    );
+    assert_eq!(chain_of(&second).glb(), built.glb());
+
+    let mut edited = ChainState::default();
+    edited.keep_in(Some(file.clone()));
+    edited.set_recipe(recipe("simplify:4%,hybrid:2%,voxel:5%"));
+    assert!(edited.reopen(torus(), &ctx).is_none());
+    assert!(finish(&mut edited).is_empty(), "another chain: nothing reopened");
+    assert!(edited.built().is_none());
+    build(&mut edited, "simplify:4%,hybrid:2%,voxel:5%", torus());
+    assert_eq!(reused(&edited), [false, true, true]);
+
+    std::fs::write(&file, b"LODSTHRY damaged").unwrap();
+    let mut damaged = ChainState::default();
+    damaged.keep_in(Some(file));
+    damaged.set_recipe(recipe(GROUPS));
+    assert!(damaged.reopen(torus(), &ctx).is_none());
+    assert!(finish(&mut damaged).is_empty());
+    build(&mut damaged, GROUPS, torus());
+    assert_eq!(reused(&damaged), [false, false, false]);
+}
