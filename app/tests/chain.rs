@@ -2,7 +2,8 @@
 //! egui_kittest: a mixed chain built from its panel matches the core API row
 //! for row, the switch preview names and draws the LOD for its distance, the
 //! chain exports as the CLI writes it (byte for byte from the same recipe),
-//! recipes round-trip, and the chain survives a restart.
+//! recipes round-trip, and the chain (its rows and what they built) survives
+//! a restart.
 
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
@@ -307,8 +308,8 @@ fn the_panel_edits_rows_and_refuses_bad_recipes() {
     );
 }
 
-/// The chain on the panel (saved or not) and the recent recipes survive a
-/// restart through the autosave.
+/// The chain on the panel (saved or not), the recent recipes and the built
+/// chain survive a restart through the autosave: the chain without a build.
 #[test]
 fn an_unsaved_chain_survives_a_restart() {
     // Declared first, removed last: the studio below saves on drop.
@@ -334,10 +335,30 @@ fn an_unsaved_chain_survives_a_restart() {
         std::thread::sleep(interval / 4);
         first.step();
     }
+    built_chain(&mut first);
+    let glb = first.state().built_chain().unwrap().chain.glb();
     std::mem::forget(first);
     let mut second = studio(None);
     second.state_mut().resume(Autosave::in_dir(&dir), true);
     assert_eq!(second.state().chain_settings().recipe, recipe);
+    // The built chain is back with the model, and nothing was built for it.
+    second.step();
+    wait_while(&mut second, "reopening", |s| {
+        s.is_loading() || s.is_building_chain()
+    });
+    let chain = &second
+        .state()
+        .built_chain()
+        .expect("the chain reopened")
+        .chain;
+    assert!(chain.lods.iter().all(|l| l.reused));
+    assert_eq!(chain.glb(), glb);
+    assert!(
+        second
+            .state()
+            .log_lines()
+            .any(|l| l.contains("Reopened the last session's chain of 3 LODs"))
+    );
 }
 
 /// A chain of the textured milk truck: each edge-collapse row is drawn with

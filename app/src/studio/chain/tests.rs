@@ -358,7 +358,14 @@ fn an_edited_row_rebuilds_alone() {
     assert_eq!(reused(&state), [false, false, false]);
     let events = build(&mut state, "simplify:2%,hybrid:2%,voxel:5%", torus());
     assert!(
-        matches!(events[..], [ChainEvent::Built { lods: 3, kept: 2, .. }]),
+        matches!(
+            events[..],
+            [ChainEvent::Built {
+                lods: 3,
+                kept: 2,
+                ..
+            }]
+        ),
         "{events:?}"
     );
     assert_eq!(reused(&state), [false, true, true]);
@@ -412,7 +419,10 @@ fn kept_work_reopens_the_chain_after_a_restart() {
     edited.keep_in(Some(file.clone()));
     edited.set_recipe(recipe("simplify:4%,hybrid:2%,voxel:5%"));
     assert!(edited.reopen(torus(), &ctx).is_none());
-    assert!(finish(&mut edited).is_empty(), "another chain: nothing reopened");
+    assert!(
+        finish(&mut edited).is_empty(),
+        "another chain: nothing reopened"
+    );
     assert!(edited.built().is_none());
     build(&mut edited, "simplify:4%,hybrid:2%,voxel:5%", torus());
     assert_eq!(reused(&edited), [false, true, true]);
