@@ -111,11 +111,15 @@ impl<T> Job<T> {
         self.started.elapsed()
     }
 
-    /// A progress bar with the stage name and a Cancel button; true when Cancel
+    /// A progress bar with the stage name, the time left once it can be
+    /// told, and a Cancel button; true when Cancel
     /// was clicked (the caller drops the job, which stops it).
     pub fn progress_row(&self, ui: &mut egui::Ui) -> bool {
         ui.horizontal(|ui| {
-            let text = format!("{}: {}", self.label, self.progress.stage_name());
+            let mut text = format!("{}: {}", self.label, self.progress.stage_name());
+            if let Some(left) = self.progress.time_left() {
+                text.push_str(&format!(" · about {} left", duration_text(left)));
+            }
             ui.add(
                 egui::ProgressBar::new(self.progress.fraction())
                     .desired_width((ui.available_width() - 80.0).max(40.0))
@@ -124,6 +128,14 @@ impl<T> Job<T> {
             ui.button("Cancel").clicked()
         })
         .inner
+    }
+}
+
+/// "45 s", "3 min 20 s": whole seconds, an estimate needs no more.
+fn duration_text(d: Duration) -> String {
+    match d.as_secs() {
+        s if s < 60 => format!("{s} s"),
+        s => format!("{} min {} s", s / 60, s % 60),
     }
 }
 

@@ -21,11 +21,23 @@ pub struct Cancelled;
 #[derive(Debug, Default)]
 pub struct Progress {
     stage: Mutex<String>,
+    /// The part of a larger job running now ([`Progress::part`]).
+    part: Mutex<Option<Part>>,
+    /// When the bar last started from empty (for [`Progress::time_left`]).
+    bar_started: Mutex<Option<Instant>>,
     fraction: AtomicU32,
     cancel: AtomicBool,
     watched: AtomicBool,
     /// The latest intermediate state and when it was published.
     preview: Mutex<(Option<DrawSet>, Option<Instant>)>,
+}
+
+/// A named share `[lo, hi]` of the bar.
+#[derive(Debug, Clone)]
+struct Part {
+    name: String,
+    lo: f32,
+    hi: f32,
 }
 
 /// The shortest time between two published intermediate states.
@@ -36,13 +48,41 @@ impl Progress {
         Self::default()
     }
 
-    /// Starts a named stage and resets the fraction to 0.
+    /// Starts a named stage and resets the fraction to 0: the bar restarts,
+    /// unless the stage belongs to a part, whose share of the bar it fills.
     pub fn stage(&self, name: &str) {
         if let Ok(mut s) = self.stage.lock() {
             s.clear();
             s.push_str(name);
         }
         self.set_fraction(0.0);
+        if self.part.lock().is_ok_and(|p| p.is_none()) {
+            self.restart_bar();
+        }
+    }
+
+    /// Starts part `name` of a larger job (a chain's row), filling the
+    /// share `lo..=hi` of the bar: its stages are named after it and move
+    /// the bar within that share, so the bar never restarts while the job
+    /// runs (a part from 0 starts it).
+    pub fn part(&self, name: &str, lo: f32, hi: f32) {
+        if let Ok(mut p) = self.part.lock() {
+            *p = Some(Part {
+                name: name.to_string(),
+                lo,
+                hi: hi.max(lo),
+            });
+        }
+        if lo <= 0.0 {
+            self.restart_bar();
+        }
+        self.stage("");
+    }
+
+    fn restart_bar(&self) {
+        if let Ok(mut t) = self.bar_started.lock() {
+            *t = Some(Instant::now());
+        }
     }
 
     pub fn set_fraction(&self, f: f32) {
@@ -54,12 +94,33 @@ impl Progress {
         self.fraction.store(f.to_bits(), Ordering::Relaxed);
     }
 
+    /// How full the bar is: the stage's fraction, within its part's share.
     pub fn fraction(&self) -> f32 {
-        f32::from_bits(self.fraction.load(Ordering::Relaxed))
+        let f = f32::from_bits(self.fraction.load(Ordering::Relaxed));
+        match self.part.lock().ok().and_then(|p| p.clone()) {
+            Some(Part { lo, hi, .. }) => lo + f * (hi - lo),
+            None => f,
+        }
     }
 
+    /// The time left until the bar is full, at the rate it filled since it
+    /// last started; `None` until a second and 2 % of it have passed (too
+    /// early to tell).
+    pub fn time_left(&self) -> Option<Duration> {
+        let elapsed = (*self.bar_started.lock().ok()?)?.elapsed();
+        let f = self.fraction();
+        (f >= 0.02 && elapsed >= Duration::from_secs(1)).then(|| elapsed.mul_f32((1.0 - f) / f))
+    }
+
+    /// The stage's name, after its part's where it has one ("row 2 of
+    /// 4: hybrid · sampling").
     pub fn stage_name(&self) -> String {
-        self.stage.lock().map(|s| s.clone()).unwrap_or_default()
+        let stage = self.stage.lock().map(|s| s.clone()).unwrap_or_default();
+        match self.part.lock().ok().and_then(|p| p.clone()) {
+            Some(part) if stage.is_empty() => part.name,
+            Some(part) => format!("{} · {stage}", part.name),
+            None => stage,
+        }
     }
 
     pub fn cancel(&self) {
@@ -104,5 +165,49 @@ impl Progress {
         } else {
             Ok(())
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A job's parts fill their shares of the bar, whatever their stages do,
+    /// and name them; a bar too young tells no time.
+    #[test]
+    fn parts_fill_their_share_and_name_their_stages() {
+        let p = Progress::new();
+        p.stage("load");
+        p.set_fraction(0.5);
+        assert_eq!((p.fraction(), p.stage_name().as_str()), (0.5, "load"));
+        p.part("row 1 of 4: hybrid", 0.0, 0.5);
+        p.stage("sampling");
+        p.set_fraction(0.5);
+        assert_eq!(p.fraction(), 0.25);
+        assert_eq!(p.stage_name(), "row 1 of 4: hybrid · sampling");
+        p.stage("merging");
+        assert_eq!(
+            p.fraction(),
+            0.0,
+            "a part's stage starts at its share's start"
+        );
+        p.set_fraction(1.0);
+        p.part("row 3 of 4: amg", 0.5, 1.0);
+        assert_eq!(p.fraction(), 0.5);
+        assert_eq!(p.stage_name(), "row 3 of 4: amg");
+        assert_eq!(p.time_left(), None, "too early to tell");
+    }
+
+    /// Half the bar in a second: about a second left.
+    #[test]
+    fn the_time_left_follows_the_rate_the_bar_filled() {
+        let p = Progress::new();
+        p.stage("work");
+        std::thread::sleep(Duration::from_millis(1050));
+        p.set_fraction(0.5);
+        let left = p.time_left().expect("an estimate").as_secs_f32();
+        assert!((1.0..10.0).contains(&left), "{left} s");
+        p.set_fraction(0.01);
+        assert_eq!(p.time_left(), None, "below 2 %");
     }
 }

@@ -154,11 +154,13 @@ impl StudioApp {
         self.build_note = Some(message);
     }
 
-    /// The latest intermediate state of the running build, as a scene.
+    /// The latest intermediate state of the running build (or chain
+    /// build), as a scene.
     pub(super) fn poll_preview(&mut self) {
-        match &self.build {
-            Some(job) => {
-                if let Some(state) = job.progress().take_preview() {
+        let building = self.build.as_ref().map(Job::progress);
+        match building.or_else(|| self.chain.build_progress()) {
+            Some(progress) => {
+                if let Some(state) = progress.take_preview() {
                     self.preview = Some(Arc::new(Scene::from_draw_set(
                         &state,
                         &SceneStyle::default(),

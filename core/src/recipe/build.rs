@@ -183,7 +183,12 @@ fn build(
         for &j in &group {
             done[j] = true;
         }
-        progress.stage(&format!("row {}: {}", first + 1, row.method.name()));
+        let (n, done_rows) = (recipe.rows.len(), done.iter().filter(|&&d| d).count());
+        progress.part(
+            &format!("row {} of {n}: {}", first + 1, row.method.name()),
+            (done_rows - group.len()) as f32 / n as f32,
+            done_rows as f32 / n as f32,
+        );
         let key = cache::group_key(recipe, &group);
         let found = cache.as_deref_mut().and_then(|c| c.group(&key));
         let reused = found.is_some();
@@ -208,6 +213,12 @@ fn build(
                 hit
             }
         };
+        // Watchers see each group's coarsest LOD once it is made.
+        if progress.wants_preview()
+            && let Some(last) = sets.last()
+        {
+            progress.publish(last.clone());
+        }
         for (j, set) in group.into_iter().zip(sets) {
             lods.push(ChainLod {
                 rows: vec![j],
@@ -580,5 +591,24 @@ mod tests {
         let other = Model::Mesh(crate::builtins::torus(1.0, 0.25, 48, 24));
         let fresh = build_chain_cached(&other, &recipe, &p, &mut reread).unwrap();
         assert!(fresh.lods.iter().all(|l| !l.reused));
+    }
+
+    /// A watched chain build shows what it has made (its rows' LODs as
+    /// they are built), and its bar ends full, never restarting per stage.
+    #[test]
+    fn a_watched_chain_build_publishes_what_it_made() {
+        let recipe = Recipe::new(parse_lods("simplify:0.5,hybrid:2%", None).unwrap());
+        let p = Progress::new();
+        p.watch();
+        let chain = build_chain(&torus(), &recipe, &p).unwrap();
+        let shown = p.take_preview().expect("a state shown while building");
+        assert!(shown.primitive_count() > 0);
+        assert!(shown.primitive_count() <= 2 * chain.lods[0].set.primitive_count());
+        assert!(
+            p.stage_name().starts_with("row 2 of 2: "),
+            "{}",
+            p.stage_name()
+        );
+        assert!(p.fraction() >= 0.5);
     }
 }

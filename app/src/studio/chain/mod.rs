@@ -137,6 +137,8 @@ impl ChainState {
         };
         match spawn("chain", "Chain", "the chain build", ctx, work) {
             Ok(job) => {
+                // What the rows' builds have made so far, for the viewport.
+                job.progress().watch();
                 self.job = Some(job);
                 self.reopening = reopen;
                 None
@@ -158,6 +160,11 @@ impl ChainState {
 
     pub fn is_building(&self) -> bool {
         self.job.is_some()
+    }
+
+    /// The running build's progress (its stage, and what it made so far).
+    pub fn build_progress(&self) -> Option<&Progress> {
+        self.job.as_ref().map(Job::progress)
     }
 
     /// The last chain built for the model on screen.
