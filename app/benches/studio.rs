@@ -14,8 +14,9 @@
 //!   at most 5 ms).
 //!
 //! - issue 46: with `-- --ratio [MODEL…]`, the same build through the
-//!   studio's frame loop and through the core call in one run, and whether
-//!   an idle studio asks for frames.
+//!   studio's frame loop and through the core call in one run (edge
+//!   collapse, hybrid, the default chain and the chain with one row edited),
+//!   and whether an idle studio asks for frames.
 //!
 //! Run with `cargo bench -p lodstudio --bench studio` (horse, engine, dragon)
 //! or name models: `cargo bench -p lodstudio --bench studio -- horse.ply`.
@@ -170,6 +171,57 @@ fn ratio_row(h: &mut Harness<'_, StudioApp>, model: &str, method: Method) {
     );
 }
 
+/// Steps the studio as its frame loop would (a frame when it asks for one)
+/// until the chain build ends; the build's seconds from its log line.
+fn studio_chain_build(h: &mut Harness<'_, StudioApp>) -> f64 {
+    let ctx = h.ctx.clone();
+    h.state_mut().build_chain(&ctx);
+    h.step();
+    while h.state().is_building_chain() {
+        let wait = h.state().poll_interval().unwrap_or_default();
+        std::thread::sleep(wait);
+        h.step();
+        h.render().expect("render the studio");
+    }
+    let line = h
+        .state()
+        .log_lines()
+        .filter(|l| l.contains("Built a chain of"))
+        .last()
+        .expect("the chain's log line")
+        .to_string();
+    let seconds = line.split(" in ").nth(1).and_then(|t| t.split(' ').next());
+    seconds.and_then(|s| s.parse().ok()).expect("seconds in the log line")
+}
+
+/// The default chain through `recipe::build_chain` and through the
+/// studio's frame loop (its work kept beside a session, as in use), in one
+/// run; then one edge-collapse row edited and the chain built again from
+/// what was kept.
+fn chain_ratio_row(h: &mut Harness<'_, StudioApp>, model: &str, session: &std::path::Path) {
+    use lodstudio_core::recipe::{Recipe, build_chain, parse_lods};
+    h.state_mut()
+        .resume(lodstudio::session::Autosave::in_dir(session), false);
+    let lods = "source,simplify:0.5%,simplify:2%,amg:15%";
+    let mut recipe = Recipe::new(parse_lods(lods, None).expect("rows"));
+    h.state_mut().set_chain_recipe(recipe.clone());
+    let loaded = h.state().loaded().expect("a model").model.clone();
+    let t = Instant::now();
+    build_chain(&loaded, &recipe, &lodstudio_core::Progress::new()).expect("the core builds");
+    let core_s = t.elapsed().as_secs_f64();
+    let studio_s = studio_chain_build(h);
+    recipe.rows[2] = parse_lods("simplify:4%", None).expect("a row").remove(0);
+    h.state_mut().set_chain_recipe(recipe);
+    let edited_s = studio_chain_build(h);
+    let chain = &h.state().built_chain().expect("a chain").chain;
+    let kept = chain.lods.iter().filter(|l| l.reused).count();
+    println!(
+        "| {model} | chain `{lods}` | {core_s:.2} | {studio_s:.2} | {:.2} | row 2 edited to `simplify:4%`: {edited_s:.2} s, {kept} of {} LODs kept |",
+        studio_s / core_s,
+        chain.lods.len()
+    );
+}
+
 /// Builds an LOD chain on the loaded model and runs the switch preview
 /// through it; prints the chain table's row.
 fn chain_row(h: &mut Harness<'_, StudioApp>, model: &str) {
@@ -243,6 +295,8 @@ fn main() {
             for method in [Method::EdgeCollapse, Method::Hybrid] {
                 ratio_row(&mut h, &model, method);
             }
+            let session = tempfile::tempdir().expect("a session folder");
+            chain_ratio_row(&mut h, &model, session.path());
         }
         return;
     }
