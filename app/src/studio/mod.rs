@@ -50,8 +50,10 @@ use crate::settings::voxel::VolumeGrid;
 /// (benchmarks/studio.md, "Builds against the CLI").
 const POLL_INTERVAL: Duration = Duration::from_millis(250);
 /// Past this, a build's progress moves slowly: a frame a second shows it,
-/// and each frame less gives the build ~55 ms of CPU under lavapipe.
-const LONG_BUILD: Duration = Duration::from_secs(2);
+/// and each frame less gives the build ~55 ms of CPU under lavapipe (2 s
+/// before: the horse's default chain took 1.1–1.6× the CLI's time, now
+/// 0.99–1.24×; benchmarks/studio.md).
+const LONG_BUILD: Duration = Duration::from_secs(1);
 const LONG_POLL_INTERVAL: Duration = Duration::from_secs(1);
 
 /// The model on screen.
