@@ -191,7 +191,9 @@ fn studio_chain_build(h: &mut Harness<'_, StudioApp>) -> f64 {
         .expect("the chain's log line")
         .to_string();
     let seconds = line.split(" in ").nth(1).and_then(|t| t.split(' ').next());
-    seconds.and_then(|s| s.parse().ok()).expect("seconds in the log line")
+    seconds
+        .and_then(|s| s.parse().ok())
+        .expect("seconds in the log line")
 }
 
 /// The default chain through `recipe::build_chain` and through the

@@ -118,7 +118,13 @@ impl<T> Job<T> {
         ui.horizontal(|ui| {
             let mut text = format!("{}: {}", self.label, self.progress.stage_name());
             if let Some(left) = self.progress.time_left() {
-                text.push_str(&format!(" · about {} left", duration_text(left)));
+                // A bar of one stage tells that stage's time only.
+                let scope = if self.progress.has_parts() {
+                    ""
+                } else {
+                    " in this stage"
+                };
+                text.push_str(&format!(" · about {} left{scope}", duration_text(left)));
             }
             ui.add(
                 egui::ProgressBar::new(self.progress.fraction())

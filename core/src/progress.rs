@@ -23,8 +23,9 @@ pub struct Progress {
     stage: Mutex<String>,
     /// The part of a larger job running now ([`Progress::part`]).
     part: Mutex<Option<Part>>,
-    /// When the bar last started from empty (for [`Progress::time_left`]).
-    bar_started: Mutex<Option<Instant>>,
+    /// The first fill the bar reported since it last restarted, and when
+    /// (for [`Progress::time_left`]).
+    bar_started: Mutex<Option<(Instant, f32)>>,
     fraction: AtomicU32,
     cancel: AtomicBool,
     watched: AtomicBool,
@@ -81,7 +82,7 @@ impl Progress {
 
     fn restart_bar(&self) {
         if let Ok(mut t) = self.bar_started.lock() {
-            *t = Some(Instant::now());
+            *t = None;
         }
     }
 
@@ -92,6 +93,11 @@ impl Progress {
             0.0
         };
         self.fraction.store(f.to_bits(), Ordering::Relaxed);
+        if let Ok(mut t) = self.bar_started.lock()
+            && t.is_none()
+        {
+            *t = Some((Instant::now(), self.fraction()));
+        }
     }
 
     /// How full the bar is: the stage's fraction, within its part's share.
@@ -103,13 +109,21 @@ impl Progress {
         }
     }
 
-    /// The time left until the bar is full, at the rate it filled since it
-    /// last started; `None` until a second and 2 % of it have passed (too
-    /// early to tell).
+    /// Whether the bar stands for the whole job (its parts), not only the
+    /// stage running now.
+    pub fn has_parts(&self) -> bool {
+        self.part.lock().is_ok_and(|p| p.is_some())
+    }
+
+    /// The time left until the bar is full, at the rate it filled since its
+    /// first report after it restarted (a stage may start half full: work
+    /// done ahead by another thread); `None` until a second and 2 % of the
+    /// bar have passed (too early to tell).
     pub fn time_left(&self) -> Option<Duration> {
-        let elapsed = (*self.bar_started.lock().ok()?)?.elapsed();
-        let f = self.fraction();
-        (f >= 0.02 && elapsed >= Duration::from_secs(1)).then(|| elapsed.mul_f32((1.0 - f) / f))
+        let (t0, f0) = (*self.bar_started.lock().ok()?)?;
+        let (elapsed, f) = (t0.elapsed(), self.fraction());
+        (f - f0 >= 0.02 && elapsed >= Duration::from_secs(1))
+            .then(|| elapsed.mul_f32((1.0 - f) / (f - f0)))
     }
 
     /// The stage's name, after its part's where it has one ("row 2 of
@@ -180,7 +194,9 @@ mod tests {
         p.stage("load");
         p.set_fraction(0.5);
         assert_eq!((p.fraction(), p.stage_name().as_str()), (0.5, "load"));
+        assert!(!p.has_parts());
         p.part("row 1 of 4: hybrid", 0.0, 0.5);
+        assert!(p.has_parts());
         p.stage("sampling");
         p.set_fraction(0.5);
         assert_eq!(p.fraction(), 0.25);
@@ -198,16 +214,19 @@ mod tests {
         assert_eq!(p.time_left(), None, "too early to tell");
     }
 
-    /// Half the bar in a second: about a second left.
+    /// A stage that starts half full and fills a quarter in a second has
+    /// about a second left (not the third of a second its start suggests).
     #[test]
     fn the_time_left_follows_the_rate_the_bar_filled() {
         let p = Progress::new();
         p.stage("work");
-        std::thread::sleep(Duration::from_millis(1050));
         p.set_fraction(0.5);
+        std::thread::sleep(Duration::from_millis(1050));
+        assert_eq!(p.time_left(), None, "no progress yet");
+        p.set_fraction(0.75);
         let left = p.time_left().expect("an estimate").as_secs_f32();
-        assert!((1.0..10.0).contains(&left), "{left} s");
-        p.set_fraction(0.01);
-        assert_eq!(p.time_left(), None, "below 2 %");
+        assert!((1.0..3.0).contains(&left), "{left} s");
+        p.stage("next");
+        assert_eq!(p.time_left(), None, "a new stage: too early");
     }
 }

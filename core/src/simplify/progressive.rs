@@ -124,10 +124,18 @@ pub fn record(
             if s.collapses().is_multiple_of(512) {
                 let done = (n - s.triangle_count()) as f32 / n.saturating_sub(floor).max(1) as f32;
                 progress.set_fraction(done);
+                // The studio shows the mesh as it is simplified.
+                if progress.wants_preview() {
+                    progress.publish(crate::lod::DrawSet {
+                        mesh: s.mesh().0,
+                        ..Default::default()
+                    });
+                }
             }
             true
         },
     )?;
+    progress.stage("indexing the record");
     let record = Record {
         history: col.arrays().gather(0..col.triangle_total() as u32),
         input_triangles: n as u32,
@@ -486,6 +494,19 @@ mod tests {
     }
 
     /// Hostile records are refused, never replayed.
+    /// A watched record shows the mesh as it is simplified (the studio's
+    /// edge-collapse build draws it): a state between the input and the floor.
+    #[test]
+    fn a_watched_record_publishes_the_mesh_being_simplified() {
+        let mesh = crate::builtins::torus(1.0, 0.3, 96, 48);
+        let progress = Progress::new();
+        progress.watch();
+        record(&mesh, CollapseOptions::default(), 100, &progress).unwrap();
+        let shown = progress.take_preview().expect("an intermediate mesh");
+        let t = shown.mesh.triangles.len();
+        assert!(t < mesh.triangles.len() && t >= 100, "{t}");
+    }
+
     #[test]
     fn inconsistent_records_are_refused() {
         let mesh = crate::builtins::torus(1.0, 0.3, 12, 8);
