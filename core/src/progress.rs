@@ -23,9 +23,9 @@ pub struct Progress {
     stage: Mutex<String>,
     /// The part of a larger job running now ([`Progress::part`]).
     part: Mutex<Option<Part>>,
-    /// The first fill the bar reported since it last restarted, and when
-    /// (for [`Progress::time_left`]).
-    bar_started: Mutex<Option<(Instant, f32)>>,
+    /// Two fills the bar reported since it last restarted, and when: the
+    /// rate between the older and now gives [`Progress::time_left`].
+    bar_window: Mutex<Option<Window>>,
     fraction: AtomicU32,
     cancel: AtomicBool,
     watched: AtomicBool,
@@ -40,6 +40,17 @@ struct Part {
     lo: f32,
     hi: f32,
 }
+
+/// Fills of the bar and when they were reported: the older one is at most
+/// [`WINDOW`] × 2 old, so the rate follows a stage that slows down (later
+/// collapses cost more to bound than early ones).
+#[derive(Debug, Clone, Copy)]
+struct Window {
+    older: (Instant, f32),
+    newer: (Instant, f32),
+}
+
+const WINDOW: Duration = Duration::from_secs(5);
 
 /// The shortest time between two published intermediate states.
 const PREVIEW_INTERVAL: Duration = Duration::from_millis(250);
@@ -81,8 +92,8 @@ impl Progress {
     }
 
     fn restart_bar(&self) {
-        if let Ok(mut t) = self.bar_started.lock() {
-            *t = None;
+        if let Ok(mut w) = self.bar_window.lock() {
+            *w = None;
         }
     }
 
@@ -93,10 +104,21 @@ impl Progress {
             0.0
         };
         self.fraction.store(f.to_bits(), Ordering::Relaxed);
-        if let Ok(mut t) = self.bar_started.lock()
-            && t.is_none()
-        {
-            *t = Some((Instant::now(), self.fraction()));
+        if let Ok(mut w) = self.bar_window.lock() {
+            let now = (Instant::now(), self.fraction());
+            match &mut *w {
+                None => {
+                    *w = Some(Window {
+                        older: now,
+                        newer: now,
+                    })
+                }
+                Some(w) if w.newer.0.elapsed() >= WINDOW => {
+                    w.older = w.newer;
+                    w.newer = now;
+                }
+                Some(_) => {}
+            }
         }
     }
 
@@ -115,12 +137,12 @@ impl Progress {
         self.part.lock().is_ok_and(|p| p.is_some())
     }
 
-    /// The time left until the bar is full, at the rate it filled since its
-    /// first report after it restarted (a stage may start half full: work
-    /// done ahead by another thread); `None` until a second and 2 % of the
-    /// bar have passed (too early to tell).
+    /// The time left until the bar is full, at the rate it filled over the
+    /// last 5–10 s (a stage may start half full, with work done ahead by
+    /// another thread, and slow down as it goes); `None` until a second and
+    /// 2 % of the bar have passed (too early to tell).
     pub fn time_left(&self) -> Option<Duration> {
-        let (t0, f0) = (*self.bar_started.lock().ok()?)?;
+        let (t0, f0) = (*self.bar_window.lock().ok()?)?.older;
         let (elapsed, f) = (t0.elapsed(), self.fraction());
         (f - f0 >= 0.02 && elapsed >= Duration::from_secs(1))
             .then(|| elapsed.mul_f32((1.0 - f) / (f - f0)))
