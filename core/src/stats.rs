@@ -4,7 +4,7 @@
 use serde_json::json;
 
 use crate::geom::{RepairReport, Topology};
-use crate::io::{Format, Loaded, Model};
+use crate::io::{AssetReport, Format, Loaded, Model};
 
 #[derive(Debug, Clone, PartialEq)]
 pub struct ModelSummary {
@@ -27,6 +27,8 @@ pub struct ModelSummary {
     pub spacing: Option<[f32; 3]>,
     pub value_range: Option<(f32, f32)>,
     pub repairs: RepairReport,
+    /// The asset around the model (a glTF's scene) and what is not carried.
+    pub asset: AssetReport,
 }
 
 impl ModelSummary {
@@ -49,6 +51,7 @@ impl ModelSummary {
             spacing: None,
             value_range: None,
             repairs: loaded.repairs.clone(),
+            asset: loaded.asset.clone(),
         };
         match &loaded.model {
             Model::Mesh(m) => {
@@ -102,6 +105,19 @@ impl ModelSummary {
             "boundary_loops": self.boundary_loops,
             "non_manifold_edges": self.non_manifold_edges,
         });
+        let a = &self.asset;
+        for (key, value) in [
+            ("nodes", json!(a.nodes)),
+            ("meshes", json!(a.meshes)),
+            ("instances", json!(a.instances)),
+            ("skins", json!(a.skins)),
+            ("animations", json!(a.animations)),
+            ("morph_targets", json!(a.morph_targets)),
+            ("extensions", json!(a.extensions)),
+            ("dropped", json!(a.dropped)),
+        ] {
+            v[key] = value;
+        }
         if let (Some(g), Some(sp), Some((lo, hi))) = (self.grid, self.spacing, self.value_range) {
             v["grid"] = json!(g);
             v["spacing"] = json!(sp);
@@ -154,6 +170,29 @@ impl ModelSummary {
         out.push(("bbox diagonal".into(), format!("{:.6}", self.bbox_diagonal)));
         for (what, n) in self.repairs.applied() {
             out.push((format!("repair: {}", what.replace('_', " ")), n.to_string()));
+        }
+        let a = &self.asset;
+        if a.nodes > 1 || a.skins + a.animations + a.morph_targets > 0 {
+            out.push((
+                "scene".into(),
+                format!(
+                    "{} nodes, {} meshes, {} instances",
+                    a.nodes, a.meshes, a.instances
+                ),
+            ));
+            out.push((
+                "skins, animations, targets".into(),
+                format!("{}, {}, {}", a.skins, a.animations, a.morph_targets),
+            ));
+        }
+        if !a.extensions.is_empty() {
+            out.push(("extensions".into(), a.extensions.join(", ")));
+        }
+        if !a.dropped.is_empty() {
+            out.push((
+                "not carried".into(),
+                format!("{} items (see the log)", a.dropped.len()),
+            ));
         }
         out
     }

@@ -61,7 +61,7 @@ fn check_chain(out: &Path, report: &Value) -> Vec<Value> {
     );
 
     // A reader without MSFT_lod sees LOD0 alone.
-    let back = gltf::read(&glb, None).expect("the GLB reads back");
+    let (back, _) = gltf::read(&glb, None).expect("the GLB reads back");
     if splats[0] == 0 {
         assert_eq!(back.triangles.len() as u64, triangles[0]);
         assert!(back.normals.is_some(), "every LOD has normals");
@@ -313,7 +313,7 @@ fn bad_input_exits_2_and_loses_nothing() {
     assert_eq!(report["bytes"].as_u64().unwrap() as usize, glb.len());
     assert!(glb_json(&glb).get("extensionsUsed").is_none());
     assert_eq!(
-        gltf::read(&glb, None).unwrap().triangles.len() as u64,
+        gltf::read(&glb, None).unwrap().0.triangles.len() as u64,
         report["lods"][0]["triangles"].as_u64().unwrap()
     );
 }
@@ -454,7 +454,7 @@ fn original_materials_and_textures_are_carried_into_every_lod() {
     let tmp = tempfile::tempdir().unwrap();
     let truck = shared_model("CesiumMilkTruck.glb");
     let input = std::fs::read(&truck).unwrap();
-    let original = gltf::read(&input, None).unwrap();
+    let (original, _) = gltf::read(&input, None).unwrap();
     let materials = original.materials.clone().expect("the truck has materials");
     assert_eq!(materials.table.len(), 4);
     let atlas = materials.table[0]
@@ -513,7 +513,7 @@ fn original_materials_and_textures_are_carried_into_every_lod() {
             }
         }
         // LOD0 read back wears the input's materials, image bytes included.
-        let back = gltf::read(&glb, None).unwrap();
+        let (back, _) = gltf::read(&glb, None).unwrap();
         let got = back.materials.expect("materials read back");
         assert_eq!(got.table, materials.table, "{method}");
         assert_eq!(got.table[0].base_color_texture.as_ref(), Some(&atlas));

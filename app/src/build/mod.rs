@@ -227,6 +227,7 @@ pub(crate) mod tests {
                 model,
                 format: Format::Builtin,
                 repairs: Default::default(),
+                asset: lodstudio_core::io::AssetReport::single(),
             }),
             solid: None,
         }

@@ -247,7 +247,10 @@ fn export_one(
         Model::Mesh(m) => Some(m),
         _ => None,
     };
-    Ok(report(&chain, file, output, bytes, seconds, mesh))
+    let mut report = report(&chain, file, output, bytes, seconds, mesh);
+    // What the input held that the chain does not carry (issue 49).
+    report["dropped"] = serde_json::json!(loaded.asset.dropped);
+    Ok(report)
 }
 
 /// The JSON report of a written chain.

@@ -73,6 +73,9 @@ pub fn run(args: InfoArgs) -> Result<(), CliError> {
         for (label, value) in summary.lines() {
             println!("  {label:<22} {value}");
         }
+        for d in &summary.asset.dropped {
+            println!("  not carried: {} ({})", d.what, d.place);
+        }
     }
     Ok(())
 }

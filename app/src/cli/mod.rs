@@ -460,7 +460,17 @@ pub fn open_input(
         .and_then(|f| f.rsplit_once("#lod"))
         .map_or(file, |(f, _)| std::path::Path::new(f));
     outputs::input(read)?;
-    Ok(lodstudio_core::open::open(file, opts, &Progress::new())?)
+    let loaded = lodstudio_core::open::open(file, opts, &Progress::new())?;
+    // Nothing is dropped silently: what the outputs leave out is said.
+    for d in &loaded.asset.dropped {
+        eprintln!(
+            "lodstudio: {}: not carried: {} ({})",
+            file.display(),
+            d.what,
+            d.place
+        );
+    }
+    Ok(loaded)
 }
 
 /// Loads FILE and insists on a triangle mesh.

@@ -209,6 +209,10 @@ impl StudioApp {
                     "Loaded {name} ({}, {counts}) in {seconds:.2} s",
                     summary.format.name()
                 ));
+                // Nothing is dropped silently: what exports leave out is said.
+                for d in &summary.asset.dropped {
+                    self.info(format!("{name}: not carried: {} ({})", d.what, d.place));
+                }
                 self.forget_result();
                 self.chain.forget();
                 if volume.is_some() && self.threshold_volume.as_ref() != Some(&path) {

@@ -12,6 +12,7 @@ use std::sync::Arc;
 
 use glam::{Mat3, Mat4, Vec2, Vec3};
 
+use super::asset::{AssetReport, audit_gltf, check_required};
 use super::confine;
 use super::error::{ParseError, ParseResult};
 use crate::geom::{AlphaMode, Image, Material, Materials, TriMesh, VertexAttributes};
@@ -36,8 +37,14 @@ fn check_glb_length(data: &[u8]) -> ParseResult<()> {
 /// Parses and validates `data`. The crate's validation reads each primitive's
 /// `POSITION` accessor before it checks that index (a panic on a hostile
 /// file, found by fuzzing), so those indices are checked here first.
-fn parse(data: &[u8]) -> ParseResult<gltf::Gltf> {
+fn parse(data: &[u8]) -> ParseResult<(gltf::Gltf, serde_json::Value)> {
     check_glb_length(data)?;
+    // A required extension is named before the crate's own checks (which
+    // refuse it as "unsupported" without saying what it is).
+    let raw = raw_json(data);
+    if let Ok(root) = &raw {
+        check_required(root)?;
+    }
     let invalid = |e: gltf::Error| ParseError::file(format!("expected valid glTF 2.0 ({e})"));
     let gltf::Gltf { document, blob } =
         gltf::Gltf::from_slice_without_validation(data).map_err(invalid)?;
@@ -81,15 +88,25 @@ fn parse(data: &[u8]) -> ParseResult<gltf::Gltf> {
         }
     }
     let document = gltf::Document::from_json(document.into_json()).map_err(invalid)?;
-    Ok(gltf::Gltf { document, blob })
+    Ok((gltf::Gltf { document, blob }, raw?))
 }
 
 /// Every mesh instance of the default scene (else the first scene, else of
-/// every node) as one mesh.
-pub fn read(data: &[u8], base: Option<&Path>) -> ParseResult<TriMesh> {
-    let g = parse(data)?;
+/// every node) as one mesh, with what the file holds besides
+/// ([`AssetReport`]: counted, and listed where the outputs leave it out).
+///
+/// # Errors
+/// A malformed file, or one that requires an extension lodstudio cannot read.
+pub fn read(data: &[u8], base: Option<&Path>) -> ParseResult<(TriMesh, AssetReport)> {
+    let (g, raw) = parse(data)?;
+    let scene = g
+        .document
+        .default_scene()
+        .or_else(|| g.document.scenes().next())
+        .map(|s| s.index());
+    let report = audit_gltf(&raw, scene)?;
     let roots = scene_roots(&g.document);
-    read_nodes(&g, base, roots)
+    Ok((read_nodes(&g, base, roots)?, report))
 }
 
 /// Level `lod` of the `MSFT_lod` chain that `export` writes: LOD 0 is the
@@ -100,11 +117,11 @@ pub fn read(data: &[u8], base: Option<&Path>) -> ParseResult<TriMesh> {
 /// # Errors
 /// As [`read`], and when the chain has no LOD `lod`.
 pub fn read_lod(data: &[u8], base: Option<&Path>, lod: usize) -> ParseResult<TriMesh> {
-    let g = parse(data)?;
+    let (g, raw) = parse(data)?;
     let Some(head) = scene_roots(&g.document).into_iter().next() else {
         return Err(ParseError::file("expected a node to hold LOD 0"));
     };
-    let ids = lod_ids(data, head.index())?;
+    let ids = lod_ids(&raw, head.index())?;
     let index = match lod {
         0 => head.index(),
         k => *ids.get(k - 1).ok_or_else(|| {
@@ -135,13 +152,7 @@ fn scene_roots(document: &gltf::Document) -> Vec<gltf::Node<'_>> {
 
 /// The `MSFT_lod` ids of node `node` (none without the extension), read from
 /// the JSON itself: the gltf crate, as configured, drops unknown extensions.
-fn lod_ids(data: &[u8], node: usize) -> ParseResult<Vec<usize>> {
-    let json = match gltf::binary::Glb::from_slice(data) {
-        Ok(glb) => glb.json.into_owned(),
-        Err(_) => data.to_vec(),
-    };
-    let root: serde_json::Value = serde_json::from_slice(&json)
-        .map_err(|e| ParseError::file(format!("expected glTF JSON ({e})")))?;
+fn lod_ids(root: &serde_json::Value, node: usize) -> ParseResult<Vec<usize>> {
     let Some(ids) = root["nodes"][node]["extensions"]["MSFT_lod"].get("ids") else {
         return Ok(Vec::new());
     };
@@ -151,6 +162,15 @@ fn lod_ids(data: &[u8], node: usize) -> ParseResult<Vec<usize>> {
             "expected MSFT_lod ids to be node indices",
         )
     })
+}
+
+/// The file's JSON as written (a GLB's JSON chunk).
+fn raw_json(data: &[u8]) -> ParseResult<serde_json::Value> {
+    let json = match gltf::binary::Glb::from_slice(data) {
+        Ok(glb) => glb.json.into_owned(),
+        Err(_) => data.to_vec(),
+    };
+    serde_json::from_slice(&json).map_err(|e| ParseError::file(format!("expected glTF JSON ({e})")))
 }
 
 /// Most node instances a scene graph may expand to: a graph of nodes that
@@ -668,7 +688,11 @@ mod tests {
             &[1.0, 0.5, 0.1],
             PointsAs::default(),
         );
-        assert_eq!(read(&chain, None).unwrap().triangles.len(), 3, "LOD0 alone");
+        assert_eq!(
+            read(&chain, None).unwrap().0.triangles.len(),
+            3,
+            "LOD0 alone"
+        );
         for (lod, triangles) in [(0, 3), (1, 2), (2, 1)] {
             assert_eq!(
                 read_lod(&chain, None, lod).unwrap().triangles.len(),
@@ -723,7 +747,7 @@ mod tests {
         std::fs::write(model.join("sub/tri.bin"), triangle_bytes()).unwrap();
         std::fs::write(dir.path().join("secret.bin"), triangle_bytes()).unwrap();
         std::fs::write(model.join("img.png"), b"\x89PNG not decoded here").unwrap();
-        let read_at = |json: &[u8]| read(json, Some(&model));
+        let read_at = |json: &[u8]| read(json, Some(&model)).map(|(mesh, _)| mesh);
         let ok = read_at(&gltf_naming("sub/tri.bin", Some("img.png"))).unwrap();
         assert_eq!(ok.triangles.len(), 1);
         let image = ok.materials.unwrap().table[0]

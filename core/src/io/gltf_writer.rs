@@ -731,7 +731,7 @@ mod round_trips {
         let mut m = crate::builtins::torus(1.0, 0.3, 16, 8);
         m.colors = Some(vec![Vec3::new(0.2, 0.5, 0.9); m.positions.len()]);
         let glb = write_glb(&m);
-        let back = read(&glb, None).unwrap();
+        let back = read(&glb, None).unwrap().0;
         assert_eq!(back.triangles, m.triangles);
         assert_eq!(back.positions, m.positions);
         assert!(back.normals.is_some() && back.uvs.is_some());
@@ -791,7 +791,7 @@ mod round_trips {
             doc["samplers"][0],
             serde_json::json!({"magFilter": 9729, "wrapS": 10497, "wrapT": 33648})
         );
-        let back = read(&glb, None).unwrap();
+        let back = read(&glb, None).unwrap().0;
         // Read back, each material says which attributes its primitive has:
         // the textured part's white COLOR_0 was left out.
         let mut expected = m.materials.clone().unwrap();
@@ -848,7 +848,7 @@ mod round_trips {
         assert_eq!(prim["mode"], 0);
         let radius = prim["attributes"]["_RADIUS"].as_u64().unwrap() as usize;
         assert_eq!(doc["accessors"][radius]["count"], 2);
-        assert_eq!(read(&glb, None).unwrap().triangles, mesh.triangles);
+        assert_eq!(read(&glb, None).unwrap().0.triangles, mesh.triangles);
         // Points alone still make a valid file.
         let only = glb_json(&write_draw_set_glb(&set(&TriMesh::default())));
         assert_eq!(only["meshes"][0]["primitives"][0]["mode"], 0);
@@ -907,7 +907,7 @@ mod round_trips {
                 assert!(prim["attributes"][attr].is_u64(), "lod{i} {attr}");
             }
         }
-        let back = read(&glb, None).unwrap();
+        let back = read(&glb, None).unwrap().0;
         assert_eq!(back.triangles, lods[0].triangles);
         assert_eq!(back.positions, lods[0].positions);
         // One LOD: the plain file, no extension.
@@ -921,18 +921,18 @@ mod round_trips {
         let glb = write_lod_chain(&sets(&lods), &[0.5, 0.1], Default::default());
         let doc = glb_json(&glb);
         assert!(doc["nodes"][1].get("mesh").is_none());
-        assert_eq!(read(&glb, None).unwrap().triangles, lods[0].triangles);
+        assert_eq!(read(&glb, None).unwrap().0.triangles, lods[0].triangles);
         // Nothing at all: a valid GLB without a binary chunk.
         let empty = write_glb(&TriMesh::default());
         assert_eq!(
             empty.len(),
             20 + glb_json(&empty).to_string().len().next_multiple_of(4)
         );
-        assert!(read(&empty, None).unwrap().triangles.is_empty());
+        assert!(read(&empty, None).unwrap().0.triangles.is_empty());
         // A mesh without normals is written with computed ones.
         let mut bare = crate::builtins::torus(1.0, 0.3, 8, 4);
         bare.normals = None;
-        let back = read(&write_glb(&bare), None).unwrap();
+        let back = read(&write_glb(&bare), None).unwrap().0;
         let expected = bare.vertex_normals();
         for (a, b) in back.normals.unwrap().iter().zip(&expected) {
             assert!(a.distance(*b) < 1e-5);

@@ -4,6 +4,7 @@
 //! Readers work on bytes and never trust a header count: every count is checked
 //! against the bytes that remain before anything is allocated from it.
 
+pub mod asset;
 pub mod confine;
 pub mod cut_writer;
 mod error;
@@ -20,6 +21,7 @@ pub mod volume;
 
 use std::path::{Path, PathBuf};
 
+pub use asset::{AssetReport, Dropped};
 pub use error::{LoadError, Location, ParseError, ParseResult};
 pub use volume::{RawSpec, ScalarType};
 
@@ -33,6 +35,8 @@ pub struct Loaded {
     pub model: Model,
     pub format: Format,
     pub repairs: RepairReport,
+    /// The asset around the model and what the outputs leave out of it.
+    pub asset: AssetReport,
 }
 
 /// File formats lodstudio reads.
@@ -113,11 +117,14 @@ pub fn load_bytes(
     progress.check()?;
     let format = detect(path, data, opts.raw.is_some())?;
     progress.stage(&format!("parsing {}", format.name()));
+    let mut asset = AssetReport::single();
     let model = match format {
         Format::Obj => Model::Mesh(obj::read(data, progress).map_err(malformed)?),
         Format::Gltf | Format::Glb => {
             let base = path.parent().map(Path::to_path_buf);
-            Model::Mesh(gltf::read(data, base.as_deref()).map_err(malformed)?)
+            let (mesh, report) = gltf::read(data, base.as_deref()).map_err(malformed)?;
+            asset = report;
+            Model::Mesh(mesh)
         }
         Format::Ply => ply::read(data, progress).map_err(malformed)?,
         Format::Off => off::read(data, progress).map_err(malformed)?,
@@ -141,7 +148,9 @@ pub fn load_bytes(
         }
     };
     progress.check()?;
-    prepared(path, model, format, opts)
+    let mut loaded = prepared(path, model, format, opts)?;
+    loaded.asset = asset;
+    Ok(loaded)
 }
 
 /// A model read from `path` in `format`, repaired as loading does, and
@@ -166,6 +175,7 @@ fn finish(model: Model, format: Format, opts: &LoadOptions) -> Loaded {
                 model: Model::Mesh(mesh),
                 format,
                 repairs,
+                asset: AssetReport::single(),
             }
         }
         Model::Points(points) => {
@@ -174,12 +184,14 @@ fn finish(model: Model, format: Format, opts: &LoadOptions) -> Loaded {
                 model: Model::Points(points),
                 format,
                 repairs,
+                asset: AssetReport::single(),
             }
         }
         Model::Volume(v) => Loaded {
             model: Model::Volume(v),
             format,
             repairs: RepairReport::default(),
+            asset: AssetReport::single(),
         },
     }
 }
