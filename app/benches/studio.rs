@@ -149,13 +149,7 @@ fn ratio_row(h: &mut Harness<'_, StudioApp>, model: &str, method: Method) {
         .expect("the core builds");
     let core_s = t.elapsed().as_secs_f64();
     h.state_mut().build();
-    h.step();
-    while h.state().is_building() {
-        let wait = h.state().poll_interval().unwrap_or_default();
-        std::thread::sleep(wait);
-        h.step();
-        h.render().expect("render the studio");
-    }
+    frame_loop_while(h, StudioApp::is_building);
     let studio_s = f64::from(h.state().result().expect("a result").seconds);
     h.run();
     let mut asked = 0;
@@ -171,18 +165,24 @@ fn ratio_row(h: &mut Harness<'_, StudioApp>, model: &str, method: Method) {
     );
 }
 
-/// Steps the studio as its frame loop would (a frame when it asks for one)
-/// until the chain build ends; the build's seconds from its log line.
-fn studio_chain_build(h: &mut Harness<'_, StudioApp>) -> f64 {
-    let ctx = h.ctx.clone();
-    h.state_mut().build_chain(&ctx);
+/// Steps and renders the studio as its frame loop would (a frame when it
+/// asks for one) while `busy`.
+fn frame_loop_while(h: &mut Harness<'_, StudioApp>, busy: fn(&StudioApp) -> bool) {
     h.step();
-    while h.state().is_building_chain() {
+    while busy(h.state()) {
         let wait = h.state().poll_interval().unwrap_or_default();
         std::thread::sleep(wait);
         h.step();
         h.render().expect("render the studio");
     }
+}
+
+/// Builds the chain through the studio's frame loop; the build's seconds
+/// from its log line.
+fn studio_chain_build(h: &mut Harness<'_, StudioApp>) -> f64 {
+    let ctx = h.ctx.clone();
+    h.state_mut().build_chain(&ctx);
+    frame_loop_while(h, StudioApp::is_building_chain);
     let line = h
         .state()
         .log_lines()

@@ -85,86 +85,17 @@ impl LiveCut {
 
     /// The scene of the current cut in the current style.
     fn make_scene(&self) -> Scene {
-        let d = &self.draw;
-        let plain = SceneStyle {
-            splat_outlines: self.style.outlines,
-            wireframe: self.style.wireframe,
-            ..SceneStyle::default()
-        };
-        if !self.style.heat && !self.style.by_type {
-            return match self.style.regions {
-                true => self.region_scene(plain),
-                false => Scene::from_draw_set(d, &plain),
-            };
-        }
-        let max = d.error_bound.max(f32::MIN_POSITIVE);
-        let colors: Vec<glam::Vec3> = if self.style.heat {
-            d.triangle_errors
-                .iter()
-                .map(|e| crate::heatmap::linear(e / max))
-                .collect()
-        } else {
-            vec![TRIANGLE_COLOR; d.mesh.triangles.len()]
-        };
-        let mut styled = d.clone();
-        for p in &mut styled.points {
-            p.color = if self.style.heat {
-                crate::heatmap::linear(p.error / max)
-            } else {
-                POINT_COLOR
-            };
-        }
-        Scene::from_draw_set(
-            &styled,
-            &SceneStyle {
-                triangle_colors: Some(&colors),
-                ..plain
-            },
-        )
-    }
-
-    /// The cut coloured by region: triangles by level (the ramp, coarsest
-    /// hottest), splats by AMG domain (the texture's Ψ kept as alpha), layers
-    /// each in a hue of its own.
-    fn region_scene(&self, plain: SceneStyle) -> Scene {
-        let d = &self.draw;
-        let top = d.triangle_levels.iter().copied().max().unwrap_or(0).max(1) as f32;
-        let levels: Vec<glam::Vec3> = d
-            .triangle_levels
-            .iter()
-            .map(|&l| crate::heatmap::linear(l as f32 / top))
-            .collect();
-        let layers: Vec<glam::Vec3> = (0..d.layers.len())
-            .map(crate::heatmap::categorical)
-            .collect();
-        let mut styled = d.clone();
-        for s in &d.splats {
-            let rgb = crate::heatmap::categorical(s.domain).map(|c| c.powf(1.0 / 2.2) * 255.0);
-            if let Some(t) = styled.textures.get_mut(s.texture) {
-                for texel in &mut t.rgba {
-                    texel[..3].copy_from_slice(&rgb.to_array().map(|c| c as u8));
-                }
-            }
-        }
-        Scene::from_draw_set(
-            &styled,
-            &SceneStyle {
-                triangle_colors: (!levels.is_empty()).then_some(&levels[..]),
-                layer_colors: Some(&layers),
-                ..plain
-            },
-        )
+        styled_scene(&self.draw, self.style)
     }
 
     /// Whether the cut has regions to colour by (levels, domains or layers).
     pub fn has_regions(&self) -> bool {
-        let d = &self.draw;
-        !d.triangle_levels.is_empty() || !d.splats.is_empty() || !d.layers.is_empty()
+        set_regions(&self.draw).is_some()
     }
 
     /// Whether the cut carries error bounds per triangle or point to colour by.
     pub fn has_errors(&self) -> bool {
-        !self.draw.triangle_errors.is_empty() || !self.draw.points.is_empty()
+        set_has_errors(&self.draw)
     }
 
     /// Changes how the cut is drawn (rebuilds the scene only, not the cut).
@@ -243,6 +174,98 @@ impl LiveCut {
     pub fn draw_set(&self) -> &DrawSet {
         &self.draw
     }
+}
+
+/// The scene of `d` drawn in `style` (the live cut's, and a chain LOD's).
+/// The heat map needs a bound per primitive: without one, plain colours.
+pub fn styled_scene(d: &DrawSet, style: CutStyle) -> Scene {
+    let plain = SceneStyle {
+        splat_outlines: style.outlines,
+        wireframe: style.wireframe,
+        ..SceneStyle::default()
+    };
+    let heat = style.heat && d.triangle_errors.len() == d.mesh.triangles.len();
+    if !heat && !style.by_type {
+        return match style.regions {
+            true => region_scene(d, plain),
+            false => Scene::from_draw_set(d, &plain),
+        };
+    }
+    let max = d.error_bound.max(f32::MIN_POSITIVE);
+    let colors: Vec<glam::Vec3> = if heat {
+        d.triangle_errors
+            .iter()
+            .map(|e| crate::heatmap::linear(e / max))
+            .collect()
+    } else {
+        vec![TRIANGLE_COLOR; d.mesh.triangles.len()]
+    };
+    let mut styled = d.clone();
+    for p in &mut styled.points {
+        p.color = if heat {
+            crate::heatmap::linear(p.error / max)
+        } else {
+            POINT_COLOR
+        };
+    }
+    Scene::from_draw_set(
+        &styled,
+        &SceneStyle {
+            triangle_colors: Some(&colors),
+            ..plain
+        },
+    )
+}
+
+/// `d` coloured by region: triangles by level (the ramp, coarsest hottest),
+/// splats by AMG domain (the texture's Ψ kept as alpha), layers each in a
+/// hue of its own.
+fn region_scene(d: &DrawSet, plain: SceneStyle) -> Scene {
+    let top = d.triangle_levels.iter().copied().max().unwrap_or(0).max(1) as f32;
+    let levels: Vec<glam::Vec3> = d
+        .triangle_levels
+        .iter()
+        .map(|&l| crate::heatmap::linear(l as f32 / top))
+        .collect();
+    let layers: Vec<glam::Vec3> = (0..d.layers.len())
+        .map(crate::heatmap::categorical)
+        .collect();
+    let mut styled = d.clone();
+    for s in &d.splats {
+        let rgb = crate::heatmap::categorical(s.domain).map(|c| c.powf(1.0 / 2.2) * 255.0);
+        if let Some(t) = styled.textures.get_mut(s.texture) {
+            for texel in &mut t.rgba {
+                texel[..3].copy_from_slice(&rgb.to_array().map(|c| c as u8));
+            }
+        }
+    }
+    Scene::from_draw_set(
+        &styled,
+        &SceneStyle {
+            triangle_colors: (!levels.is_empty()).then_some(&levels[..]),
+            layer_colors: Some(&layers),
+            ..plain
+        },
+    )
+}
+
+/// What "colour by region" colours in a set cut from a hierarchy, when it
+/// has regions (the hierarchy's own word, `Hierarchy::regions`).
+pub fn set_regions(d: &DrawSet) -> Option<&'static str> {
+    if !d.triangle_levels.is_empty() {
+        Some("merge-tree level")
+    } else if !d.splats.is_empty() {
+        Some("AMG domain")
+    } else if !d.layers.is_empty() {
+        Some("voxel layer")
+    } else {
+        None
+    }
+}
+
+/// Whether `d` carries error bounds per triangle or point to colour by.
+pub fn set_has_errors(d: &DrawSet) -> bool {
+    !d.triangle_errors.is_empty() || !d.points.is_empty()
 }
 
 /// [`CutStats::screen_pixels`]: each triangle's bound at its centroid and

@@ -3,7 +3,7 @@
 
 use std::sync::Arc;
 
-use lodstudio_core::lod::Picked;
+use lodstudio_core::lod::{DrawSet, Picked};
 
 use super::{Current, StudioApp, View};
 use crate::build;
@@ -14,15 +14,9 @@ impl StudioApp {
     /// Re-selects a live cut for the camera and the threshold (only when the
     /// hierarchy says they change it).
     pub(super) fn update_cut(&mut self) {
-        let heat = self.heat && self.view.shows_lod();
+        let style = self.cut_style();
         if let Some(live) = self.result.as_mut().map(|b| &mut b.live) {
-            live.set_style(CutStyle {
-                heat,
-                by_type: self.by_type && self.view.shows_lod(),
-                regions: self.regions && self.view.shows_lod(),
-                outlines: self.outlines,
-                wireframe: self.wireframe,
-            });
+            live.set_style(style);
             let mut view = self.viewport.core_view();
             let input_triangles = self
                 .current
@@ -38,6 +32,27 @@ impl StudioApp {
         }
     }
 
+    /// How the view bar asks a LOD to be drawn (the live cut or a chain LOD).
+    fn cut_style(&self) -> CutStyle {
+        let lod = self.view.shows_lod();
+        CutStyle {
+            heat: self.heat && lod,
+            by_type: self.by_type && lod,
+            regions: self.regions && lod,
+            outlines: self.outlines,
+            wireframe: self.wireframe,
+        }
+    }
+
+    /// The primitives the viewport draws as the LOD: a chain row's or the
+    /// switch preview's when one is shown, else the live cut's.
+    pub(super) fn shown_set(&self) -> Option<&DrawSet> {
+        let chain = self.chain.shown_set(self.viewport.camera.distance);
+        chain
+            .filter(|_| self.view.shows_lod())
+            .or_else(|| self.result.as_ref().map(|b| b.live.draw_set()))
+    }
+
     /// Shows the scene the view toggles ask for (uploads only on a change).
     pub(super) fn sync_view(&mut self) {
         if let Some(preview) = &self.preview {
@@ -49,7 +64,7 @@ impl StudioApp {
         if self.view.shows_lod()
             && let Some(scene) = self
                 .chain
-                .scene(self.viewport.camera.distance, self.wireframe)
+                .scene(self.viewport.camera.distance, self.cut_style())
         {
             self.viewport.swap_scene(&scene);
             return;
@@ -112,7 +127,7 @@ impl StudioApp {
         let Some((origin, dir)) = self.viewport.take_click() else {
             return;
         };
-        let Some(live) = self.result.as_ref().map(|b| &b.live) else {
+        let Some(set) = self.shown_set() else {
             return;
         };
         let diagonal = self
@@ -121,7 +136,6 @@ impl StudioApp {
             .map_or(1.0, |c| c.scene.bounds().diagonal())
             .max(f32::MIN_POSITIVE);
         let bound = |e: f32| format!("bound {} ({:.3} %)", build::length(e), 100.0 * e / diagonal);
-        let set = live.draw_set();
         // Merge-tree triangles also tell their tree level.
         let level = |t: usize| {
             set.triangle_levels

@@ -1,6 +1,7 @@
 //! The bar above the viewport: which version is shown and how it is coloured.
 
 use super::StudioApp;
+use crate::live_cut::{set_has_errors, set_regions};
 
 /// Which version of the model the viewport shows.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -23,7 +24,11 @@ impl StudioApp {
     /// Original / simplified toggle and the heat-map switch above the viewport.
     pub(super) fn view_bar(&mut self, ui: &mut egui::Ui) {
         let has_result = self.has_lod();
-        let has_heat = self.result.as_ref().is_some_and(|r| r.live.has_errors());
+        // What the bar colours: the chain LOD shown, else the live cut.
+        let shown_set = self.shown_set();
+        let has_heat = shown_set.is_some_and(set_has_errors);
+        let region = shown_set.and_then(set_regions);
+        let live = shown_set.is_some();
         // Without a result the original is what is shown, whatever was chosen.
         let mut shown = if has_result {
             self.view
@@ -63,17 +68,12 @@ impl StudioApp {
                         );
                     });
                     ui.separator();
-                    let live = self.result.is_some();
                     ui.add_enabled(
                         live,
                         egui::Checkbox::new(&mut self.by_type, "Colour by type"),
                     )
                     .on_hover_text("Triangles orange, points blue; splats keep their textures.")
                     .on_disabled_hover_text("Build a hierarchy first.");
-                    let region = self.result.as_ref().and_then(|b| {
-                        let live = &b.live;
-                        live.regions().filter(|_| live.has_regions())
-                    });
                     ui.add_enabled(
                         region.is_some(),
                         egui::Checkbox::new(

@@ -200,11 +200,7 @@ pub fn audit_gltf(root: &Value, scene: Option<usize>) -> ParseResult<AssetReport
                     }
                 }
             }
-            targets = targets.max(
-                prim.get("targets")
-                    .and_then(Value::as_array)
-                    .map_or(0, Vec::len),
-            );
+            targets = targets.max(array_len(prim, "targets"));
         }
         if targets > 0 {
             morph_targets += targets;
@@ -215,27 +211,17 @@ pub fn audit_gltf(root: &Value, scene: Option<usize>) -> ParseResult<AssetReport
         }
     }
     for (i, skin) in list("skins").iter().enumerate() {
-        let joints = skin
-            .get("joints")
-            .and_then(Value::as_array)
-            .map_or(0, Vec::len);
+        let joints = array_len(skin, "joints");
+        let at = label("skin", i, skin);
         drop(
             "skin",
-            format!(
-                "{} ({joints} joints): read in its bind pose",
-                label("skin", i, skin)
-            ),
+            format!("{at} ({joints} joints): read in its bind pose"),
         );
     }
     for (i, animation) in list("animations").iter().enumerate() {
-        let channels = animation
-            .get("channels")
-            .and_then(Value::as_array)
-            .map_or(0, Vec::len);
-        drop(
-            "animation",
-            format!("{} ({channels} channels)", label("animation", i, animation)),
-        );
+        let channels = array_len(animation, "channels");
+        let at = label("animation", i, animation);
+        drop("animation", format!("{at} ({channels} channels)"));
     }
     for (i, camera) in list("cameras").iter().enumerate() {
         drop("camera", label("camera", i, camera));
@@ -280,6 +266,11 @@ pub fn audit_gltf(root: &Value, scene: Option<usize>) -> ParseResult<AssetReport
         extensions: names("extensionsUsed"),
         dropped,
     })
+}
+
+/// The length of `item`'s array `key` (0 without one).
+fn array_len(item: &Value, key: &str) -> usize {
+    item.get(key).and_then(Value::as_array).map_or(0, Vec::len)
 }
 
 /// Node indices in a JSON array (others skipped: the reader refuses them).

@@ -2,7 +2,7 @@
 //! viewport and the table show of it.
 
 use std::path::Path;
-use std::sync::Arc;
+use std::sync::{Arc, Mutex};
 
 use lodstudio_core::Progress;
 use lodstudio_core::io::{LoadOptions, Loaded};
@@ -10,9 +10,13 @@ use lodstudio_core::recipe::{Chain, Recipe, build_chain_cached, fingerprint};
 
 use super::ChainError;
 use super::kept::Kept;
+use crate::live_cut::{CutStyle, styled_scene};
 use crate::panels::chain::RowFigures;
 use crate::render::camera::distance_at_coverage;
 use crate::render::{Scene, SceneStyle};
+
+/// A LOD's scene in a style other than the plain one.
+type Styled = (CutStyle, Arc<Scene>);
 
 /// A chain built for the model on screen, with what the viewport and the
 /// table show of it.
@@ -20,8 +24,9 @@ pub struct BuiltChain {
     pub chain: Arc<Chain>,
     /// One scene per LOD, made on the worker.
     pub(super) scenes: Vec<Arc<Scene>>,
-    /// The same with their wireframes, made the first time one is shown.
-    pub(super) wire_scenes: Vec<std::sync::OnceLock<Arc<Scene>>>,
+    /// Per LOD, its scene in the last style other than the plain one it was
+    /// shown in (wireframe, colour by bound, type or region), made when shown.
+    styled: Vec<Mutex<Option<Styled>>>,
     /// Per recipe row: its LOD and its table cells.
     pub(super) figures: Vec<RowFigures>,
     /// Why the chain's work could not be saved for the next session.
@@ -29,16 +34,25 @@ pub struct BuiltChain {
 }
 
 impl BuiltChain {
-    /// LOD `k`'s scene, with its wireframe when asked.
-    pub(super) fn scene(&self, k: usize, wireframe: bool) -> Option<Arc<Scene>> {
+    /// LOD `k`'s scene drawn in `style`, as the live cut is drawn.
+    pub(super) fn scene(&self, k: usize, style: CutStyle) -> Option<Arc<Scene>> {
         let scene = self.scenes.get(k)?;
-        if !wireframe {
+        if style == CutStyle::default() {
             return Some(Arc::clone(scene));
         }
-        let wire = self.wire_scenes.get(k)?.get_or_init(|| {
-            Arc::new(Scene::clone(scene).with_wireframe(&self.chain.lods[k].set.mesh))
-        });
-        Some(Arc::clone(wire))
+        let mut styled = self
+            .styled
+            .get(k)?
+            .lock()
+            .unwrap_or_else(|e| e.into_inner());
+        match &*styled {
+            Some((s, scene)) if *s == style => Some(Arc::clone(scene)),
+            _ => {
+                let scene = Arc::new(styled_scene(&self.chain.lods[k].set, style));
+                *styled = Some((style, Arc::clone(&scene)));
+                Some(scene)
+            }
+        }
     }
 
     /// The recipe it was built with.
@@ -95,7 +109,7 @@ impl BuiltChain {
             .collect();
         let figures = figures(&chain);
         BuiltChain {
-            wire_scenes: chain.lods.iter().map(|_| Default::default()).collect(),
+            styled: chain.lods.iter().map(|_| Mutex::default()).collect(),
             chain: Arc::new(chain),
             scenes,
             figures,

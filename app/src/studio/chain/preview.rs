@@ -4,7 +4,10 @@
 
 use std::sync::Arc;
 
+use lodstudio_core::lod::DrawSet;
+
 use super::{ChainState, dolly};
+use crate::live_cut::CutStyle;
 use crate::render::camera::coverage_at_distance;
 use crate::render::{Camera, Scene};
 use crate::studio::View;
@@ -85,11 +88,18 @@ impl ChainState {
         }
     }
 
-    /// The scene a chain row or the switch preview shows, if any, with its
-    /// wireframe when the view asks for one.
-    pub fn scene(&self, camera_distance: f32, wireframe: bool) -> Option<Arc<Scene>> {
+    /// The scene a chain row or the switch preview shows, if any, drawn in
+    /// the view's `style`.
+    pub fn scene(&self, camera_distance: f32, style: CutStyle) -> Option<Arc<Scene>> {
         let k = self.shown_lod(camera_distance)?;
-        self.built.as_ref()?.scene(k, wireframe)
+        self.built.as_ref()?.scene(k, style)
+    }
+
+    /// The primitives of the LOD a chain row or the switch preview shows
+    /// (what the view bar colours and a click picks).
+    pub fn shown_set(&self, camera_distance: f32) -> Option<&DrawSet> {
+        let k = self.shown_lod(camera_distance)?;
+        Some(&self.built.as_ref()?.chain.lods.get(k)?.set)
     }
 
     /// Starts the dolly at egui time `now`: the preview, from near to far.

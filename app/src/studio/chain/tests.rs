@@ -11,6 +11,7 @@ use lodstudio_core::recipe::{Recipe, build_chain, parse_lods};
 
 use super::*;
 use crate::export::Saved;
+use crate::live_cut::{CutStyle, set_regions};
 use crate::render::camera::distance_at_coverage;
 use crate::studio::View;
 use crate::studio::loading::absolute;
@@ -114,7 +115,7 @@ fn forgetting_drops_the_chain_its_preview_and_a_running_build() {
     state.forget();
     assert!(state.built().is_none());
     assert!(state.switch_lod(camera.distance).is_none());
-    assert!(state.scene(camera.distance, false).is_none());
+    assert!(state.scene(camera.distance, CutStyle::default()).is_none());
 
     let ctx = egui::Context::default();
     assert!(state.start_build(Some(torus()), &ctx).is_none());
@@ -135,11 +136,13 @@ fn changed_rows_leave_the_chain_built_but_stale() {
     let mut view = View::Original;
     state.select_row(1, &mut view);
     assert_eq!(view, View::Simplified);
-    let shown = state.scene(0.0, false).expect("the row's LOD");
+    let shown = state
+        .scene(0.0, CutStyle::default())
+        .expect("the row's LOD");
     assert!(Arc::ptr_eq(&shown, &state.built().unwrap().scenes[1]));
     state.set_recipe(recipe("simplify:2%"));
     assert!(
-        state.scene(0.0, false).is_none(),
+        state.scene(0.0, CutStyle::default()).is_none(),
         "row 1 is another row now"
     );
     assert!(Arc::ptr_eq(&chain_of(&state), &before));
@@ -221,10 +224,14 @@ fn the_switch_distance_picks_the_lod_whose_coverage_range_holds_it() {
         let (shown, name) = state.switch_lod(camera.distance).expect("a preview");
         assert_eq!(shown, k, "coverage {c} in {:?}", chain.coverages);
         assert!(name.starts_with(&format!("LOD{k} simplify:")), "{name}");
-        let scene = state.scene(camera.distance, false).expect("a scene");
+        let scene = (state.scene(camera.distance, CutStyle::default())).expect("a scene");
         assert!(Arc::ptr_eq(&scene, &state.built().unwrap().scenes[k]));
         // The wireframe draws every edge of the LOD shown once, over it.
-        let wire = state.scene(camera.distance, true).expect("a scene");
+        let wire = CutStyle {
+            wireframe: true,
+            ..CutStyle::default()
+        };
+        let wire = state.scene(camera.distance, wire).expect("a scene");
         let lod = &chain.lods[k].set.mesh;
         let mut edges: Vec<(u32, u32)> = lod
             .triangles
@@ -246,7 +253,7 @@ fn the_switch_distance_picks_the_lod_whose_coverage_range_holds_it() {
     assert_eq!(state.switch_lod(camera.distance).unwrap().0, 2);
     state.set_switch_distance(None, &mut camera, &mut view);
     assert!(state.switch_lod(camera.distance).is_none());
-    assert!(state.scene(camera.distance, false).is_none());
+    assert!(state.scene(camera.distance, CutStyle::default()).is_none());
 }
 
 /// The dolly takes the camera from near to far through every LOD in order,
@@ -435,4 +442,48 @@ fn kept_work_reopens_the_chain_after_a_restart() {
     assert!(finish(&mut damaged).is_empty());
     build(&mut damaged, GROUPS, torus());
     assert_eq!(reused(&damaged), [false, false, false]);
+}
+
+/// The view bar's colour modes and a click work on the chain LOD shown, as
+/// on a live cut: by type colours a hybrid LOD's triangles and points, by
+/// region an AMG LOD's domains; a style's scene is made once; the set a
+/// click picks in is the LOD's own.
+#[test]
+fn colour_modes_and_picking_apply_to_the_chain_lod_shown() {
+    let mut state = ChainState::default();
+    build(&mut state, "hybrid:2%,amg:20%", torus());
+    let chain = chain_of(&state);
+    let mut view = View::Original;
+    for (row, region) in [(0, None), (1, Some("AMG domain"))] {
+        state.select_row(row, &mut view);
+        let k = state.shown_lod(0.0).expect("the row's LOD");
+        let set = state.shown_set(0.0).expect("its primitives");
+        assert!(std::ptr::eq(set, &chain.lods[k].set));
+        assert_eq!(set_regions(set), region, "row {row}");
+        let plain = state.scene(0.0, CutStyle::default()).unwrap();
+        let style = match region {
+            None => CutStyle {
+                by_type: true,
+                ..CutStyle::default()
+            },
+            Some(_) => CutStyle {
+                regions: true,
+                ..CutStyle::default()
+            },
+        };
+        let styled = state.scene(0.0, style).unwrap();
+        assert_ne!(
+            format!("{plain:?}"),
+            format!("{styled:?}"),
+            "row {row} recoloured"
+        );
+        assert!(
+            Arc::ptr_eq(&styled, &state.scene(0.0, style).unwrap()),
+            "made once"
+        );
+        assert!(Arc::ptr_eq(
+            &plain,
+            &state.scene(0.0, CutStyle::default()).unwrap()
+        ));
+    }
 }
