@@ -171,29 +171,6 @@ impl ModelSummary {
         for (what, n) in self.repairs.applied() {
             out.push((format!("repair: {}", what.replace('_', " ")), n.to_string()));
         }
-        let a = &self.asset;
-        if a.nodes > 1 || a.skins + a.animations + a.morph_targets > 0 {
-            out.push((
-                "scene".into(),
-                format!(
-                    "{} nodes, {} meshes, {} instances",
-                    a.nodes, a.meshes, a.instances
-                ),
-            ));
-            out.push((
-                "skins, animations, targets".into(),
-                format!("{}, {}, {}", a.skins, a.animations, a.morph_targets),
-            ));
-        }
-        if !a.extensions.is_empty() {
-            out.push(("extensions".into(), a.extensions.join(", ")));
-        }
-        if !a.dropped.is_empty() {
-            out.push((
-                "not carried".into(),
-                format!("{} items (see the log)", a.dropped.len()),
-            ));
-        }
         out
     }
 }

@@ -73,7 +73,15 @@ pub fn run(args: InfoArgs) -> Result<(), CliError> {
         for (label, value) in summary.lines() {
             println!("  {label:<22} {value}");
         }
-        for d in &summary.asset.dropped {
+        let a = &summary.asset;
+        println!(
+            "  {:<22} {} nodes, {} meshes, {} instances; {} skins, {} animations, {} morph targets",
+            "asset", a.nodes, a.meshes, a.instances, a.skins, a.animations, a.morph_targets
+        );
+        if !a.extensions.is_empty() {
+            println!("  {:<22} {}", "extensions", a.extensions.join(", "));
+        }
+        for d in &a.dropped {
             println!("  not carried: {} ({})", d.what, d.place);
         }
     }
