@@ -12,7 +12,7 @@ use std::sync::Arc;
 
 use glam::{Mat3, Mat4, Vec2, Vec3};
 
-use super::asset::{AssetReport, audit_gltf, check_required};
+use super::asset::{self, AssetReport, audit_gltf, check_required};
 use super::confine;
 use super::error::{ParseError, ParseResult};
 use crate::geom::{AlphaMode, Image, Material, Materials, TriMesh, VertexAttributes};
@@ -87,7 +87,12 @@ fn parse(data: &[u8]) -> ParseResult<(gltf::Gltf, serde_json::Value)> {
             ));
         }
     }
-    let document = gltf::Document::from_json(document.into_json()).map_err(invalid)?;
+    // What the reader takes in whole is no longer a requirement the crate
+    // must know (it refuses KHR_mesh_quantization as unsupported).
+    let mut json = document.into_json();
+    json.extensions_required
+        .retain(|e| !asset::READ.contains(&e.as_str()));
+    let document = gltf::Document::from_json(json).map_err(invalid)?;
     Ok((gltf::Gltf { document, blob }, raw?))
 }
 
@@ -348,6 +353,62 @@ fn read_uri(uri: &str, base: Option<&Path>, what: &str) -> ParseResult<Vec<u8>> 
     }
 }
 
+/// A three-component attribute: floats through the crate's `read`, integers
+/// (KHR_mesh_quantization) through [`dequantized`]; `None` without one.
+fn vec3s(
+    prim: &gltf::Primitive,
+    semantic: &gltf::Semantic,
+    buffers: &[gltf::buffer::Data],
+    read: impl FnOnce() -> Option<Vec<[f32; 3]>>,
+) -> Option<Vec<[f32; 3]>> {
+    match prim.get(semantic) {
+        Some(acc) if acc.data_type() != gltf::accessor::DataType::F32 => {
+            Some(dequantized::<3>(&acc, buffers))
+        }
+        _ => read(),
+    }
+}
+
+/// The elements of an integer accessor as floats, as KHR_mesh_quantization
+/// reads them: normalized components map to [0, 1] or [-1, 1] (glTF 2.0
+/// §3.11: `max(c / 127, -1)`, `c / 255`, `max(c / 32767, -1)`,
+/// `c / 65535`), the others keep their values (a node's scale and offset
+/// then dequantize them). The accessor was checked against its buffer
+/// ([`check_accessor`]).
+fn dequantized<const N: usize>(
+    acc: &gltf::Accessor,
+    buffers: &[gltf::buffer::Data],
+) -> Vec<[f32; N]> {
+    use gltf::accessor::DataType as D;
+    let (Some(view), size) = (acc.view(), acc.data_type().size()) else {
+        return Vec::new();
+    };
+    let Some(data) = buffers.get(view.buffer().index()) else {
+        return Vec::new();
+    };
+    let stride = view.stride().unwrap_or(acc.size());
+    let start = view.offset() + acc.offset();
+    let normalized = acc.normalized();
+    let component = |at: usize| -> f32 {
+        let b = &data.0[at..at + size];
+        let (value, max) = match acc.data_type() {
+            D::I8 => (b[0] as i8 as f32, 127.0),
+            D::U8 => (b[0] as f32, 255.0),
+            D::I16 => (i16::from_le_bytes([b[0], b[1]]) as f32, 32767.0),
+            D::U16 => (u16::from_le_bytes([b[0], b[1]]) as f32, 65535.0),
+            D::U32 => (u32::from_le_bytes([b[0], b[1], b[2], b[3]]) as f32, 1.0),
+            D::F32 => (f32::from_le_bytes([b[0], b[1], b[2], b[3]]), 1.0),
+        };
+        match normalized {
+            true => (value / max).max(-1.0),
+            false => value,
+        }
+    };
+    (0..acc.count())
+        .map(|i| std::array::from_fn(|c| component(start + i * stride + c * size)))
+        .collect()
+}
+
 /// Checks that every element of the accessor lies inside its buffer view and buffer.
 fn check_accessor(acc: &gltf::Accessor, buffers: &[gltf::buffer::Data]) -> ParseResult<()> {
     let what = || format!("accessor {}", acc.index());
@@ -406,11 +467,17 @@ fn read_primitive(
     for (semantic, acc) in prim.attributes() {
         // Only the attributes read below; the reader assumes their element types.
         let ok = match semantic {
-            Semantic::Positions | Semantic::Normals => {
-                acc.dimensions() == N::Vec3 && acc.data_type() == D::F32
+            // Integers: KHR_mesh_quantization, read by [`dequantized`].
+            Semantic::Positions => {
+                acc.dimensions() == N::Vec3
+                    && matches!(acc.data_type(), D::F32 | D::I8 | D::U8 | D::I16 | D::U16)
+            }
+            Semantic::Normals => {
+                acc.dimensions() == N::Vec3 && matches!(acc.data_type(), D::F32 | D::I8 | D::I16)
             }
             Semantic::TexCoords(0) => {
-                acc.dimensions() == N::Vec2 && matches!(acc.data_type(), D::F32 | D::U8 | D::U16)
+                acc.dimensions() == N::Vec2
+                    && matches!(acc.data_type(), D::F32 | D::I8 | D::U8 | D::I16 | D::U16)
             }
             Semantic::Colors(0) => {
                 matches!(acc.dimensions(), N::Vec3 | N::Vec4)
@@ -436,10 +503,13 @@ fn read_primitive(
         check_accessor(&acc, buffers)?;
     }
     let reader = prim.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
-    let Some(positions) = reader.read_positions() else {
+    let Some(positions) = vec3s(prim, &Semantic::Positions, buffers, || {
+        reader.read_positions().map(Iterator::collect)
+    }) else {
         return Ok(None);
     };
     let positions: Vec<Vec3> = positions
+        .into_iter()
         .map(|p| world.transform_point3(Vec3::from_array(p)))
         .collect();
     let n = positions.len();
@@ -477,16 +547,23 @@ fn read_primitive(
     };
     let mut mesh = TriMesh::new(positions, triangles);
     let normal_matrix = Mat3::from_mat4(world).inverse().transpose();
-    if let Some(nr) = reader.read_normals() {
+    if let Some(nr) = vec3s(prim, &Semantic::Normals, buffers, || {
+        reader.read_normals().map(Iterator::collect)
+    }) {
         let normals: Vec<Vec3> = nr
+            .into_iter()
             .map(|v| (normal_matrix * Vec3::from_array(v)).normalize_or_zero())
             .collect();
         if normals.len() == n {
             mesh.normals = Some(normals);
         }
     }
-    if let Some(uv) = reader.read_tex_coords(0) {
-        let uvs: Vec<Vec2> = uv.into_f32().map(Vec2::from_array).collect();
+    let uvs = match prim.get(&Semantic::TexCoords(0)) {
+        Some(acc) if acc.data_type() != D::F32 => Some(dequantized::<2>(&acc, buffers)),
+        _ => reader.read_tex_coords(0).map(|uv| uv.into_f32().collect()),
+    };
+    if let Some(uv) = uvs {
+        let uvs: Vec<Vec2> = uv.into_iter().map(Vec2::from_array).collect();
         if uvs.len() == n {
             mesh.uvs = Some(uvs);
         }
@@ -737,6 +814,70 @@ mod tests {
             .iter()
             .flat_map(|v| v.to_le_bytes())
             .collect()
+    }
+
+    /// KHR_mesh_quantization (gltfpack's default output) is read, not
+    /// refused: normalized i16 positions under a node's scale, normalized i8
+    /// normals and unnormalized u16 UVs give the floats they stand for.
+    #[test]
+    fn quantized_attributes_are_dequantized_on_load() {
+        let dir = tempfile::tempdir().unwrap();
+        let mut bin = Vec::new();
+        for p in [[0i16, 0, 0], [32767, 0, 0], [0, 32767, 0]] {
+            p.iter().for_each(|c| bin.extend(c.to_le_bytes()));
+            bin.extend([0, 0]); // 4-byte aligned stride of 8
+        }
+        for _ in 0..3 {
+            bin.extend([0u8, 0, 127, 0]); // (0, 0, 1), stride 4
+        }
+        for uv in [[0u16, 0], [1, 0], [0, 1]] {
+            uv.iter().for_each(|c| bin.extend(c.to_le_bytes()));
+        }
+        std::fs::write(dir.path().join("q.bin"), &bin).unwrap();
+        let doc = serde_json::json!({
+            "asset": {"version": "2.0"},
+            "extensionsUsed": ["KHR_mesh_quantization"],
+            "extensionsRequired": ["KHR_mesh_quantization"],
+            "buffers": [{"uri": "q.bin", "byteLength": 48}],
+            "bufferViews": [
+                {"buffer": 0, "byteOffset": 0, "byteLength": 24, "byteStride": 8},
+                {"buffer": 0, "byteOffset": 24, "byteLength": 12, "byteStride": 4},
+                {"buffer": 0, "byteOffset": 36, "byteLength": 12}
+            ],
+            "accessors": [
+                {"bufferView": 0, "componentType": 5122, "normalized": true, "count": 3,
+                 "type": "VEC3", "min": [0, 0, 0], "max": [32767, 32767, 0]},
+                {"bufferView": 1, "componentType": 5120, "normalized": true, "count": 3, "type": "VEC3"},
+                {"bufferView": 2, "componentType": 5123, "count": 3, "type": "VEC2"}
+            ],
+            "meshes": [{"primitives": [{"attributes": {"POSITION": 0, "NORMAL": 1, "TEXCOORD_0": 2}}]}],
+            "nodes": [{"mesh": 0, "scale": [2.0, 2.0, 2.0]}],
+            "scenes": [{"nodes": [0]}],
+        });
+        let (mesh, report) = read(&serde_json::to_vec(&doc).unwrap(), Some(dir.path())).unwrap();
+        let positions: Vec<[f32; 3]> = mesh.positions.iter().map(|p| p.to_array()).collect();
+        assert_eq!(
+            positions,
+            [[0.0, 0.0, 0.0], [2.0, 0.0, 0.0], [0.0, 2.0, 0.0]]
+        );
+        let normals = mesh.normals.expect("normals");
+        assert!(
+            normals.iter().all(|n| (*n - Vec3::Z).length() < 1e-6),
+            "{normals:?}"
+        );
+        let uvs: Vec<[f32; 2]> = mesh
+            .uvs
+            .expect("uvs")
+            .iter()
+            .map(|u| u.to_array())
+            .collect();
+        assert_eq!(uvs, [[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]]);
+        assert!(
+            report
+                .dropped
+                .iter()
+                .all(|d| !d.what.contains("quantization"))
+        );
     }
 
     #[test]
