@@ -88,11 +88,6 @@ impl LiveCut {
         styled_scene(&self.draw, self.style)
     }
 
-    /// Whether the cut has regions to colour by (levels, domains or layers).
-    pub fn has_regions(&self) -> bool {
-        set_regions(&self.draw).is_some()
-    }
-
     /// Whether the cut carries error bounds per triangle or point to colour by.
     pub fn has_errors(&self) -> bool {
         set_has_errors(&self.draw)
@@ -149,11 +144,6 @@ impl LiveCut {
     /// (and so something to save).
     pub fn has_levels(&self) -> bool {
         self.hierarchy.has_levels()
-    }
-
-    /// What "colour by region" colours the cut by, when its cuts have regions.
-    pub fn regions(&self) -> Option<&'static str> {
-        self.hierarchy.regions()
     }
 
     /// Which knobs the cut reads and whether the threshold chooses it now.
@@ -247,20 +237,6 @@ fn region_scene(d: &DrawSet, plain: SceneStyle) -> Scene {
             ..plain
         },
     )
-}
-
-/// What "colour by region" colours in a set cut from a hierarchy, when it
-/// has regions (the hierarchy's own word, `Hierarchy::regions`).
-pub fn set_regions(d: &DrawSet) -> Option<&'static str> {
-    if !d.triangle_levels.is_empty() {
-        Some("merge-tree level")
-    } else if !d.splats.is_empty() {
-        Some("AMG domain")
-    } else if !d.layers.is_empty() {
-        Some("voxel layer")
-    } else {
-        None
-    }
 }
 
 /// Whether `d` carries error bounds per triangle or point to colour by.

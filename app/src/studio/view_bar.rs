@@ -1,7 +1,9 @@
 //! The bar above the viewport: which version is shown and how it is coloured.
 
+use lodstudio_core::lod::DrawSet;
+
 use super::StudioApp;
-use crate::live_cut::{set_has_errors, set_regions};
+use crate::live_cut::set_has_errors;
 
 /// Which version of the model the viewport shows.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -27,7 +29,7 @@ impl StudioApp {
         // What the bar colours: the chain LOD shown, else the live cut.
         let shown_set = self.shown_set();
         let has_heat = shown_set.is_some_and(set_has_errors);
-        let region = shown_set.and_then(set_regions);
+        let region = shown_set.and_then(DrawSet::regions);
         let live = shown_set.is_some();
         // Without a result the original is what is shown, whatever was chosen.
         let mut shown = if has_result {

@@ -491,11 +491,6 @@ impl Hierarchy for AmgHierarchy {
         self.level.map(|l| l as u64)
     }
 
-    /// The level to draw, or `None` for the tolerance's choice.
-    fn regions(&self) -> Option<&'static str> {
-        Some("AMG domain")
-    }
-
     /// A fixed level chooses the cut instead of the tolerance.
     fn controls(&self) -> crate::lod::Controls {
         use crate::lod::Knob;

@@ -110,6 +110,20 @@ pub struct DrawSet {
 }
 
 impl DrawSet {
+    /// What the studio's "colour by region" colours in this set (merge-tree
+    /// levels, AMG domains, voxel layers); `None` when it has none.
+    pub fn regions(&self) -> Option<&'static str> {
+        if !self.triangle_levels.is_empty() {
+            Some("merge-tree level")
+        } else if !self.splats.is_empty() {
+            Some("AMG domain")
+        } else if !self.layers.is_empty() {
+            Some("voxel layer")
+        } else {
+            None
+        }
+    }
+
     pub fn primitive_count(&self) -> usize {
         self.mesh.triangles.len()
             + self.points.len()

@@ -49,11 +49,6 @@ pub trait Hierarchy: Any + Send + Sync {
             has_levels: self.has_levels(),
         }
     }
-    /// What the studio's "colour by region" colours its cuts by (merge-tree
-    /// levels, AMG domains, voxel layers); `None` when its cuts have none.
-    fn regions(&self) -> Option<&'static str> {
-        None
-    }
     /// The built hierarchy in a saved-hierarchy file with `params` (see
     /// `io::hierarchy_file`); `None` for hierarchies that do not save.
     fn save(&self, _params: &serde_json::Value) -> Option<Vec<u8>> {

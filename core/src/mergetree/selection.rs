@@ -450,11 +450,6 @@ impl Hierarchy for MergeTreeView {
         ))
     }
 
-    /// The criteria switches (§3).
-    fn regions(&self) -> Option<&'static str> {
-        Some("merge-tree level")
-    }
-
     /// The criteria scale the tolerance per node (§3); they never replace it.
     fn controls(&self) -> crate::lod::Controls {
         crate::lod::Controls {

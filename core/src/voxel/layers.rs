@@ -316,10 +316,6 @@ impl Hierarchy for Layered {
     fn has_levels(&self) -> bool {
         false
     }
-
-    fn regions(&self) -> Option<&'static str> {
-        Some("voxel layer")
-    }
 }
 
 #[cfg(test)]

@@ -345,12 +345,6 @@ impl Hierarchy for PyramidCut {
         ))
     }
 
-    /// The continuous position to show (0 = finest), or `None` to follow
-    /// the tolerance.
-    fn regions(&self) -> Option<&'static str> {
-        Some("voxel layer")
-    }
-
     /// A fixed position chooses the level instead of the tolerance.
     fn controls(&self) -> crate::lod::Controls {
         use crate::lod::Knob;

@@ -11,7 +11,7 @@ use lodstudio_core::recipe::{Recipe, build_chain, parse_lods};
 
 use super::*;
 use crate::export::Saved;
-use crate::live_cut::{CutStyle, set_regions};
+use crate::live_cut::CutStyle;
 use crate::render::camera::distance_at_coverage;
 use crate::studio::View;
 use crate::studio::loading::absolute;
@@ -459,7 +459,7 @@ fn colour_modes_and_picking_apply_to_the_chain_lod_shown() {
         let k = state.shown_lod(0.0).expect("the row's LOD");
         let set = state.shown_set(0.0).expect("its primitives");
         assert!(std::ptr::eq(set, &chain.lods[k].set));
-        assert_eq!(set_regions(set), region, "row {row}");
+        assert_eq!(set.regions(), region, "row {row}");
         let plain = state.scene(0.0, CutStyle::default()).unwrap();
         let style = match region {
             None => CutStyle {
