@@ -24,6 +24,7 @@ pub mod open;
 pub mod progress;
 pub mod recipe;
 pub mod rng;
+pub mod scene;
 mod simd;
 pub mod simplify;
 pub mod stats;

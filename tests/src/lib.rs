@@ -110,3 +110,46 @@ pub fn build_hierarchy(method: Method, mesh: &TriMesh) -> (Box<dyn Hierarchy>, s
         .unwrap_or_else(|e| panic!("{method:?}: {e}"));
     (built, serde_json::json!({}))
 }
+
+/// The meshes a client shows at LOD `l` of an exported chain: walking the
+/// scene, each node's mesh at level 0, or for a node with `MSFT_lod` the
+/// mesh of its `l`-th LOD node (its coarsest where the chain is shorter);
+/// each mesh once. Holds for a flattened chain (node 0) and for a scene.
+pub fn lod_meshes(doc: &serde_json::Value, l: usize) -> Vec<usize> {
+    let index = |v: &serde_json::Value| v.as_u64().map(|i| i as usize);
+    let scene = index(&doc["scene"]).unwrap_or(0);
+    let mut stack: Vec<usize> = doc["scenes"][scene]["nodes"]
+        .as_array()
+        .into_iter()
+        .flatten()
+        .filter_map(index)
+        .collect();
+    stack.reverse();
+    let mut out = Vec::new();
+    while let Some(n) = stack.pop() {
+        let node = &doc["nodes"][n];
+        let ids: Vec<usize> = node["extensions"]["MSFT_lod"]["ids"]
+            .as_array()
+            .into_iter()
+            .flatten()
+            .filter_map(index)
+            .collect();
+        let shown = match (l, ids.last()) {
+            (0, _) | (_, None) => n,
+            (l, Some(last)) => *ids.get(l - 1).unwrap_or(last),
+        };
+        if let Some(m) = index(&doc["nodes"][shown]["mesh"])
+            && !out.contains(&m)
+        {
+            out.push(m);
+        }
+        let children: Vec<usize> = node["children"]
+            .as_array()
+            .into_iter()
+            .flatten()
+            .filter_map(index)
+            .collect();
+        stack.extend(children.into_iter().rev());
+    }
+    out
+}

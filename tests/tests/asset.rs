@@ -103,10 +103,11 @@ fn info_counts_the_asset() {
     assert_eq!(torus["dropped"], json!([]));
 }
 
-/// An export of a file with optional extensions it cannot carry writes its
-/// output, lists them in its JSON and says so on stderr.
+/// An export carries the scene's materials as read, their extensions
+/// included (KHR_texture_transform), and lists what it cannot carry: an
+/// optional extension on a primitive, whose primitives the LODs replace.
 #[test]
-fn an_export_lists_what_it_leaves_out() {
+fn an_export_carries_material_extensions_and_lists_what_it_leaves_out() {
     let tmp = tempfile::tempdir().unwrap();
     let input = shared_model("production/textureTransform/TextureTransformTest.gltf");
     let out = tmp.path().join("tt.glb");
@@ -125,36 +126,48 @@ fn an_export_lists_what_it_leaves_out() {
         "{}",
         String::from_utf8_lossy(&run.stderr)
     );
-    assert!(out.is_file());
     let j: Value = serde_json::from_slice(&run.stdout).unwrap();
-    assert!(dropped_whats(&j).contains(&"KHR_texture_transform".to_string()));
-    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert!(!dropped_whats(&j).contains(&"KHR_texture_transform".to_string()));
+    let original: Value = serde_json::from_slice(&std::fs::read(&input).unwrap()).unwrap();
+    let glb = std::fs::read(&out).unwrap();
+    let (json, _) = lodstudio_core::io::gltf::split_glb(&glb, "x.bin").unwrap();
+    let doc: Value = serde_json::from_slice(&json).unwrap();
+    assert_eq!(doc["materials"], original["materials"]);
     assert!(
-        stderr.contains("not carried: KHR_texture_transform"),
-        "{stderr}"
+        doc["materials"]
+            .to_string()
+            .contains("KHR_texture_transform")
     );
 
-    // An extension nobody knows, optional: carried on without it, listed.
+    // An extension nobody knows, optional, on a primitive: carried on
+    // without it, listed where it was.
     let made_up = triangle_gltf(
         tmp.path(),
         "made-up.gltf",
-        json!({"extensionsUsed": ["EXT_made_up"], "extensions": {"EXT_made_up": {}}}),
+        json!({"extensionsUsed": ["EXT_made_up"],
+               "meshes": [{"primitives": [{"attributes": {"POSITION": 0},
+                                           "extensions": {"EXT_made_up": {}}}]}]}),
     );
     let out = tmp.path().join("made-up.glb");
-    let j = lodstudio_json(&[
+    let run = lodstudio(&[
         "export",
         &made_up,
         "--lods",
         "source",
         "-o",
         out.to_str().unwrap(),
+        "--json",
     ]);
+    assert!(run.status.success());
     assert!(out.is_file());
+    let j: Value = serde_json::from_slice(&run.stdout).unwrap();
     let listed = &j["dropped"][0];
     assert_eq!(
         (listed["what"].as_str(), listed["where"].as_str()),
-        (Some("EXT_made_up"), Some("the asset"))
+        (Some("EXT_made_up"), Some("mesh 0 primitive 0"))
     );
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert!(stderr.contains("not carried: EXT_made_up"), "{stderr}");
 }
 
 /// A required extension lodstudio cannot read refuses the file with exit 2,

@@ -7,7 +7,7 @@
 use std::collections::BTreeMap;
 
 use glam::Vec3;
-use lodstudio_tests::{load_mesh, lodstudio, lodstudio_json, shared_model};
+use lodstudio_tests::{load_mesh, lod_meshes, lodstudio, lodstudio_json, shared_model};
 use serde_json::Value;
 
 /// A glTF document and its binary buffer (GLB, or `.gltf` with one `.bin`).
@@ -143,14 +143,17 @@ fn truck_textures_stay_on_their_side_of_every_seam() {
                 uv["area_over_threshold"].as_f64().unwrap() < 0.01,
                 "{method} LOD {l}: {uv}"
             );
-            let mesh = doc["nodes"][lod_node(&doc, l)]["mesh"].as_u64().unwrap() as usize;
-            for p in doc["meshes"][mesh]["primitives"].as_array().unwrap() {
+            let meshes = lod_meshes(&doc, l);
+            for p in meshes
+                .iter()
+                .flat_map(|&m| doc["meshes"][m]["primitives"].as_array().unwrap())
+            {
                 if p["mode"].as_u64().unwrap_or(4) == 4 {
                     assert_eq!(area_against_winding(&doc, &bin, p), 0.0, "{method} LOD {l}");
                 }
             }
             // Exactly the input's optional attributes, material by material.
-            let attrs = attributes_by_material(&doc, &[mesh]);
+            let attrs = attributes_by_material(&doc, &meshes);
             for (m, a) in &attrs {
                 assert_eq!(Some(a), src_attrs.get(m), "{method} LOD {l} material {m}");
             }
@@ -161,16 +164,6 @@ fn truck_textures_stay_on_their_side_of_every_seam() {
         let e = lodstudio_core::distance::uv_error(&original, &back).unwrap();
         assert!(e.area_over_threshold < 0.01, "{method}: {e:?}");
     }
-}
-
-/// The node of LOD `l`: node 0, then the ids its `MSFT_lod` lists.
-fn lod_node(doc: &Value, l: usize) -> usize {
-    if l == 0 {
-        return 0;
-    }
-    doc["nodes"][0]["extensions"]["MSFT_lod"]["ids"][l - 1]
-        .as_u64()
-        .unwrap() as usize
 }
 
 #[test]
@@ -196,12 +189,15 @@ fn engine_normals_face_their_triangles_and_gain_no_colours() {
         );
         let (doc, bin) = read_gltf(&out);
         for l in 0..report["lods"].as_array().unwrap().len() {
-            let mesh = doc["nodes"][lod_node(&doc, l)]["mesh"].as_u64().unwrap() as usize;
-            for p in doc["meshes"][mesh]["primitives"].as_array().unwrap() {
+            let meshes = lod_meshes(&doc, l);
+            for p in meshes
+                .iter()
+                .flat_map(|&m| doc["meshes"][m]["primitives"].as_array().unwrap())
+            {
                 assert_eq!(p["mode"].as_u64(), Some(4), "discs: no POINTS primitive");
                 assert_eq!(area_against_winding(&doc, &bin, p), 0.0, "{method} LOD {l}");
             }
-            for (m, a) in attributes_by_material(&doc, &[mesh]) {
+            for (m, a) in attributes_by_material(&doc, &meshes) {
                 if m == "points" {
                     continue;
                 }
@@ -224,12 +220,15 @@ fn horse_normals_face_their_triangles_and_gain_nothing() {
         let lods = report["lods"].as_array().unwrap().len();
         assert_eq!(lods, 3, "{method}");
         for l in 0..lods {
-            let mesh = doc["nodes"][lod_node(&doc, l)]["mesh"].as_u64().unwrap() as usize;
-            for p in doc["meshes"][mesh]["primitives"].as_array().unwrap() {
+            let meshes = lod_meshes(&doc, l);
+            for p in meshes
+                .iter()
+                .flat_map(|&m| doc["meshes"][m]["primitives"].as_array().unwrap())
+            {
                 assert_eq!(p["mode"].as_u64().unwrap_or(4), 4, "{method} LOD {l}");
                 assert_eq!(area_against_winding(&doc, &bin, p), 0.0, "{method} LOD {l}");
             }
-            for (m, a) in attributes_by_material(&doc, &[mesh]) {
+            for (m, a) in attributes_by_material(&doc, &meshes) {
                 if m != "points" {
                     assert!(a.is_empty(), "{method} LOD {l} material {m}: {a:?}");
                 }
@@ -241,8 +240,8 @@ fn horse_normals_face_their_triangles_and_gain_nothing() {
 #[test]
 fn points_say_what_radius_means_or_become_covering_meshes() {
     let tmp = tempfile::tempdir().unwrap();
-    let out = tmp.path().join("engine-points.glb");
-    let report = export("2CylinderEngine.gltf", "hybrid", &out, &[]);
+    let out = tmp.path().join("bones-points.glb");
+    let report = export("bones.off", "hybrid", &out, &[]);
     let points: u64 = report["lods"]
         .as_array()
         .unwrap()
@@ -254,11 +253,10 @@ fn points_say_what_radius_means_or_become_covering_meshes() {
     // The first point's radius in each LOD (POINTS primitives carry `_RADIUS`).
     let mut first_radius = Vec::new();
     for l in 0..report["lods"].as_array().unwrap().len() {
-        let mesh = doc["nodes"][lod_node(&doc, l)]["mesh"].as_u64().unwrap() as usize;
-        let p = doc["meshes"][mesh]["primitives"]
-            .as_array()
-            .unwrap()
+        let meshes = lod_meshes(&doc, l);
+        let p = meshes
             .iter()
+            .flat_map(|&m| doc["meshes"][m]["primitives"].as_array().unwrap())
             .find(|p| p["mode"] == 0);
         first_radius.push(p.map(|p| {
             assert!(p["extras"]["_RADIUS"].as_str().unwrap().contains("radius"));
@@ -269,17 +267,13 @@ fn points_say_what_radius_means_or_become_covering_meshes() {
     // Quads and discs: 4 and 8 triangles per point, and the polygon covers
     // the point's disc (its edges are at least the radius from the centre).
     for (how, per_point) in [("quads", 4u64), ("discs", 8)] {
-        let out = tmp.path().join(format!("engine-{how}.glb"));
-        let r = export(
-            "2CylinderEngine.gltf",
-            "hybrid",
-            &out,
-            &["--points-as", how],
-        );
+        let out = tmp.path().join(format!("bones-{how}.glb"));
+        let r = export("bones.off", "hybrid", &out, &["--points-as", how]);
         let (doc, bin) = read_gltf(&out);
         for (l, lod) in r["lods"].as_array().unwrap().iter().enumerate() {
-            let mesh = doc["nodes"][lod_node(&doc, l)]["mesh"].as_u64().unwrap() as usize;
-            let prims = doc["meshes"][mesh]["primitives"].as_array().unwrap();
+            let meshes = lod_meshes(&doc, l);
+            assert_eq!(meshes.len(), 1, "one model, one mesh per LOD");
+            let prims = doc["meshes"][meshes[0]]["primitives"].as_array().unwrap();
             assert!(
                 prims.iter().all(|p| p["mode"] == 4),
                 "{how}: no POINTS left"
@@ -388,8 +382,11 @@ fn voxel_surfaces_write_their_own_normals_and_nothing_else() {
                 lod["uv_error"].is_null(),
                 "{model} LOD {l}: no UVs to measure"
             );
-            let mesh = doc["nodes"][lod_node(&doc, l)]["mesh"].as_u64().unwrap() as usize;
-            for p in doc["meshes"][mesh]["primitives"].as_array().unwrap() {
+            let meshes = lod_meshes(&doc, l);
+            for p in meshes
+                .iter()
+                .flat_map(|&m| doc["meshes"][m]["primitives"].as_array().unwrap())
+            {
                 let mut attrs: Vec<&String> = p["attributes"].as_object().unwrap().keys().collect();
                 attrs.sort();
                 assert_eq!(attrs, ["NORMAL", "POSITION"], "{model} LOD {l}");

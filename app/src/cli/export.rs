@@ -10,6 +10,7 @@ use lodstudio_core::lod::Method;
 use lodstudio_core::recipe::{Chain, ChainError, Recipe, build_chain, parse_lods};
 
 mod batch;
+mod scene;
 
 /// `--method`: a [`Method`] by its tag.
 fn parse_method(tag: &str) -> Result<Method, String> {
@@ -60,6 +61,18 @@ pub struct ExportArgs {
     /// folder, glob or manifest, the folder that receives one MODEL.glb each.
     #[arg(short = 'o', long = "output", value_name = "OUT.glb")]
     output: PathBuf,
+    /// How a glTF scene's chains are laid out: msft_lod (MSFT_lod on each
+    /// node, Babylon.js), nodes (children NAME_LOD0…NAME_LODn, which Unity,
+    /// Unreal and Godot importers read as LOD groups) or files (OUT.glb,
+    /// OUT_LOD1.glb…, each the whole scene at one level) [default: the
+    /// recipe's, else msft_lod].
+    #[arg(long, value_name = "msft_lod|nodes|files", value_parser = str::parse::<lodstudio_core::scene::Layout>)]
+    layout: Option<lodstudio_core::scene::Layout>,
+    /// Skinned glTF meshes: poses sampled evenly in time from each
+    /// animation, at which the skinned LOD is measured against the
+    /// skinned original (JSON lods[].pose_error).
+    #[arg(long, value_name = "N", default_value_t = 8, value_parser = clap::value_parser!(u64).range(0..=256))]
+    poses: u64,
     /// Pixel tolerance for the MSFT_screencoverage thresholds: a LOD is shown
     /// only where its error bound projects to at most this many pixels.
     #[arg(long, value_name = "P", default_value_t = Recipe::new(Vec::new()).pixels)]
@@ -104,10 +117,13 @@ pub struct ExportArgs {
 }
 
 pub fn run(args: ExportArgs) -> Result<(), CliError> {
-    let recipe = match &args.recipe {
+    let mut recipe = match &args.recipe {
         Some(path) => read_recipe(path)?,
         None => recipe_of(&args)?,
     };
+    if let Some(layout) = args.layout {
+        recipe.layout = layout;
+    }
     if let Some(path) = &args.save_recipe {
         check_output(path, args.report.force)?;
     }
@@ -149,10 +165,22 @@ pub fn run(args: ExportArgs) -> Result<(), CliError> {
     if format == Format::Gltf {
         check_output(&args.output.with_extension("bin"), args.report.force)?;
     }
-    let j = export_one(&args.input, &recipe, file, &args.output)?;
+    let j = match scene::is_scene(file) {
+        true => scene::export_scene(
+            &args.input,
+            &recipe,
+            file,
+            &args.output,
+            args.report.force,
+            args.poses as usize,
+        )?,
+        false => export_one(&args.input, &recipe, file, &args.output)?,
+    };
     save()?;
     if args.report.json {
         println!("{j}");
+    } else if j.get("meshes").is_some() {
+        scene::print_summary(&j);
     } else {
         print_summary(&j);
     }

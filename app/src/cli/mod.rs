@@ -121,7 +121,7 @@ enum Command {
     Voxel(voxel::VoxelArgs),
     /// Export an LOD chain as one GLB: the MSFT_lod node extension with
     /// MSFT_screencoverage thresholds from each LOD's guaranteed error bound.
-    Export(export::ExportArgs),
+    Export(Box<export::ExportArgs>),
     /// Reopen a saved hierarchy (simplify, hybrid, mergetree, voxel --pyramid
     /// --save) and write its cut at an object-space error or a triangle count,
     /// without rebuilding.
@@ -371,7 +371,7 @@ fn dispatch(command: Option<Command>) -> Result<(), CliError> {
         Some(Command::Measure(args)) => measure::run(args),
         Some(Command::Compare(args)) => compare::run(args),
         Some(Command::Voxel(args)) => voxel::run(args),
-        Some(Command::Export(args)) => export::run(args),
+        Some(Command::Export(args)) => export::run(*args),
         Some(Command::Cut(args)) => cut::run(args),
         Some(Command::Mergetree(args)) => mergetree::run(args),
         Some(Command::Hybrid(args)) => hybrid::run(args),

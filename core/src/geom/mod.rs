@@ -71,6 +71,22 @@ impl Aabb {
         }
     }
 
+    /// The box around this one's eight corners under `m` (empty stays empty).
+    pub fn transformed(&self, m: glam::Mat4) -> Aabb {
+        if self.is_empty() {
+            return *self;
+        }
+        (0..8).fold(Aabb::EMPTY, |b, k| {
+            let pick = |bit: usize, lo: f32, hi: f32| if k >> bit & 1 == 0 { lo } else { hi };
+            let corner = Vec3::new(
+                pick(0, self.min.x, self.max.x),
+                pick(1, self.min.y, self.max.y),
+                pick(2, self.min.z, self.max.z),
+            );
+            b.grow(m.transform_point3(corner))
+        })
+    }
+
     pub fn is_empty(&self) -> bool {
         !(self.min.x <= self.max.x && self.min.y <= self.max.y && self.min.z <= self.max.z)
     }

@@ -104,9 +104,35 @@ const OTHER_TEXTURES: [(&str, &str); 4] = [
 /// The attributes a primitive's triangles are read with.
 const READ_ATTRIBUTES: [&str; 4] = ["POSITION", "NORMAL", "TEXCOORD_0", "COLOR_0"];
 
+/// How much of a glTF the outputs carry.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Carried {
+    /// One mesh: every instance flattened into world space (`gltf::read`).
+    Flat,
+    /// The document as read, with LOD meshes put in (`scene::read`): only
+    /// what a primitive holds beyond the attributes read can be lost.
+    Scene,
+}
+
+/// The attributes a scene's primitives are read and written with.
+const SCENE_ATTRIBUTES: [&str; 6] = [
+    "POSITION",
+    "NORMAL",
+    "TEXCOORD_0",
+    "COLOR_0",
+    "JOINTS_0",
+    "WEIGHTS_0",
+];
+
 /// The report of a glTF's JSON `root`, whose scene `scene` (its index) is
-/// the one read; refuses a required extension.
-pub fn audit_gltf(root: &Value, scene: Option<usize>) -> ParseResult<AssetReport> {
+/// the one read, for outputs that carry `carried`; refuses a required
+/// extension.
+pub fn audit_gltf(
+    root: &Value,
+    scene: Option<usize>,
+    carried: Carried,
+) -> ParseResult<AssetReport> {
+    let flat = carried == Carried::Flat;
     check_required(root)?;
     let list = |key: &str| {
         root.get(key)
@@ -158,6 +184,58 @@ pub fn audit_gltf(root: &Value, scene: Option<usize>) -> ParseResult<AssetReport
         );
     }
     let instances = uses.iter().sum();
+    let mut morph_targets = 0;
+    for mesh in meshes {
+        let prims = mesh.get("primitives").and_then(Value::as_array);
+        morph_targets += prims
+            .map_or(&[][..], |a| a)
+            .iter()
+            .map(|p| array_len(p, "targets"))
+            .max()
+            .unwrap_or(0);
+    }
+    let report = |dropped| AssetReport {
+        nodes: nodes.len(),
+        meshes: meshes.len(),
+        instances,
+        skins: list("skins").len(),
+        animations: list("animations").len(),
+        morph_targets,
+        extensions: names("extensionsUsed"),
+        dropped,
+    };
+    if !flat {
+        for (m, mesh) in meshes.iter().enumerate() {
+            let prims = mesh.get("primitives").and_then(Value::as_array);
+            for (p, prim) in prims.map_or(&[][..], |a| a).iter().enumerate() {
+                let at = || format!("{} primitive {p}", label("mesh", m, mesh));
+                // Points and lines are carried as they are.
+                if prim.get("mode").and_then(Value::as_u64).unwrap_or(4) < 4 {
+                    continue;
+                }
+                if let Some(attributes) = prim.get("attributes").and_then(Value::as_object) {
+                    for name in attributes.keys() {
+                        if !SCENE_ATTRIBUTES.contains(&name.as_str()) {
+                            drop(&format!("attribute {name}"), at());
+                        }
+                    }
+                }
+                let targets = prim.get("targets").and_then(Value::as_array);
+                for target in targets.map_or(&[][..], |a| a) {
+                    for name in target.as_object().into_iter().flat_map(|t| t.keys()) {
+                        if name != "POSITION" && name != "NORMAL" {
+                            drop(&format!("morph target {name}"), at());
+                        }
+                    }
+                }
+                for name in extension_names(prim) {
+                    drop(&name, at());
+                }
+            }
+        }
+        dropped.dedup();
+        return Ok(report(dropped));
+    }
     if nodes.len() > 1 || nodes.iter().any(|n| n.get("name").is_some()) {
         drop(
             "scene graph",
@@ -186,7 +264,6 @@ pub fn audit_gltf(root: &Value, scene: Option<usize>) -> ParseResult<AssetReport
             );
         }
     }
-    let mut morph_targets = 0;
     for (m, mesh) in meshes.iter().enumerate() {
         let prims = mesh.get("primitives").and_then(Value::as_array);
         let mut targets = 0;
@@ -206,7 +283,6 @@ pub fn audit_gltf(root: &Value, scene: Option<usize>) -> ParseResult<AssetReport
             targets = targets.max(array_len(prim, "targets"));
         }
         if targets > 0 {
-            morph_targets += targets;
             drop(
                 "morph targets",
                 format!("{}: {targets} targets", label("mesh", m, mesh)),
@@ -259,16 +335,7 @@ pub fn audit_gltf(root: &Value, scene: Option<usize>) -> ParseResult<AssetReport
     for name in extension_names(root) {
         drop(&name, "the asset".into());
     }
-    Ok(AssetReport {
-        nodes: nodes.len(),
-        meshes: meshes.len(),
-        instances,
-        skins: list("skins").len(),
-        animations: list("animations").len(),
-        morph_targets,
-        extensions: names("extensionsUsed"),
-        dropped,
-    })
+    Ok(report(dropped))
 }
 
 /// The length of `item`'s array `key` (0 without one).
@@ -346,7 +413,7 @@ mod tests {
                            "extensions": {"KHR_materials_clearcoat": {}}}],
             "extensionsUsed": ["KHR_texture_transform", "KHR_materials_clearcoat"]
         });
-        let r = audit_gltf(&root, Some(0)).unwrap();
+        let r = audit_gltf(&root, Some(0), Carried::Flat).unwrap();
         assert_eq!(
             (
                 r.nodes,
@@ -391,7 +458,7 @@ mod tests {
     #[test]
     fn a_required_extension_refuses_the_file_by_name() {
         let root = json!({"extensionsRequired": ["KHR_draco_mesh_compression"]});
-        let e = audit_gltf(&root, None).unwrap_err().expected;
+        let e = audit_gltf(&root, None, Carried::Flat).unwrap_err().expected;
         assert!(
             e.contains("KHR_draco_mesh_compression") && e.contains("Draco"),
             "{e}"
@@ -405,7 +472,7 @@ mod tests {
             "scenes": [{"nodes": [0]}], "nodes": [{"mesh": 0}],
             "meshes": [{"primitives": [{"attributes": {"POSITION": 0, "NORMAL": 1}}]}]
         });
-        let r = audit_gltf(&root, Some(0)).unwrap();
+        let r = audit_gltf(&root, Some(0), Carried::Flat).unwrap();
         assert!(r.dropped.is_empty(), "{:?}", r.dropped);
         assert_eq!((r.nodes, r.meshes, r.instances), (1, 1, 1));
     }

@@ -37,7 +37,7 @@ fn check_glb_length(data: &[u8]) -> ParseResult<()> {
 /// Parses and validates `data`. The crate's validation reads each primitive's
 /// `POSITION` accessor before it checks that index (a panic on a hostile
 /// file, found by fuzzing), so those indices are checked here first.
-fn parse(data: &[u8]) -> ParseResult<(gltf::Gltf, serde_json::Value)> {
+pub(super) fn parse(data: &[u8]) -> ParseResult<(gltf::Gltf, serde_json::Value)> {
     check_glb_length(data)?;
     // A required extension is named before the crate's own checks (which
     // refuse it as "unsupported" without saying what it is).
@@ -109,7 +109,7 @@ pub fn read(data: &[u8], base: Option<&Path>) -> ParseResult<(TriMesh, AssetRepo
         .default_scene()
         .or_else(|| g.document.scenes().next())
         .map(|s| s.index());
-    let report = audit_gltf(&raw, scene)?;
+    let report = audit_gltf(&raw, scene, asset::Carried::Flat)?;
     let roots = scene_roots(&g.document);
     Ok((read_nodes(&g, base, roots)?, report))
 }
@@ -145,7 +145,7 @@ pub fn read_lod(data: &[u8], base: Option<&Path>, lod: usize) -> ParseResult<Tri
     read_nodes(&g, base, vec![node])
 }
 
-fn scene_roots(document: &gltf::Document) -> Vec<gltf::Node<'_>> {
+pub(super) fn scene_roots(document: &gltf::Document) -> Vec<gltf::Node<'_>> {
     match document
         .default_scene()
         .or_else(|| document.scenes().next())
@@ -157,7 +157,7 @@ fn scene_roots(document: &gltf::Document) -> Vec<gltf::Node<'_>> {
 
 /// The `MSFT_lod` ids of node `node` (none without the extension), read from
 /// the JSON itself: the gltf crate, as configured, drops unknown extensions.
-fn lod_ids(root: &serde_json::Value, node: usize) -> ParseResult<Vec<usize>> {
+pub(super) fn lod_ids(root: &serde_json::Value, node: usize) -> ParseResult<Vec<usize>> {
     let Some(ids) = root["nodes"][node]["extensions"]["MSFT_lod"].get("ids") else {
         return Ok(Vec::new());
     };
@@ -229,42 +229,12 @@ fn read_nodes(g: &gltf::Gltf, base: Option<&Path>, roots: Vec<gltf::Node>) -> Pa
                 &format!("{triangles} triangles of instanced meshes"),
                 triangles.saturating_mul(INSTANCE_BYTES_PER_TRIANGLE),
             )?;
-            let mut instance = TriMesh::default();
-            // Primitives of one material make one part, whatever their count.
-            let mut keys: Vec<Option<usize>> = Vec::new();
-            let mut materials = Materials::default();
-            let mut parts = Vec::new();
-            for prim in m.primitives() {
-                if let Some(piece) = read_primitive(&prim, &buffers, world)? {
-                    let key = prim.material().index();
-                    let part = match keys.iter().position(|k| *k == key) {
-                        Some(p) => p,
-                        None => {
-                            let slot = key.unwrap_or(materials_read.len() - 1);
-                            let mut material = match &materials_read[slot] {
-                                Some(m) => m.clone(),
-                                None => {
-                                    let m = read_material(&prim.material(), &buffers, &mut images)?;
-                                    materials_read[slot] = Some(m.clone());
-                                    m
-                                }
-                            };
-                            material.vertex_attributes = VertexAttributes {
-                                colors: prim.get(&gltf::Semantic::Colors(0)).is_some(),
-                                uvs: prim.get(&gltf::Semantic::TexCoords(0)).is_some(),
-                            };
-                            let i = materials.intern(&material);
-                            materials.of_part.push(i);
-                            keys.push(key);
-                            keys.len() - 1
-                        }
-                    };
-                    parts.extend(std::iter::repeat_n(part as u32, piece.triangles.len()));
-                    instance.append(&piece);
-                }
-            }
-            instance.parts = (keys.len() > 1).then_some(parts);
-            instance.materials = Some(materials);
+            let mut reader = MeshReader {
+                buffers: &buffers,
+                images: &mut images,
+                materials: &mut materials_read,
+            };
+            let (instance, _) = reader.read(&m, world, &mut |_, _| Ok(()))?;
             if !instance.triangles.is_empty() {
                 pieces.push(instance);
             }
@@ -274,6 +244,67 @@ fn read_nodes(g: &gltf::Gltf, base: Option<&Path>, roots: Vec<gltf::Node>) -> Pa
         }
     }
     Ok(TriMesh::concat(&pieces))
+}
+
+/// Reads meshes, each material and image once however many meshes use it.
+pub(super) struct MeshReader<'r, 'a> {
+    pub buffers: &'r [gltf::buffer::Data],
+    pub images: &'r mut ImageCache<'a>,
+    /// The materials read so far, by glTF index (the last: the default).
+    pub materials: &'r mut Vec<Option<Material>>,
+}
+
+impl MeshReader<'_, '_> {
+    /// The triangles of `mesh` under `world`, one part per material, and
+    /// each part's glTF material index (`None`: the default material).
+    /// `each` sees every primitive read and the vertex count it added, in
+    /// the order of the mesh's vertices (for attributes read beside them).
+    pub fn read(
+        &mut self,
+        mesh: &gltf::Mesh,
+        world: Mat4,
+        each: &mut dyn FnMut(&gltf::Primitive, usize) -> ParseResult<()>,
+    ) -> ParseResult<(TriMesh, Vec<Option<usize>>)> {
+        let mut out = TriMesh::default();
+        // Primitives of one material make one part, whatever their count.
+        let mut keys: Vec<Option<usize>> = Vec::new();
+        let mut materials = Materials::default();
+        let mut parts = Vec::new();
+        for prim in mesh.primitives() {
+            let Some(piece) = read_primitive(&prim, self.buffers, world)? else {
+                continue;
+            };
+            let key = prim.material().index();
+            let part = match keys.iter().position(|k| *k == key) {
+                Some(p) => p,
+                None => {
+                    let slot = key.unwrap_or(self.materials.len() - 1);
+                    let mut material = match &self.materials[slot] {
+                        Some(m) => m.clone(),
+                        None => {
+                            let m = read_material(&prim.material(), self.buffers, self.images)?;
+                            self.materials[slot] = Some(m.clone());
+                            m
+                        }
+                    };
+                    material.vertex_attributes = VertexAttributes {
+                        colors: prim.get(&gltf::Semantic::Colors(0)).is_some(),
+                        uvs: prim.get(&gltf::Semantic::TexCoords(0)).is_some(),
+                    };
+                    let i = materials.intern(&material);
+                    materials.of_part.push(i);
+                    keys.push(key);
+                    keys.len() - 1
+                }
+            };
+            parts.extend(std::iter::repeat_n(part as u32, piece.triangles.len()));
+            each(&prim, piece.positions.len())?;
+            out.append(&piece);
+        }
+        out.parts = (keys.len() > 1).then_some(parts);
+        out.materials = Some(materials);
+        Ok((out, keys))
+    }
 }
 
 /// What one triangle of an instance costs once read: three vertices
@@ -296,7 +327,7 @@ fn mesh_triangles(mesh: &gltf::Mesh) -> u64 {
 /// The buffers' bytes: the GLB's binary chunk, `data:` URIs, and files
 /// inside the asset folder (`confine`), each within the memory budget and
 /// padded to 4 bytes as the gltf crate's readers expect.
-fn load_buffers(
+pub(super) fn load_buffers(
     document: &gltf::Document,
     base: Option<&Path>,
     mut blob: Option<Vec<u8>>,
@@ -327,7 +358,7 @@ fn load_buffers(
 /// The bytes a URI names, through the asset-folder policy (`confine`): a
 /// `data:` URI decoded, or a regular file inside the folder within the
 /// memory budget. A GLB read from memory has no folder, so files are refused.
-fn read_uri(uri: &str, base: Option<&Path>, what: &str) -> ParseResult<Vec<u8>> {
+pub(super) fn read_uri(uri: &str, base: Option<&Path>, what: &str) -> ParseResult<Vec<u8>> {
     let refused = |e: confine::Refused| ParseError::file(e.message().to_string());
     let target = match base {
         Some(folder) => confine::resolve_uri(folder, uri, what).map_err(refused)?,
@@ -375,7 +406,7 @@ fn vec3s(
 /// `c / 65535`), the others keep their values (a node's scale and offset
 /// then dequantize them). The accessor was checked against its buffer
 /// ([`check_accessor`]).
-fn dequantized<const N: usize>(
+pub(super) fn dequantized<const N: usize>(
     acc: &gltf::Accessor,
     buffers: &[gltf::buffer::Data],
 ) -> Vec<[f32; N]> {
@@ -410,7 +441,10 @@ fn dequantized<const N: usize>(
 }
 
 /// Checks that every element of the accessor lies inside its buffer view and buffer.
-fn check_accessor(acc: &gltf::Accessor, buffers: &[gltf::buffer::Data]) -> ParseResult<()> {
+pub(super) fn check_accessor(
+    acc: &gltf::Accessor,
+    buffers: &[gltf::buffer::Data],
+) -> ParseResult<()> {
     let what = || format!("accessor {}", acc.index());
     if acc.sparse().is_some() {
         return Err(ParseError::item(
@@ -631,13 +665,13 @@ fn read_material(
 /// Each image's bytes, read once however many materials name it (60
 /// materials naming one 200 MB file held it 60 times), its declared size
 /// checked against the memory budget before anything decodes it.
-struct ImageCache<'a> {
+pub(super) struct ImageCache<'a> {
     base: Option<&'a Path>,
     read: Vec<Option<(Arc<[u8]>, String)>>,
 }
 
 impl<'a> ImageCache<'a> {
-    fn new(document: &gltf::Document, base: Option<&'a Path>) -> Self {
+    pub(super) fn new(document: &gltf::Document, base: Option<&'a Path>) -> Self {
         ImageCache {
             base,
             read: vec![None; document.images().len()],

@@ -22,6 +22,7 @@ use std::hash::{DefaultHasher, Hash, Hasher};
 use glam::Vec3;
 use serde_json::{Value, json};
 
+use super::scene::VertexExtras;
 use crate::geom::{Aabb, AlphaMode, Material, TriMesh};
 use crate::lod::{DrawSet, Texture};
 
@@ -29,6 +30,7 @@ const ARRAY_BUFFER: u32 = 34962;
 const ELEMENT_ARRAY_BUFFER: u32 = 34963;
 const FLOAT: u32 = 5126;
 const UNSIGNED_INT: u32 = 5125;
+const UNSIGNED_SHORT: u32 = 5123;
 
 /// How a cut's points are written.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
@@ -60,9 +62,20 @@ const RADIUS_NOTE: &str = "_RADIUS: object-space radius of each point; draw each
      that radius facing its normal (lodstudio hybrid LOD, hybrid paper 5.3). Clients that draw POINTS \
      as pixels see a sparse cloud: export with --points-as quads|discs for a covering surface.";
 
+/// How a scene's mesh is written ([`GltfWriter::scene_mesh`]): the glTF
+/// material of each part, and what each written vertex carries besides
+/// its surface (skin, morph target deltas), given the vertices.
+pub struct ScenePrimitives<'a> {
+    pub materials: &'a [Option<usize>],
+    pub extras: &'a dyn Fn(&TriMesh) -> VertexExtras,
+}
+
 /// Accumulates buffers, accessors, materials and nodes, then packs a GLB.
 #[derive(Default)]
 pub struct GltfWriter {
+    /// The document written into (a scene's, [`GltfWriter::extending`]),
+    /// less the arrays this writer holds.
+    base: Option<Value>,
     points_as: PointsAs,
     bin: Vec<u8>,
     views: Vec<Value>,
@@ -106,6 +119,64 @@ impl GltfWriter {
         }
     }
 
+    /// A writer that adds to `doc` (whose buffer 0 is `bin`, its only
+    /// buffer): new objects take the indices after the document's own.
+    pub fn extending(mut doc: Value, bin: Vec<u8>, points_as: PointsAs) -> Self {
+        let mut take = |key: &str| match doc.as_object_mut().and_then(|o| o.remove(key)) {
+            Some(Value::Array(a)) => a,
+            _ => Vec::new(),
+        };
+        let mut w = Self {
+            points_as,
+            bin,
+            views: take("bufferViews"),
+            accessors: take("accessors"),
+            meshes: take("meshes"),
+            nodes: take("nodes"),
+            materials: take("materials"),
+            images: take("images"),
+            textures: take("textures"),
+            samplers: take("samplers"),
+            ..Self::default()
+        };
+        w.base = Some(doc);
+        w
+    }
+
+    /// The nodes, to edit in place (a scene's nodes, then those added).
+    pub fn nodes_mut(&mut self) -> &mut Vec<Value> {
+        &mut self.nodes
+    }
+
+    /// The meshes, to edit in place.
+    pub fn meshes_mut(&mut self) -> &mut Vec<Value> {
+        &mut self.meshes
+    }
+
+    /// Appends a node; its index.
+    pub fn push_node(&mut self, node: Value) -> usize {
+        self.nodes.push(node);
+        self.nodes.len() - 1
+    }
+
+    /// The primitives of `set` as one of a scene's meshes: its surface one
+    /// primitive per part wearing the scene's materials, with the vertex
+    /// extras `scene` gives, then its points and splats.
+    pub fn scene_primitives(&mut self, set: &DrawSet, scene: &ScenePrimitives) -> Vec<Value> {
+        let mut primitives = Vec::new();
+        if !set.mesh.triangles.is_empty() {
+            primitives.extend(self.wearing(&set.mesh, Some(scene)));
+        }
+        primitives.extend(self.points(set));
+        primitives.extend(self.splats(set));
+        primitives
+    }
+
+    /// Marks an extension used.
+    pub fn uses(&mut self, extension: &'static str) {
+        self.extensions.insert(extension);
+    }
+
     /// Appends `bytes` as a buffer view (4-byte aligned).
     fn view(&mut self, bytes: &[u8], target: Option<u32>) -> usize {
         while !self.bin.len().is_multiple_of(4) {
@@ -125,6 +196,7 @@ impl GltfWriter {
         let width = match kind {
             "VEC2" => 2,
             "VEC3" => 3,
+            "VEC4" => 4,
             _ => 1,
         };
         let view = self.view(&le(data), Some(ARRAY_BUFFER));
@@ -183,22 +255,58 @@ impl GltfWriter {
     /// The triangle primitives of a cut's surface: one with the shared surface
     /// material, or one per material of the input's that it wears.
     fn surface_primitives(&mut self, mesh: &TriMesh) -> Vec<Value> {
+        self.wearing(mesh, None)
+    }
+
+    /// [`Self::surface_primitives`], or with `scene` one primitive per part
+    /// wearing the scene's own material (`None`: glTF's default), with the
+    /// vertex extras `scene` gives each.
+    fn wearing(&mut self, mesh: &TriMesh, scene: Option<&ScenePrimitives>) -> Vec<Value> {
         // glTF stores attributes per vertex: one vertex per wedge.
         let mesh = &mesh.unwelded();
         let Some(materials) = &mesh.materials else {
             let m = self.surface_material();
-            return self.triangles(mesh, m).into_iter().collect();
+            return self.triangles(mesh, Some(m), None).into_iter().collect();
         };
-        let mut groups: Vec<Vec<u32>> = vec![Vec::new(); materials.table.len()];
+        // Groups: materials, or a scene's glTF materials (two parts may wear
+        // equal materials that are distinct glTF materials, or one glTF
+        // material: a skinned mesh's parts are its bones').
+        let scene_groups: Vec<Option<usize>> = match scene {
+            Some(s) => {
+                let mut g: Vec<Option<usize>> = s.materials.to_vec();
+                g.sort();
+                g.dedup();
+                g
+            }
+            None => Vec::new(),
+        };
+        let groups_len = match scene {
+            Some(_) => scene_groups.len().max(1),
+            None => materials.table.len(),
+        };
+        let mut groups: Vec<Vec<u32>> = vec![Vec::new(); groups_len];
         for t in 0..mesh.triangles.len() {
-            let m = (materials.of(mesh.part(t)) as usize).min(groups.len() - 1);
-            groups[m].push(t as u32);
+            let g = match scene {
+                Some(s) => {
+                    let key = s.materials.get(mesh.part(t) as usize).copied().flatten();
+                    scene_groups.binary_search(&key).unwrap_or(0)
+                }
+                None => materials.of(mesh.part(t)) as usize,
+            };
+            groups[g.min(groups_len - 1)].push(t as u32);
         }
         let mut out = Vec::new();
-        for (m, tris) in materials.table.iter().zip(groups) {
+        for (g, tris) in groups.into_iter().enumerate() {
             if tris.is_empty() {
                 continue;
             }
+            let m = match scene {
+                Some(_) => {
+                    let part = mesh.part(tris[0] as usize);
+                    &materials.table[(materials.of(part) as usize).min(materials.table.len() - 1)]
+                }
+                None => &materials.table[g],
+            };
             let mut piece = mesh.subset(&tris);
             // Only the attributes the input gave this material's vertices.
             if !m.vertex_attributes.uvs {
@@ -218,8 +326,14 @@ impl GltfWriter {
                     piece.colors = None;
                 }
             }
-            let material = self.original_material(m);
-            out.extend(self.triangles(&piece, material));
+            let (material, extras) = match scene {
+                Some(s) => (
+                    scene_groups.get(g).copied().flatten(),
+                    Some((s.extras)(&piece)),
+                ),
+                None => (Some(self.original_material(m)), None),
+            };
+            out.extend(self.triangles(&piece, material, extras));
         }
         out
     }
@@ -236,8 +350,14 @@ impl GltfWriter {
         m
     }
 
-    /// The triangle primitive of `mesh`, or `None` when it has no triangles.
-    fn triangles(&mut self, mesh: &TriMesh, material: usize) -> Option<Value> {
+    /// The triangle primitive of `mesh` (with its vertices' `extras`), or
+    /// `None` when it has no triangles.
+    fn triangles(
+        &mut self,
+        mesh: &TriMesh,
+        material: Option<usize>,
+        extras: Option<VertexExtras>,
+    ) -> Option<Value> {
         if mesh.triangles.is_empty() || mesh.positions.is_empty() {
             return None;
         }
@@ -266,9 +386,44 @@ impl GltfWriter {
             let a = self.floats(&flat, "VEC2", None);
             attributes.insert("TEXCOORD_0".into(), a.into());
         }
+        let mut targets = Vec::new();
+        if let Some(extras) = extras {
+            if let Some(skin) = extras.skin {
+                let joints: Vec<u8> = skin
+                    .joints
+                    .iter()
+                    .flatten()
+                    .flat_map(|j| j.to_le_bytes())
+                    .collect();
+                let view = self.view(&joints, Some(ARRAY_BUFFER));
+                self.accessors.push(json!({"bufferView": view, "componentType": UNSIGNED_SHORT, "count": skin.joints.len(), "type": "VEC4"}));
+                attributes.insert("JOINTS_0".into(), (self.accessors.len() - 1).into());
+                let weights: Vec<f32> = skin.weights.iter().flatten().copied().collect();
+                let a = self.floats(&weights, "VEC4", None);
+                attributes.insert("WEIGHTS_0".into(), a.into());
+            }
+            for target in &extras.targets {
+                let bounds = crate::geom::Aabb::from_points(&target.positions);
+                let mut t = serde_json::Map::new();
+                let p = self.floats(&flat3(&target.positions), "VEC3", Some(bounds));
+                t.insert("POSITION".into(), p.into());
+                if let Some(n) = &target.normals {
+                    let a = self.floats(&flat3(n), "VEC3", None);
+                    t.insert("NORMAL".into(), a.into());
+                }
+                targets.push(Value::Object(t));
+            }
+        }
         let flat: Vec<u32> = mesh.triangles.iter().flatten().copied().collect();
         let indices = self.indices(&flat);
-        Some(json!({"attributes": attributes, "indices": indices, "mode": 4, "material": material}))
+        let mut primitive = json!({"attributes": attributes, "indices": indices, "mode": 4});
+        if let Some(m) = material {
+            primitive["material"] = json!(m);
+        }
+        if !targets.is_empty() {
+            primitive["targets"] = json!(targets);
+        }
+        Some(primitive)
     }
 
     /// The points of a cut as a POINTS primitive with `_RADIUS`, or as
@@ -341,7 +496,7 @@ impl GltfWriter {
             "pbrMetallicRoughness": {"baseColorFactor": [1.0, 1.0, 1.0, 1.0], "metallicFactor": 0.0, "roughnessFactor": 0.8},
             "doubleSided": true
         }));
-        self.triangles(&mesh, m)
+        self.triangles(&mesh, Some(m), None)
     }
 
     /// The splats of a cut: textured quads, one material per texture.
@@ -451,7 +606,7 @@ impl GltfWriter {
                 "alphaMode": if alpha >= 1.0 { "OPAQUE" } else { "BLEND" },
             }));
             let mut node = json!({"name": format!("layer{i}")});
-            if let Some(primitive) = self.triangles(&layer.mesh, m) {
+            if let Some(primitive) = self.triangles(&layer.mesh, Some(m), None) {
                 self.meshes.push(json!({"primitives": [primitive]}));
                 node["mesh"] = json!(self.meshes.len() - 1);
             }
@@ -488,6 +643,9 @@ impl GltfWriter {
         while !self.bin.len().is_multiple_of(4) {
             self.bin.push(0);
         }
+        if let Some(base) = self.base.take() {
+            return self.scene_document(base);
+        }
         let mut doc = json!({
             "asset": {"version": "2.0", "generator": "lodstudio"},
             "scene": 0,
@@ -511,6 +669,46 @@ impl GltfWriter {
         }
         (doc, self.bin)
     }
+}
+
+impl GltfWriter {
+    /// The scene document `base` with this writer's arrays put back (each
+    /// only where it has entries, as glTF wants no empty arrays).
+    fn scene_document(self, mut base: Value) -> (Value, Vec<u8>) {
+        for (key, list) in [
+            ("bufferViews", self.views),
+            ("accessors", self.accessors),
+            ("meshes", self.meshes),
+            ("nodes", self.nodes),
+            ("materials", self.materials),
+            ("images", self.images),
+            ("textures", self.textures),
+            ("samplers", self.samplers),
+        ] {
+            if !list.is_empty() {
+                base[key] = Value::Array(list);
+            }
+        }
+        base["buffers"] = json!([{"byteLength": self.bin.len()}]);
+        let mut used: Vec<Value> = base["extensionsUsed"]
+            .as_array()
+            .cloned()
+            .unwrap_or_default();
+        for e in self.extensions {
+            if !used.iter().any(|u| u == e) {
+                used.push(json!(e));
+            }
+        }
+        if !used.is_empty() {
+            base["extensionsUsed"] = json!(used);
+        }
+        (base, self.bin)
+    }
+}
+
+/// A document and its binary as a GLB.
+pub fn glb(doc: &Value, bin: Vec<u8>) -> Vec<u8> {
+    glb_container(doc.to_string().into_bytes(), bin)
 }
 
 /// One cut as a GLB: a single node in the scene.

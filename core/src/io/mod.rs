@@ -16,6 +16,9 @@ pub mod limits;
 pub mod obj;
 pub mod off;
 pub mod ply;
+pub mod rig;
+pub mod scene;
+pub mod scene_writer;
 mod text;
 pub mod volume;
 

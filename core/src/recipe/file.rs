@@ -15,6 +15,7 @@ use serde::{Deserialize, Serialize};
 use crate::geom::Weld;
 use crate::hybrid::HybridOptions;
 use crate::io::gltf_writer::PointsAs;
+use crate::io::scene_writer::Layout;
 use crate::lod::{Method, Params};
 use crate::voxel::PostSimplify;
 use crate::voxel::VoxelParams;
@@ -58,8 +59,16 @@ pub struct Recipe {
     /// How coincident vertices are merged on load.
     #[serde(default)]
     pub weld: WeldSpec,
+    /// How a scene's chains are laid out (glTF inputs; written only when
+    /// not the default, so older recipes read and write the same).
+    #[serde(default, skip_serializing_if = "is_default_layout")]
+    pub layout: Layout,
     /// LOD0…LODn as asked; the chain orders them by certified bound.
     pub rows: Vec<Row>,
+}
+
+fn is_default_layout(layout: &Layout) -> bool {
+    *layout == Layout::default()
 }
 
 fn one() -> f32 {
@@ -329,6 +338,7 @@ impl Recipe {
             viewport_height: full_hd(),
             coverage: 1.0,
             points_as: PointsAs::default(),
+            layout: Layout::default(),
             keep_seams: false,
             lock_borders: false,
             weld: WeldSpec::default(),

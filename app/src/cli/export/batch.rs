@@ -147,6 +147,11 @@ pub fn run(args: &ExportArgs, recipe: &Recipe, entries: Vec<Entry>) -> Result<Ra
     if threads == 0 {
         return Err(CliError::BadInput("--threads must be at least 1".into()));
     }
+    if recipe.layout == lodstudio_core::scene::Layout::Files {
+        return Err(CliError::BadInput(
+            "--layout files writes a file per level, a batch one file per model: use msft_lod or nodes".into(),
+        ));
+    }
     let budget = b
         .memory
         .unwrap_or_else(|| io::limits::current().memory_budget);

@@ -1,0 +1,263 @@
+//! A scene's LOD chains (issue 49, DESIGN "Assets, not meshes"): each mesh
+//! the scene draws gets the recipe's chain, built once in the mesh's own
+//! space however many nodes draw it; the LODs go back into the scene in a
+//! [`Layout`], carrying skins and morph targets ([`transfer`]).
+//!
+//! Bounds in world space: a node draws its mesh through its world matrix
+//! M, which stretches no length by more than σ_max(M), its largest
+//! singular value ([`crate::io::scene::largest_singular_value`]); a LOD
+//! within ε of the mesh in mesh space is within σ_max(M)·ε of the node's
+//! drawing. The switch coverages need no scaling: the node's bounding
+//! sphere grows by the same σ_max (`scene_writer::COVERAGE_NOTE`).
+
+pub mod bones;
+pub mod pose;
+pub mod transfer;
+
+use serde_json::{Value, json};
+
+use crate::geom::repair::{RepairOptions, repair_mesh};
+use crate::io::gltf_writer::PointsAs;
+use crate::io::scene::Scene;
+pub use crate::io::scene_writer::Layout;
+use crate::io::scene_writer::{self, MeshLods};
+use crate::progress::Progress;
+use crate::recipe::{Chain, ChainError, Recipe, build_chain};
+use crate::{Model, TriMesh};
+
+/// The chains of a scene's meshes, in the order of [`Scene::meshes`].
+pub struct SceneChains {
+    pub chains: Vec<Chain>,
+    /// The glTF material of each part of each chain's meshes (skinned
+    /// meshes are split by bone, [`bones`]).
+    pub materials: Vec<Vec<Option<usize>>>,
+}
+
+/// What is measured of one LOD of a skinned or morphing mesh.
+#[derive(Debug, Clone, Default, PartialEq, serde::Serialize)]
+pub struct LodMeasures {
+    /// Skinned meshes: original and LOD skinned at sampled poses.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub pose_error: Option<pose::PoseError>,
+    /// Morphing meshes, per target: the sampled two-sided distance between
+    /// the original's target shape and the LOD's (base + deltas at weight 1).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub target_errors: Vec<TargetError>,
+    /// Textured meshes: how far the LOD's UVs moved (`distance::uv`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub uv_error: Option<crate::distance::UvError>,
+    /// The LOD's surface area (what a scene's UV errors are weighted by).
+    #[serde(skip)]
+    pub area: f64,
+}
+
+/// One morph target's measured distance.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct TargetError {
+    pub target: usize,
+    pub name: Option<String>,
+    pub measured: f32,
+}
+
+/// Builds `recipe`'s chain for each mesh of `scene`, each repaired as
+/// loading repairs a model (`repair`).
+///
+/// # Errors
+/// A mesh the recipe does not fit (named), or cancellation.
+pub fn build(
+    scene: &Scene,
+    recipe: &Recipe,
+    repair: &RepairOptions,
+    progress: &Progress,
+) -> Result<SceneChains, ChainError> {
+    let mut chains = Vec::with_capacity(scene.meshes.len());
+    let mut materials = Vec::with_capacity(scene.meshes.len());
+    for m in &scene.meshes {
+        let (mesh, parts) = match &m.skin {
+            Some(skin) => bones::split_by_bone(&m.mesh, skin, &m.materials),
+            None => (m.mesh.clone(), m.materials.clone()),
+        };
+        materials.push(parts);
+        let (mesh, _) = repair_mesh(mesh, repair);
+        if mesh.triangles.is_empty() {
+            return Err(ChainError::BadInput(format!(
+                "mesh {} \"{}\": no valid triangles",
+                m.index, m.name
+            )));
+        }
+        let chain = build_chain(&Model::Mesh(mesh), recipe, progress).map_err(|e| match e {
+            ChainError::BadInput(why) => {
+                ChainError::BadInput(format!("mesh {} \"{}\": {why}", m.index, m.name))
+            }
+            other => other,
+        })?;
+        chains.push(chain);
+    }
+    Ok(SceneChains { chains, materials })
+}
+
+impl SceneChains {
+    /// The scene with its LODs in `layout`: one GLB, or one per level.
+    pub fn write(&self, scene: &Scene, layout: Layout, points_as: PointsAs) -> Vec<Vec<u8>> {
+        let transfers: Vec<transfer::Transfer> =
+            scene.meshes.iter().map(transfer::Transfer::new).collect();
+        let extras: Vec<_> = transfers
+            .iter()
+            .map(|t| move |lod: &TriMesh| t.extras(lod))
+            .collect();
+        let lods: Vec<MeshLods> = scene
+            .meshes
+            .iter()
+            .zip(&self.chains)
+            .zip(&extras)
+            .zip(&self.materials)
+            .map(|(((mesh, chain), extras), materials)| MeshLods {
+                mesh,
+                materials,
+                sets: chain.lods.iter().map(|l| &l.set).collect(),
+                coverages: chain.coverages.clone(),
+                extras,
+            })
+            .collect();
+        scene_writer::write(scene, &lods, layout, points_as)
+    }
+
+    /// Measures every LOD of every mesh: pose errors of skinned meshes at
+    /// `poses` poses per animation, each morph target shape's distance, and
+    /// how far textured meshes' UVs moved.
+    pub fn measure(&self, scene: &Scene, poses: usize) -> Vec<Vec<LodMeasures>> {
+        let sampled = match scene.meshes.iter().any(|m| m.skin.is_some()) {
+            true => pose::sample_poses(&scene.rig, poses),
+            false => Vec::new(),
+        };
+        let opts = crate::distance::SamplingOptions {
+            samples: 20_000,
+            ..Default::default()
+        };
+        scene
+            .meshes
+            .iter()
+            .zip(&self.chains)
+            .map(|(m, chain)| {
+                let transfer = transfer::Transfer::new(m);
+                let skin_index = m.instances.iter().find_map(|i| i.skin);
+                chain
+                    .lods
+                    .iter()
+                    .map(|l| {
+                        let lod = &l.set.mesh;
+                        let extras = transfer.extras(lod);
+                        let pose_error = match (&m.skin, &extras.skin, skin_index) {
+                            (Some(from), Some(to), Some(s)) => Some(pose::pose_error(
+                                (&m.mesh, from),
+                                (lod, to),
+                                &scene.rig,
+                                s,
+                                &sampled,
+                            )),
+                            _ => None,
+                        };
+                        let target_errors = (0..m.targets.len())
+                            .map(|t| {
+                                let mut shape = lod.clone();
+                                for (p, d) in
+                                    shape.positions.iter_mut().zip(&extras.targets[t].positions)
+                                {
+                                    *p += *d;
+                                }
+                                let original = m.target_shape(t);
+                                let measured =
+                                    crate::distance::hausdorff_mesh_mesh(&original, &shape, &opts)
+                                        .two_sided();
+                                TargetError {
+                                    target: t,
+                                    name: m.targets[t].name.clone(),
+                                    measured,
+                                }
+                            })
+                            .collect();
+                        LodMeasures {
+                            pose_error,
+                            target_errors,
+                            uv_error: crate::distance::uv_error(&m.mesh, lod),
+                            area: lod.area(),
+                        }
+                    })
+                    .collect()
+            })
+            .collect()
+    }
+
+    /// The most LODs a chain has.
+    pub fn levels(&self) -> usize {
+        self.chains.iter().map(|c| c.lods.len()).max().unwrap_or(0)
+    }
+
+    /// The JSON of each mesh: its name, instances, and per LOD its
+    /// triangles, mesh-space bound and coverage, and per instance the
+    /// world-space bound (σ_max·ε).
+    pub fn meshes_json(&self, scene: &Scene, measures: &[Vec<LodMeasures>]) -> Value {
+        let meshes: Vec<Value> = scene
+            .meshes
+            .iter()
+            .zip(&self.chains)
+            .zip(measures)
+            .map(|((m, chain), measures)| {
+                let lods: Vec<Value> = chain
+                    .lods
+                    .iter()
+                    .zip(&chain.coverages)
+                    .zip(measures)
+                    .map(|((l, c), measured)| {
+                        let world: Vec<f32> =
+                            m.instances.iter().map(|i| i.scale() * l.bound()).collect();
+                        let mut j = json!({
+                            "triangles": l.set.mesh.triangles.len(),
+                            "points": l.set.points.len(),
+                            "splats": l.set.splats.len(),
+                            "error_bound": l.bound(),
+                            "world_error_bounds": world,
+                            "screen_coverage": c,
+                        });
+                        if let (Value::Object(o), Ok(Value::Object(more))) =
+                            (&mut j, serde_json::to_value(measured))
+                        {
+                            o.extend(more);
+                        }
+                        j
+                    })
+                    .collect();
+                json!({
+                    "index": m.index,
+                    "name": m.name,
+                    "instances": m.instances.iter().map(|i| i.node).collect::<Vec<_>>(),
+                    "triangles": m.mesh.triangles.len(),
+                    "bbox_diagonal": chain.diagonal,
+                    "skinned": m.skin.is_some(),
+                    "morph_targets": m.targets.len(),
+                    "lods": lods,
+                })
+            })
+            .collect();
+        Value::Array(meshes)
+    }
+
+    /// Per level, over the scene: triangles written (each mesh once) and
+    /// drawn (each instance), and the largest world-space bound of any
+    /// instance (a chain shorter than the level stays at its coarsest).
+    pub fn level_totals(&self, scene: &Scene, k: usize) -> (usize, usize, f32) {
+        let (mut written, mut drawn, mut bound) = (0, 0, 0.0f32);
+        for (m, chain) in scene.meshes.iter().zip(&self.chains) {
+            let Some(l) = chain.lods.get(k.min(chain.lods.len().saturating_sub(1))) else {
+                continue;
+            };
+            let t = l.set.mesh.triangles.len();
+            written += t;
+            drawn += t * m.instances.len();
+            for i in &m.instances {
+                bound = bound.max(i.scale() * l.bound());
+            }
+        }
+        (written, drawn, bound)
+    }
+}

@@ -1,0 +1,168 @@
+//! What an original mesh's vertices carry besides the surface (skin joints
+//! and weights, morph target deltas), carried onto any LOD of it: each LOD
+//! vertex takes the values at its closest point on the original, blended
+//! by that point's barycentric coordinates in its triangle. Every method's
+//! LOD lies within its certified bound ε of the original, so that point is
+//! at most ε away; weights blend joint by joint and keep the four largest,
+//! renormalised to sum to 1 (glTF 2.0 §3.7.3.3).
+
+use glam::Vec3;
+
+use crate::distance::MeshDistance;
+use crate::geom::TriMesh;
+use crate::io::scene::{MorphTarget, SceneMesh, Skinning, VertexExtras};
+
+/// Carries `source`'s vertex extras onto LODs of it.
+pub struct Transfer<'a> {
+    source: &'a SceneMesh,
+    /// `None` when there is nothing to carry.
+    distance: Option<MeshDistance<'a>>,
+}
+
+impl<'a> Transfer<'a> {
+    pub fn new(source: &'a SceneMesh) -> Self {
+        let carries = source.skin.is_some() || !source.targets.is_empty();
+        Transfer {
+            source,
+            distance: carries.then(|| MeshDistance::new(&source.mesh)),
+        }
+    }
+
+    /// The extras of `lod`'s vertices.
+    pub fn extras(&self, lod: &TriMesh) -> VertexExtras {
+        let Some(distance) = &self.distance else {
+            return VertexExtras::default();
+        };
+        let src = &self.source;
+        let corners: Vec<([usize; 3], [f32; 3])> = lod
+            .positions
+            .iter()
+            .map(|&p| match distance.closest(p) {
+                Some((q, t)) => {
+                    let tri = src.mesh.triangles[t as usize].map(|i| i as usize);
+                    let [a, b, c] = tri.map(|i| src.mesh.positions[i]);
+                    (tri, barycentric(q, a, b, c))
+                }
+                None => ([0; 3], [1.0, 0.0, 0.0]),
+            })
+            .collect();
+        let skin = src.skin.as_ref().map(|_| Skinning {
+            joints: Vec::with_capacity(corners.len()),
+            weights: Vec::with_capacity(corners.len()),
+        });
+        let mut out = VertexExtras {
+            skin,
+            targets: Vec::with_capacity(src.targets.len()),
+        };
+        if let (Some(from), Some(to)) = (&src.skin, &mut out.skin) {
+            for (tri, bary) in &corners {
+                let (j, w) = blend_weights(from, tri, bary);
+                to.joints.push(j);
+                to.weights.push(w);
+            }
+        }
+        for target in &src.targets {
+            let lerp = |values: &[Vec3]| -> Vec<Vec3> {
+                corners
+                    .iter()
+                    .map(|(tri, b)| (0..3).map(|k| b[k] * values[tri[k]]).sum())
+                    .collect()
+            };
+            out.targets.push(MorphTarget {
+                name: target.name.clone(),
+                positions: lerp(&target.positions),
+                normals: target.normals.as_deref().map(lerp),
+            });
+        }
+        out
+    }
+}
+
+/// The barycentric coordinates of `p` (a point of triangle abc), each in
+/// [0, 1] and summing to 1; a degenerate triangle answers its first corner.
+pub fn barycentric(p: Vec3, a: Vec3, b: Vec3, c: Vec3) -> [f32; 3] {
+    let (v0, v1, v2) = (b - a, c - a, p - a);
+    let (d00, d01, d11) = (v0.dot(v0), v0.dot(v1), v1.dot(v1));
+    let (d20, d21) = (v2.dot(v0), v2.dot(v1));
+    let denom = d00 * d11 - d01 * d01;
+    if denom.abs() <= f32::EPSILON * d00 * d11 || !denom.is_finite() {
+        return [1.0, 0.0, 0.0];
+    }
+    let v = ((d11 * d20 - d01 * d21) / denom).clamp(0.0, 1.0);
+    let w = ((d00 * d21 - d01 * d20) / denom).clamp(0.0, 1.0 - v);
+    [1.0 - v - w, v, w]
+}
+
+/// The joints and weights at a point: the corners' weights blended joint
+/// by joint, the four largest kept and renormalised (a point without any:
+/// joint 0 at full weight).
+fn blend_weights(skin: &Skinning, tri: &[usize; 3], bary: &[f32; 3]) -> ([u16; 4], [f32; 4]) {
+    let mut sum: Vec<(u16, f32)> = Vec::with_capacity(12);
+    for k in 0..3 {
+        for (j, w) in skin.joints[tri[k]].iter().zip(skin.weights[tri[k]]) {
+            let w = w * bary[k];
+            if w <= 0.0 {
+                continue;
+            }
+            match sum.iter_mut().find(|(have, _)| have == j) {
+                Some(slot) => slot.1 += w,
+                None => sum.push((*j, w)),
+            }
+        }
+    }
+    // Largest first; equal weights by joint, so the result is deterministic.
+    sum.sort_by(|a, b| b.1.total_cmp(&a.1).then(a.0.cmp(&b.0)));
+    sum.truncate(4);
+    let total: f32 = sum.iter().map(|(_, w)| w).sum();
+    if total <= 0.0 || !total.is_finite() {
+        return ([0; 4], [1.0, 0.0, 0.0, 0.0]);
+    }
+    let (mut joints, mut weights) = ([0u16; 4], [0f32; 4]);
+    for (i, (j, w)) in sum.iter().enumerate() {
+        joints[i] = *j;
+        weights[i] = w / total;
+    }
+    // The largest absorbs the rounding, so the four sum to 1 in f32.
+    let rest: f32 = weights[1..].iter().sum();
+    weights[0] = 1.0 - rest;
+    (joints, weights)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn barycentric_coordinates_rebuild_the_point() {
+        let (a, b, c) = (Vec3::ZERO, Vec3::X, Vec3::Y);
+        let p = Vec3::new(0.25, 0.5, 0.0);
+        let [u, v, w] = barycentric(p, a, b, c);
+        assert!(((u * a + v * b + w * c) - p).length() < 1e-6);
+        assert_eq!(barycentric(Vec3::ONE, a, a, a), [1.0, 0.0, 0.0]);
+    }
+
+    #[test]
+    fn blended_weights_keep_the_four_largest_and_sum_to_one() {
+        let skin = Skinning {
+            joints: vec![[0, 1, 2, 3], [4, 5, 0, 1], [6, 0, 0, 0]],
+            weights: vec![
+                [0.4, 0.3, 0.2, 0.1],
+                [0.5, 0.5, 0.0, 0.0],
+                [1.0, 0.0, 0.0, 0.0],
+            ],
+        };
+        let (j, w) = blend_weights(&skin, &[0, 1, 2], &[0.5, 0.25, 0.25]);
+        // Joint 0: 0.2; 1: 0.15; 2: 0.1; 3: 0.05; 4: 0.125; 5: 0.125; 6: 0.25.
+        assert_eq!(j, [6, 0, 1, 4]);
+        assert!((w.iter().sum::<f32>() - 1.0).abs() < 1e-6, "{w:?}");
+        assert!(w.windows(2).all(|p| p[0] >= p[1]), "{w:?}");
+        let none = Skinning {
+            joints: vec![[0; 4]; 3],
+            weights: vec![[0.0; 4]; 3],
+        };
+        assert_eq!(
+            blend_weights(&none, &[0, 1, 2], &[1.0, 0.0, 0.0]).1,
+            [1.0, 0.0, 0.0, 0.0]
+        );
+    }
+}

@@ -1,0 +1,354 @@
+//! Assets, not meshes (issue 49): a glTF scene's export carries the scene
+//! (node names, hierarchy, transforms, skins, animations, morph targets)
+//! in each layout, simplifies each mesh once however many nodes draw it,
+//! bounds each instance in world space, and measures skinned LODs at
+//! sampled poses and morphing LODs per target shape.
+
+use std::path::Path;
+
+use glam::{Mat4, Quat, Vec3};
+use lodstudio_core::distance::{SamplingOptions, hausdorff_mesh_mesh};
+use lodstudio_core::io::{gltf, gltf_writer, scene};
+use lodstudio_tests::{lod_meshes, lodstudio_json, shared_model};
+use serde_json::{Value, json};
+
+fn doc_of(path: &Path) -> Value {
+    let bytes = std::fs::read(path).unwrap();
+    match gltf::split_glb(&bytes, "x.bin") {
+        Some((json, _)) => serde_json::from_slice(&json).unwrap(),
+        None => serde_json::from_slice(&bytes).unwrap(),
+    }
+}
+
+fn export(input: &Path, lods: &str, layout: &str, out: &Path) -> Value {
+    lodstudio_json(&[
+        "export",
+        input.to_str().unwrap(),
+        "--lods",
+        lods,
+        "--layout",
+        layout,
+        "-o",
+        out.to_str().unwrap(),
+    ])
+}
+
+fn read_scene(path: &Path) -> scene::Scene {
+    scene::read(&std::fs::read(path).unwrap(), path.parent()).unwrap()
+}
+
+/// What places a node: the keys that must come back as the input had them.
+const KEPT: [&str; 6] = [
+    "name",
+    "matrix",
+    "translation",
+    "rotation",
+    "scale",
+    "extras",
+];
+
+/// The engine (82 nodes, 29 meshes, 67 instances): in every layout the
+/// input's nodes keep their names, transforms and children (the LOD nodes
+/// come after them), and each mesh is written once per level.
+#[test]
+fn the_engine_keeps_its_scene_in_every_layout() {
+    let tmp = tempfile::tempdir().unwrap();
+    let engine = shared_model("2CylinderEngine.gltf");
+    let src = doc_of(&engine);
+    let src_nodes = src["nodes"].as_array().unwrap();
+    let src_meshes = src["meshes"].as_array().unwrap().len();
+    let lods = "source,simplify:1%,simplify:4%";
+    for layout in ["msft_lod", "nodes", "files"] {
+        let out = tmp.path().join(format!("engine-{layout}.glb"));
+        let j = export(&engine, lods, layout, &out);
+        assert_eq!(j["layout"], layout);
+        assert_eq!(
+            (j["nodes"].as_u64(), j["instances"].as_u64()),
+            (Some(82), Some(67))
+        );
+        let meshes = j["meshes"].as_array().unwrap();
+        assert_eq!(meshes.len(), src_meshes, "every mesh drawn");
+        let instances: usize = meshes
+            .iter()
+            .map(|m| m["instances"].as_array().unwrap().len())
+            .sum();
+        assert_eq!(instances, 67);
+        let levels = j["lods"].as_array().unwrap().len();
+        assert_eq!(levels, 3);
+        let doc = doc_of(&out);
+        let nodes = doc["nodes"].as_array().unwrap();
+        for (i, (a, b)) in src_nodes.iter().zip(nodes).enumerate() {
+            for key in KEPT {
+                if key != "extras" || layout == "files" {
+                    assert_eq!(a.get(key), b.get(key), "{layout} node {i} {key}");
+                }
+            }
+            let (ca, cb) = (&a["children"], &b["children"]);
+            let ca: Vec<&Value> = ca.as_array().into_iter().flatten().collect();
+            let cb: Vec<&Value> = cb.as_array().into_iter().flatten().collect();
+            assert_eq!(ca[..], cb[..ca.len()], "{layout} node {i}: children first");
+        }
+        assert_eq!(doc["scenes"], src["scenes"], "{layout}");
+        match layout {
+            "msft_lod" => {
+                // Each mesh once per level; each drawing node names its LODs.
+                assert_eq!(doc["meshes"].as_array().unwrap().len(), src_meshes * levels);
+                assert_eq!(nodes.len(), 82 + 67 * (levels - 1));
+                for n in src_nodes
+                    .iter()
+                    .enumerate()
+                    .filter(|(_, n)| n.get("mesh").is_some())
+                {
+                    let ids = &nodes[n.0]["extensions"]["MSFT_lod"]["ids"];
+                    assert_eq!(ids.as_array().unwrap().len(), levels - 1);
+                    let c = &nodes[n.0]["extras"]["MSFT_screencoverage"];
+                    assert_eq!(c.as_array().unwrap().len(), levels);
+                }
+                assert!(
+                    doc["asset"]["extras"]["MSFT_screencoverage"]
+                        .as_str()
+                        .unwrap()
+                        .contains("height share")
+                );
+            }
+            "nodes" => {
+                assert_eq!(doc["meshes"].as_array().unwrap().len(), src_meshes * levels);
+                assert_eq!(nodes.len(), 82 + 67 * levels);
+                for (i, n) in src_nodes
+                    .iter()
+                    .enumerate()
+                    .filter(|(_, n)| n.get("mesh").is_some())
+                {
+                    assert!(
+                        nodes[i].get("mesh").is_none(),
+                        "the mesh moves to the LOD nodes"
+                    );
+                    let kids = nodes[i]["children"].as_array().unwrap();
+                    let name = n["name"].as_str().map_or(String::new(), str::to_string);
+                    for (k, c) in kids[kids.len() - levels..].iter().enumerate() {
+                        let child = &nodes[c.as_u64().unwrap() as usize];
+                        let got = child["name"].as_str().unwrap();
+                        assert!(got.ends_with(&format!("_LOD{k}")), "{got}");
+                        if !name.is_empty() {
+                            assert_eq!(got, format!("{name}_LOD{k}"));
+                        }
+                    }
+                }
+            }
+            _ => {
+                // One whole scene per level, each mesh in its place.
+                let outputs = j["outputs"].as_array().unwrap();
+                assert_eq!(outputs.len(), levels);
+                for (k, o) in outputs.iter().enumerate() {
+                    let d = doc_of(Path::new(o.as_str().unwrap()));
+                    assert_eq!(d["nodes"], src["nodes"], "level {k}: the nodes as read");
+                    assert_eq!(d["meshes"].as_array().unwrap().len(), src_meshes);
+                    assert_eq!(d["asset"]["extras"]["lod_level"], json!(k));
+                }
+            }
+        }
+        // A client of MSFT_lod shows, at LOD l, one mesh per drawn mesh,
+        // holding the triangles the report gives.
+        if layout == "msft_lod" {
+            for (l, lod) in j["lods"].as_array().unwrap().iter().enumerate() {
+                let shown = lod_meshes(&doc, l);
+                assert_eq!(shown.len(), src_meshes, "LOD {l}");
+                let triangles: u64 = shown
+                    .iter()
+                    .flat_map(|&m| doc["meshes"][m]["primitives"].as_array().unwrap())
+                    .map(|p| {
+                        doc["accessors"][p["indices"].as_u64().unwrap() as usize]["count"]
+                            .as_u64()
+                            .unwrap()
+                            / 3
+                    })
+                    .sum();
+                assert_eq!(Some(triangles), lod["triangles"].as_u64(), "LOD {l}");
+            }
+        }
+    }
+}
+
+/// One torus drawn by three nodes under scaled (non-uniformly), rotated
+/// and translated transforms: simplified once, and each instance's world
+/// bound (σ_max·ε) holds against an independent measurement of that
+/// instance in world space.
+#[test]
+fn an_instanced_mesh_is_simplified_once_and_bounded_per_instance() {
+    let tmp = tempfile::tempdir().unwrap();
+    let torus = lodstudio_core::builtins::torus(1.0, 0.35, 64, 32);
+    let glb = gltf_writer::write_glb(&torus);
+    let (json, bin) = gltf::split_glb(&glb, "x.bin").unwrap();
+    let mut doc: Value = serde_json::from_slice(&json).unwrap();
+    doc["buffers"][0].as_object_mut().unwrap().remove("uri");
+    let transforms = [
+        Mat4::IDENTITY,
+        Mat4::from_scale_rotation_translation(
+            Vec3::new(3.0, 0.5, 1.0),
+            Quat::from_rotation_y(0.7),
+            Vec3::new(5.0, 0.0, 0.0),
+        ),
+        Mat4::from_scale_rotation_translation(
+            Vec3::splat(0.25),
+            Quat::from_rotation_x(-1.1),
+            Vec3::new(0.0, 4.0, 0.0),
+        ),
+    ];
+    doc["nodes"] = json!([
+        {"name": "plain", "mesh": 0},
+        {"name": "stretched", "mesh": 0, "matrix": transforms[1].to_cols_array()},
+        {"name": "small", "mesh": 0, "matrix": transforms[2].to_cols_array()},
+    ]);
+    doc["scenes"] = json!([{"nodes": [0, 1, 2]}]);
+    let input = tmp.path().join("three.glb");
+    std::fs::write(&input, gltf_writer::glb(&doc, bin)).unwrap();
+
+    let out = tmp.path().join("three-out.glb");
+    let j = export(&input, "simplify:1%,simplify:5%", "files", &out);
+    let mesh = &j["meshes"][0];
+    assert_eq!(mesh["instances"], json!([0, 1, 2]));
+    let original = read_scene(&input);
+    for (k, o) in j["outputs"].as_array().unwrap().iter().enumerate() {
+        let lod = read_scene(Path::new(o.as_str().unwrap()));
+        assert_eq!(lod.meshes.len(), 1, "simplified once");
+        assert_eq!(
+            lod.meshes[0].mesh.triangles.len() as u64,
+            mesh["lods"][k]["triangles"].as_u64().unwrap()
+        );
+        let bounds = &mesh["lods"][k]["world_error_bounds"];
+        for (i, t) in transforms.iter().enumerate() {
+            let world = |m: &lodstudio_core::TriMesh| {
+                let mut w = m.clone();
+                for p in &mut w.positions {
+                    *p = t.transform_point3(*p);
+                }
+                w
+            };
+            let measured = hausdorff_mesh_mesh(
+                &world(&original.meshes[0].mesh),
+                &world(&lod.meshes[0].mesh),
+                &SamplingOptions {
+                    samples: 50_000,
+                    seed: 3,
+                },
+            )
+            .two_sided();
+            let bound = bounds[i].as_f64().unwrap() as f32;
+            assert!(
+                measured <= bound * 1.0001 + 1e-6,
+                "LOD {k} instance {i}: {measured} > {bound}"
+            );
+            assert!(
+                bound > 0.0 && measured > 0.2 * bound,
+                "LOD {k} instance {i}: a loose bound {bound} for {measured}"
+            );
+        }
+        // The stretched instance's bound is σ_max = 3 times the mesh's.
+        let e = mesh["lods"][k]["error_bound"].as_f64().unwrap();
+        let stretched = bounds[1].as_f64().unwrap();
+        assert!((stretched / e - 3.0).abs() < 1e-3, "{stretched} / {e}");
+    }
+}
+
+/// A skinned, animated strip (Khronos' simple skin): the skin, its inverse
+/// bind matrices and the animation's samples come back as read; the LOD's
+/// joints are the original's, its weights sum to 1, and every LOD reports
+/// its distance at 8 sampled poses, 0 where the LOD is the source.
+#[test]
+fn a_skinned_asset_keeps_its_skin_and_reports_pose_errors() {
+    let tmp = tempfile::tempdir().unwrap();
+    let input = shared_model("production/simple_skin/simple_skin.gltf");
+    let src = doc_of(&input);
+    let original = read_scene(&input);
+    for layout in ["msft_lod", "nodes", "files"] {
+        let out = tmp.path().join(format!("skin-{layout}.glb"));
+        let j = export(&input, "source,simplify:5%", layout, &out);
+        let doc = doc_of(&out);
+        assert_eq!(doc["skins"], src["skins"], "{layout}");
+        assert_eq!(doc["animations"], src["animations"], "{layout}");
+        let back = read_scene(&out);
+        assert_eq!(back.rig.skins, original.rig.skins, "inverse bind matrices");
+        assert_eq!(back.rig.animations, original.rig.animations, "sampler data");
+        for (k, lod) in j["lods"].as_array().unwrap().iter().enumerate() {
+            let pose = &lod["pose_error"];
+            assert_eq!(pose["poses"].as_u64(), Some(8), "{layout} LOD {k}");
+            assert!(pose["max"].as_f64().unwrap() >= pose["mean"].as_f64().unwrap());
+            if k == 0 {
+                assert!(pose["max"].as_f64().unwrap() < 1e-5, "the source: {pose}");
+            }
+        }
+        let joints: Vec<u64> = src["skins"][0]["joints"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|j| j.as_u64().unwrap())
+            .collect();
+        // Every skinned primitive of the output: joint indices within the
+        // skin's, weights summing to 1.
+        for m in &back.meshes {
+            let skin = m.skin.as_ref().expect("the LOD meshes are skinned");
+            for (js, ws) in skin.joints.iter().zip(&skin.weights) {
+                assert!(js.iter().all(|&i| (i as usize) < joints.len()));
+                let sum: f32 = ws.iter().sum();
+                assert!((sum - 1.0).abs() < 1e-5, "weights sum to {sum}");
+            }
+        }
+    }
+}
+
+/// A cube with two morph targets, animated: every LOD mesh keeps both
+/// targets, the animation drives every LOD node (in `nodes`, the mesh
+/// node's own channel moves to its LOD children), and each target shape's
+/// distance is reported.
+#[test]
+fn a_morphing_asset_keeps_its_targets_and_reports_them() {
+    let tmp = tempfile::tempdir().unwrap();
+    let input = shared_model("production/AnimatedMorphCube/AnimatedMorphCube.gltf");
+    let src = doc_of(&input);
+    for layout in ["msft_lod", "nodes"] {
+        let out = tmp.path().join(format!("cube-{layout}.glb"));
+        let j = export(&input, "source,simplify:5%", layout, &out);
+        let doc = doc_of(&out);
+        for m in doc["meshes"].as_array().unwrap() {
+            for p in m["primitives"].as_array().unwrap() {
+                assert_eq!(p["targets"].as_array().unwrap().len(), 2, "{layout}");
+            }
+            assert_eq!(m.get("weights"), src["meshes"][0].get("weights"));
+        }
+        let lod_nodes: Vec<usize> = doc["nodes"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .enumerate()
+            .filter(|(_, n)| n["name"].as_str().is_some_and(|s| s.contains("_LOD")))
+            .map(|(i, _)| i)
+            .collect();
+        let driven: Vec<u64> = doc["animations"][0]["channels"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .filter(|c| c["target"]["path"] == "weights")
+            .map(|c| c["target"]["node"].as_u64().unwrap())
+            .collect();
+        for n in &lod_nodes {
+            assert!(
+                driven.contains(&(*n as u64)),
+                "{layout}: LOD node {n} morphs"
+            );
+        }
+        assert_eq!(
+            doc["animations"][0]["samplers"],
+            src["animations"][0]["samplers"]
+        );
+        for (k, lod) in j["lods"].as_array().unwrap().iter().enumerate() {
+            let t = lod["target_errors"].as_array().unwrap();
+            assert_eq!(t.len(), 2, "{layout} LOD {k}");
+            if k == 0 {
+                assert!(
+                    t.iter().all(|e| e["measured"].as_f64().unwrap() < 1e-4),
+                    "{t:?}"
+                );
+            }
+        }
+    }
+}
