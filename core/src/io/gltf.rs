@@ -215,13 +215,7 @@ fn read_nodes(g: &gltf::Gltf, base: Option<&Path>, roots: Vec<gltf::Node>) -> Pa
                 ),
             ));
         }
-        let world = parent * Mat4::from_cols_array_2d(&node.transform().matrix());
-        if !world.is_finite() {
-            return Err(ParseError::item(
-                format!("node {}", node.index()),
-                "expected a finite transform",
-            ));
-        }
+        let world = world_of(&node, parent)?;
         if let Some(m) = node.mesh() {
             // What the instances would hold, before they are made.
             triangles = triangles.saturating_add(mesh_triangles(&m));
@@ -305,6 +299,18 @@ impl MeshReader<'_, '_> {
         out.materials = Some(materials);
         Ok((out, keys))
     }
+}
+
+/// The world matrix of `node` under `parent`; a transform that overflows is refused.
+pub(super) fn world_of(node: &gltf::Node, parent: Mat4) -> ParseResult<Mat4> {
+    let world = parent * Mat4::from_cols_array_2d(&node.transform().matrix());
+    if !world.is_finite() {
+        return Err(ParseError::item(
+            format!("node {}", node.index()),
+            "expected a finite transform",
+        ));
+    }
+    Ok(world)
 }
 
 /// What one triangle of an instance costs once read: three vertices

@@ -206,13 +206,7 @@ fn instances(document: &gltf::Document) -> ParseResult<Vec<Vec<Instance>>> {
                  several parents or in a cycle (its instances would multiply)",
             ));
         }
-        let world = parent * Mat4::from_cols_array_2d(&node.transform().matrix());
-        if !world.is_finite() {
-            return Err(ParseError::item(
-                format!("node {}", node.index()),
-                "expected a finite transform",
-            ));
-        }
+        let world = super::gltf::world_of(&node, parent)?;
         if let Some(m) = node.mesh() {
             out[m.index()].push(Instance {
                 node: node.index(),

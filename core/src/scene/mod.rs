@@ -25,6 +25,9 @@ use crate::progress::Progress;
 use crate::recipe::{Chain, ChainError, Recipe, build_chain};
 use crate::{Model, TriMesh};
 
+/// The vertical field of view the reported switch distances assume.
+pub const SWITCH_FOV_Y_DEGREES: f32 = 60.0;
+
 /// The chains of a scene's meshes, in the order of [`Scene::meshes`].
 pub struct SceneChains {
     pub chains: Vec<Chain>,
@@ -70,14 +73,15 @@ pub fn build(
     repair: &RepairOptions,
     progress: &Progress,
 ) -> Result<SceneChains, ChainError> {
-    let mut chains = Vec::with_capacity(scene.meshes.len());
-    let mut materials = Vec::with_capacity(scene.meshes.len());
-    for m in &scene.meshes {
+    // Meshes are independent: built on as many threads as there are cores,
+    // each chain as alone (the output does not depend on the thread count).
+    // Plain threads, not rayon's: a chain build blocks on threads of its
+    // own that use rayon, which starved the pool from inside its workers.
+    let one = |m: &crate::io::scene::SceneMesh| -> Result<(Chain, Vec<Option<usize>>), ChainError> {
         let (mesh, parts) = match &m.skin {
             Some(skin) => bones::split_by_bone(&m.mesh, skin, &m.materials),
             None => (m.mesh.clone(), m.materials.clone()),
         };
-        materials.push(parts);
         let (mesh, _) = repair_mesh(mesh, repair);
         if mesh.triangles.is_empty() {
             return Err(ChainError::BadInput(format!(
@@ -91,8 +95,47 @@ pub fn build(
             }
             other => other,
         })?;
-        chains.push(chain);
-    }
+        Ok((chain, parts))
+    };
+    let threads = std::thread::available_parallelism()
+        .map_or(1, |n| n.get())
+        .min(scene.meshes.len().max(1));
+    let next = std::sync::atomic::AtomicUsize::new(0);
+    // After a failure no new mesh starts (the first failing mesh by index
+    // is the error reported, whatever the threads).
+    let failed = std::sync::atomic::AtomicBool::new(false);
+    let slots: Vec<std::sync::Mutex<Option<Result<_, ChainError>>>> = scene
+        .meshes
+        .iter()
+        .map(|_| std::sync::Mutex::new(None))
+        .collect();
+    std::thread::scope(|s| {
+        for _ in 0..threads {
+            s.spawn(|| {
+                while !failed.load(std::sync::atomic::Ordering::Relaxed) {
+                    let i = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+                    let Some(m) = scene.meshes.get(i) else { break };
+                    let result = one(m);
+                    if result.is_err() {
+                        failed.store(true, std::sync::atomic::Ordering::Relaxed);
+                    }
+                    if let Ok(mut slot) = slots[i].lock() {
+                        *slot = Some(result);
+                    }
+                }
+            });
+        }
+    });
+    let built: Vec<(Chain, Vec<Option<usize>>)> = slots
+        .into_iter()
+        .map(|slot| {
+            slot.into_inner()
+                .ok()
+                .flatten()
+                .unwrap_or(Err(ChainError::Cancelled))
+        })
+        .collect::<Result<_, _>>()?;
+    let (chains, materials) = built.into_iter().unzip();
     Ok(SceneChains { chains, materials })
 }
 
@@ -195,7 +238,9 @@ impl SceneChains {
 
     /// The JSON of each mesh: its name, instances, and per LOD its
     /// triangles, mesh-space bound and coverage, and per instance the
-    /// world-space bound (σ_max·ε).
+    /// world-space bound (σ_max·ε) and the camera distance at which the
+    /// LOD hands over to the next (vertical field of view
+    /// [`SWITCH_FOV_Y_DEGREES`]).
     pub fn meshes_json(&self, scene: &Scene, measures: &[Vec<LodMeasures>]) -> Value {
         let meshes: Vec<Value> = scene
             .meshes
@@ -211,6 +256,14 @@ impl SceneChains {
                     .map(|((l, c), measured)| {
                         let world: Vec<f32> =
                             m.instances.iter().map(|i| i.scale() * l.bound()).collect();
+                        // Where the coverage falls to `c` (LOD k is left for
+                        // k+1): c = r_w / (d·tan(θ/2)) with r_w = σ_max·r.
+                        let tan = (0.5 * SWITCH_FOV_Y_DEGREES.to_radians()).tan();
+                        let distances: Vec<f32> = m
+                            .instances
+                            .iter()
+                            .map(|i| i.scale() * chain.radius() / (c * tan))
+                            .collect();
                         let mut j = json!({
                             "triangles": l.set.mesh.triangles.len(),
                             "points": l.set.points.len(),
@@ -218,6 +271,7 @@ impl SceneChains {
                             "error_bound": l.bound(),
                             "world_error_bounds": world,
                             "screen_coverage": c,
+                            "switch_distances": distances,
                         });
                         if let (Value::Object(o), Ok(Value::Object(more))) =
                             (&mut j, serde_json::to_value(measured))

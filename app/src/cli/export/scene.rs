@@ -210,6 +210,8 @@ fn report(
         "input_triangles": scene.meshes.iter().map(|m| m.mesh.triangles.len()).sum::<usize>(),
         "bbox_diagonal": world_diagonal,
         "pixels": recipe.pixels,
+        "switch_fov_y_degrees": lodstudio_core::scene::SWITCH_FOV_Y_DEGREES,
+        "screen_coverage_means": lodstudio_core::io::scene_writer::COVERAGE_NOTE,
         "viewport_height": recipe.viewport_height,
         "seconds": seconds,
         "output": paths[0].display().to_string(),
