@@ -36,7 +36,18 @@ pub struct Session {
     pub recent_recipes: Vec<PathBuf>,
     /// The voxel threshold and the volume it was chosen for: it is in that
     /// volume's value units, so it only applies when the same volume reopens.
+    #[serde(deserialize_with = "threshold_of")]
     pub volume_threshold: Option<(PathBuf, f32)>,
+}
+
+/// A threshold beyond f32 reads as infinite (then dropped by
+/// [`Session::from_json`]) instead of failing the whole session: serde_json
+/// parses f32 fields exactly and refuses what overflows them.
+fn threshold_of<'de, D: serde::Deserializer<'de>>(
+    d: D,
+) -> Result<Option<(PathBuf, f32)>, D::Error> {
+    let wide: Option<(PathBuf, f64)> = serde::Deserialize::deserialize(d)?;
+    Ok(wide.map(|(path, t)| (path, t as f32)))
 }
 
 impl Session {

@@ -115,9 +115,10 @@ pub enum Carried {
 }
 
 /// The attributes a scene's primitives are read and written with.
-const SCENE_ATTRIBUTES: [&str; 6] = [
+const SCENE_ATTRIBUTES: [&str; 7] = [
     "POSITION",
     "NORMAL",
+    "TANGENT",
     "TEXCOORD_0",
     "COLOR_0",
     "JOINTS_0",

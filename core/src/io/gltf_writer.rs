@@ -402,6 +402,11 @@ impl GltfWriter {
                 let a = self.floats(&weights, "VEC4", None);
                 attributes.insert("WEIGHTS_0".into(), a.into());
             }
+            if let Some(tangents) = &extras.tangents {
+                let flat: Vec<f32> = tangents.iter().flatten().copied().collect();
+                let a = self.floats(&flat, "VEC4", None);
+                attributes.insert("TANGENT".into(), a.into());
+            }
             for target in &extras.targets {
                 let bounds = crate::geom::Aabb::from_points(&target.positions);
                 let mut t = serde_json::Map::new();

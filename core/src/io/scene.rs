@@ -52,6 +52,9 @@ pub struct SceneMesh {
     pub instances: Vec<Instance>,
     /// `JOINTS_0`/`WEIGHTS_0` per vertex of `mesh`, where it has them.
     pub skin: Option<Skinning>,
+    /// `TANGENT` per vertex of `mesh` (xyz, w the bitangent's sign), where
+    /// it has them: materials with normal maps need them.
+    pub tangents: Option<Vec<[f32; 4]>>,
     /// Morph targets: per target, its deltas per vertex of `mesh`.
     pub targets: Vec<MorphTarget>,
 }
@@ -153,6 +156,8 @@ pub fn read(data: &[u8], base: Option<&Path>) -> ParseResult<Scene> {
         };
         let mut skin = Skinning::default();
         let mut skinned = false;
+        let mut tangents: Vec<[f32; 4]> = Vec::new();
+        let mut tangent = false;
         let mut targets: Vec<MorphTarget> = target_names(&m);
         let mut reader = MeshReader {
             buffers: &buffers,
@@ -161,6 +166,7 @@ pub fn read(data: &[u8], base: Option<&Path>) -> ParseResult<Scene> {
         };
         let (mesh, materials) = reader.read(&m, Mat4::IDENTITY, &mut |prim, n| {
             skinned |= read_skin(prim, &buffers, n, &mut skin)?;
+            tangent |= read_tangents(prim, &buffers, n, &mut tangents)?;
             read_targets(prim, &buffers, n, &mut targets)
         })?;
         if mesh.triangles.is_empty() {
@@ -173,6 +179,7 @@ pub fn read(data: &[u8], base: Option<&Path>) -> ParseResult<Scene> {
             materials,
             instances,
             skin: skinned.then_some(skin),
+            tangents: tangent.then_some(tangents),
             targets,
         });
     }
@@ -287,6 +294,42 @@ fn read_skin(
     skin.joints.extend(joints);
     skin.weights.extend(weights);
     Ok(had)
+}
+
+/// Appends the primitive's `TANGENT`s for its `n` vertices (none: +x with
+/// a right-handed frame); whether it had them.
+fn read_tangents(
+    prim: &gltf::Primitive,
+    buffers: &[gltf::buffer::Data],
+    n: usize,
+    out: &mut Vec<[f32; 4]>,
+) -> ParseResult<bool> {
+    let Some(acc) = prim.get(&gltf::Semantic::Tangents) else {
+        out.extend(std::iter::repeat_n([1.0, 0.0, 0.0, 1.0], n));
+        return Ok(false);
+    };
+    if acc.data_type() != gltf::accessor::DataType::F32
+        || acc.dimensions() != gltf::accessor::Dimensions::Vec4
+    {
+        return Err(ParseError::item(
+            format!("accessor {}", acc.index()),
+            "expected float VEC4 tangents",
+        ));
+    }
+    check_accessor(&acc, buffers)?;
+    let reader = prim.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
+    let read: Vec<[f32; 4]> = reader
+        .read_tangents()
+        .map(Iterator::collect)
+        .unwrap_or_default();
+    if read.len() != n {
+        return Err(ParseError::item(
+            format!("mesh primitive {}", prim.index()),
+            format!("expected TANGENT for its {n} vertices"),
+        ));
+    }
+    out.extend(read);
+    Ok(true)
 }
 
 /// Appends the primitive's target deltas for its `n` vertices (zero where
@@ -421,5 +464,6 @@ fn image_mime(uri: &str) -> Option<&'static str> {
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct VertexExtras {
     pub skin: Option<Skinning>,
+    pub tangents: Option<Vec<[f32; 4]>>,
     pub targets: Vec<MorphTarget>,
 }

@@ -236,6 +236,7 @@ fn chain_file(scene: &Scene, lods: &[MeshLods], layout: Layout, points_as: Point
         w.uses("MSFT_lod");
     }
     let (mut doc, bin) = w.document(&[]);
+    let bin = super::compact::compact(&mut doc, bin);
     retarget_weights(&mut doc, &driven);
     set_extra(
         &mut doc["asset"],
@@ -283,6 +284,7 @@ fn level_file(scene: &Scene, lods: &[MeshLods], k: usize, points_as: PointsAs) -
     let mut w = GltfWriter::extending(scene.doc.clone(), scene.bin.clone(), points_as);
     write_meshes(&mut w, lods, Some(k));
     let (mut doc, bin) = w.document(&[]);
+    let bin = super::compact::compact(&mut doc, bin);
     set_extra(&mut doc["asset"], "lod_level", json!(k));
     glb(&doc, bin)
 }

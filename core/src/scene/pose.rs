@@ -226,6 +226,7 @@ mod tests {
         assert!(half.positions[0].abs_diff_eq(Vec3::new(s, s, 0.0), 1e-6));
         // The same mesh as its own LOD is at distance 0 in every pose.
         let e = pose_error((&mesh, &skin), (&mesh, &skin), &rig, 0, &poses);
-        assert_eq!((e.poses, e.max), (3, 0.0));
+        assert_eq!(e.poses, 3);
+        assert!(e.max < 1e-6, "{e:?}");
     }
 }

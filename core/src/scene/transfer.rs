@@ -21,7 +21,8 @@ pub struct Transfer<'a> {
 
 impl<'a> Transfer<'a> {
     pub fn new(source: &'a SceneMesh) -> Self {
-        let carries = source.skin.is_some() || !source.targets.is_empty();
+        let carries =
+            source.skin.is_some() || source.tangents.is_some() || !source.targets.is_empty();
         Transfer {
             source,
             distance: carries.then(|| MeshDistance::new(&source.mesh)),
@@ -50,8 +51,28 @@ impl<'a> Transfer<'a> {
             joints: Vec::with_capacity(corners.len()),
             weights: Vec::with_capacity(corners.len()),
         });
+        // Tangents blend like normals: renormalised, the handedness of the
+        // corner that weighs most.
+        let tangents = src.tangents.as_ref().map(|from| {
+            corners
+                .iter()
+                .map(|(tri, b)| {
+                    let xyz: Vec3 = (0..3)
+                        .map(|k| b[k] * Vec3::from_slice(&from[tri[k]][..3]))
+                        .sum();
+                    let most = (0..3).max_by(|&i, &j| b[i].total_cmp(&b[j])).unwrap_or(0);
+                    let xyz = xyz
+                        .try_normalize()
+                        .or_else(|| Vec3::from_slice(&from[tri[most]][..3]).try_normalize())
+                        .unwrap_or(Vec3::X);
+                    let w = if from[tri[most]][3] < 0.0 { -1.0 } else { 1.0 };
+                    [xyz.x, xyz.y, xyz.z, w]
+                })
+                .collect()
+        });
         let mut out = VertexExtras {
             skin,
+            tangents,
             targets: Vec::with_capacity(src.targets.len()),
         };
         if let (Some(from), Some(to)) = (&src.skin, &mut out.skin) {
