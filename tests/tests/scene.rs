@@ -402,6 +402,17 @@ fn a_morphing_asset_keeps_its_targets_and_reports_them() {
         for (k, lod) in j["lods"].as_array().unwrap().iter().enumerate() {
             let t = lod["target_errors"].as_array().unwrap();
             assert_eq!(t.len(), 2, "{layout} LOD {k}");
+            let b = lod["target_bounds"].as_array().unwrap();
+            for (e, b) in t.iter().zip(b) {
+                let (measured, bound) = (
+                    e["measured"].as_f64().unwrap(),
+                    b["bound"].as_f64().unwrap(),
+                );
+                assert!(
+                    measured <= bound * 1.0001 + 1e-6,
+                    "{layout} LOD {k}: {measured} > {bound}"
+                );
+            }
             if k == 0 {
                 assert!(
                     t.iter().all(|e| e["measured"].as_f64().unwrap() < 1e-4),
@@ -409,5 +420,115 @@ fn a_morphing_asset_keeps_its_targets_and_reports_them() {
                 );
             }
         }
+    }
+}
+
+/// A torus with two morph targets (a wave and a pinch): each LOD's
+/// certified bound per target shape holds against an independent dense
+/// measurement of the LOD's target shape (read back from the file) against
+/// the original's, and the LOD's bound is the largest over base and targets.
+#[test]
+fn each_morph_target_shape_is_certified() {
+    let tmp = tempfile::tempdir().unwrap();
+    let torus = lodstudio_core::builtins::torus(1.0, 0.35, 64, 32);
+    let glb = gltf_writer::write_glb(&torus);
+    let (json, mut bin) = gltf::split_glb(&glb, "x.bin").unwrap();
+    let mut doc: Value = serde_json::from_slice(&json).unwrap();
+    doc["buffers"][0].as_object_mut().unwrap().remove("uri");
+    // The primitive's positions, as written.
+    let position = &doc["accessors"][doc["meshes"][0]["primitives"][0]["attributes"]["POSITION"]
+        .as_u64()
+        .unwrap() as usize];
+    let view = &doc["bufferViews"][position["bufferView"].as_u64().unwrap() as usize];
+    let start = (view["byteOffset"].as_u64().unwrap_or(0)
+        + position["byteOffset"].as_u64().unwrap_or(0)) as usize;
+    let positions: Vec<Vec3> = (0..position["count"].as_u64().unwrap() as usize)
+        .map(|i| {
+            let f = |c: usize| {
+                let at = start + 12 * i + 4 * c;
+                f32::from_le_bytes(bin[at..at + 4].try_into().unwrap())
+            };
+            Vec3::new(f(0), f(1), f(2))
+        })
+        .collect();
+    let targets: [Vec<Vec3>; 2] = [
+        positions
+            .iter()
+            .map(|p| Vec3::new(0.0, 0.0, 0.4 * (3.0 * p.y.atan2(p.x)).sin()))
+            .collect(),
+        positions
+            .iter()
+            .map(|p| -0.5 * p.x.max(0.0) * Vec3::new(p.x, p.y, 0.0))
+            .collect(),
+    ];
+    for deltas in &targets {
+        let (lo, hi) = deltas.iter().fold(
+            (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN)),
+            |(lo, hi), d| (lo.min(*d), hi.max(*d)),
+        );
+        let offset = bin.len();
+        bin.extend(
+            deltas
+                .iter()
+                .flat_map(|d| d.to_array())
+                .flat_map(f32::to_le_bytes),
+        );
+        let views = doc["bufferViews"].as_array_mut().unwrap();
+        views.push(json!({"buffer": 0, "byteOffset": offset, "byteLength": 12 * deltas.len()}));
+        let v = views.len() - 1;
+        let accessors = doc["accessors"].as_array_mut().unwrap();
+        accessors.push(
+            json!({"bufferView": v, "componentType": 5126, "count": deltas.len(),
+            "type": "VEC3", "min": lo.to_array(), "max": hi.to_array()}),
+        );
+        let a = accessors.len() - 1;
+        let prim = &mut doc["meshes"][0]["primitives"][0];
+        if prim.get("targets").is_none() {
+            prim["targets"] = json!([]);
+        }
+        prim["targets"]
+            .as_array_mut()
+            .unwrap()
+            .push(json!({"POSITION": a}));
+    }
+    doc["meshes"][0]["weights"] = json!([0.0, 0.0]);
+    doc["meshes"][0]["extras"] = json!({"targetNames": ["wave", "pinch"]});
+    doc["buffers"][0]["byteLength"] = json!(bin.len());
+    let input = tmp.path().join("morphing.glb");
+    std::fs::write(&input, gltf_writer::glb(&doc, bin)).unwrap();
+
+    let out = tmp.path().join("morphing-out.glb");
+    let j = export(&input, "simplify:1%,simplify:4%", "files", &out);
+    let original = read_scene(&input);
+    assert_eq!(original.meshes[0].targets.len(), 2);
+    let lods = &j["meshes"][0]["lods"];
+    for (k, o) in j["outputs"].as_array().unwrap().iter().enumerate() {
+        let lod = read_scene(Path::new(o.as_str().unwrap()));
+        let bounds = lods[k]["target_bounds"].as_array().unwrap();
+        assert_eq!(bounds.len(), 2);
+        for (t, b) in bounds.iter().enumerate() {
+            assert_eq!(b["name"], ["wave", "pinch"][t]);
+            let bound = b["bound"].as_f64().unwrap() as f32;
+            let measured = hausdorff_mesh_mesh(
+                &original.meshes[0].target_shape(t),
+                &lod.meshes[0].target_shape(t),
+                &SamplingOptions {
+                    samples: 50_000,
+                    seed: 5,
+                },
+            )
+            .two_sided();
+            assert!(
+                measured <= bound * 1.0001 + 1e-6,
+                "LOD {k} target {t}: {measured} > {bound}"
+            );
+            assert!(
+                measured > 0.2 * bound,
+                "LOD {k} target {t}: a loose bound {bound} for {measured}"
+            );
+            assert!(lods[k]["error_bound"].as_f64().unwrap() as f32 >= bound);
+        }
+        let top = &j["lods"][k]["target_bounds"];
+        assert_eq!(top.as_array().unwrap().len(), 2, "{top}");
     }
 }

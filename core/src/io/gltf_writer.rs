@@ -327,10 +327,16 @@ impl GltfWriter {
                 }
             }
             let (material, extras) = match scene {
-                Some(s) => (
-                    scene_groups.get(g).copied().flatten(),
-                    Some((s.extras)(&piece)),
-                ),
+                Some(s) => {
+                    // Normals are oriented before the extras are taken, so
+                    // the vertices it splits off have extras too (a second
+                    // orientation in `triangles` splits none).
+                    piece.orient_normals_to_winding();
+                    (
+                        scene_groups.get(g).copied().flatten(),
+                        Some((s.extras)(&piece)),
+                    )
+                }
                 None => (Some(self.original_material(m)), None),
             };
             out.extend(self.triangles(&piece, material, extras));

@@ -118,15 +118,31 @@ pub struct MorphTarget {
     pub normals: Option<Vec<Vec3>>,
 }
 
-impl SceneMesh {
-    /// The mesh at morph target `t`'s full weight (base + deltas).
-    pub fn target_shape(&self, t: usize) -> TriMesh {
-        let mut shape = self.mesh.clone();
-        for (p, d) in shape.positions.iter_mut().zip(&self.targets[t].positions) {
+impl MorphTarget {
+    /// `base` at this target's full weight (base + deltas, vertex by vertex).
+    pub fn applied(&self, base: &TriMesh) -> TriMesh {
+        let mut shape = base.clone();
+        for (p, d) in shape.positions.iter_mut().zip(&self.positions) {
             *p += *d;
         }
         shape.normals = None;
         shape
+    }
+
+    /// The largest delta: how far any point of a shape moves at full weight
+    /// (a point of a triangle moves by a barycentric blend of its corners').
+    pub fn largest_delta(&self) -> f32 {
+        self.positions
+            .iter()
+            .map(|d| d.length())
+            .fold(0.0, f32::max)
+    }
+}
+
+impl SceneMesh {
+    /// The mesh at morph target `t`'s full weight (base + deltas).
+    pub fn target_shape(&self, t: usize) -> TriMesh {
+        self.targets[t].applied(&self.mesh)
     }
 }
 

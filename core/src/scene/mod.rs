@@ -12,6 +12,7 @@
 
 pub mod bones;
 pub mod pose;
+pub mod targets;
 pub mod transfer;
 
 use serde_json::{Value, json};
@@ -34,6 +35,9 @@ pub struct SceneChains {
     /// The glTF material of each part of each chain's meshes (skinned
     /// meshes are split by bone, [`bones`]).
     pub materials: Vec<Vec<Option<usize>>>,
+    /// Per chain, per LOD: each morph target's certified bound ([`targets`];
+    /// the LOD's own bound is already the largest over them).
+    pub target_bounds: Vec<Vec<Vec<targets::TargetBound>>>,
 }
 
 /// What is measured of one LOD of a skinned or morphing mesh.
@@ -77,7 +81,8 @@ pub fn build(
     // each chain as alone (the output does not depend on the thread count).
     // Plain threads, not rayon's: a chain build blocks on threads of its
     // own that use rayon, which starved the pool from inside its workers.
-    let one = |m: &crate::io::scene::SceneMesh| -> Result<(Chain, Vec<Option<usize>>), ChainError> {
+    type Built = (Chain, Vec<Option<usize>>, Vec<Vec<targets::TargetBound>>);
+    let one = |m: &crate::io::scene::SceneMesh| -> Result<Built, ChainError> {
         let (mesh, parts) = match &m.skin {
             Some(skin) => bones::split_by_bone(&m.mesh, skin, &m.materials),
             None => (m.mesh.clone(), m.materials.clone()),
@@ -89,13 +94,14 @@ pub fn build(
                 m.index, m.name
             )));
         }
-        let chain = build_chain(&Model::Mesh(mesh), recipe, progress).map_err(|e| match e {
+        let mut chain = build_chain(&Model::Mesh(mesh), recipe, progress).map_err(|e| match e {
             ChainError::BadInput(why) => {
                 ChainError::BadInput(format!("mesh {} \"{}\": {why}", m.index, m.name))
             }
             other => other,
         })?;
-        Ok((chain, parts))
+        let bounds = targets::certify(m, &mut chain, progress)?;
+        Ok((chain, parts, bounds))
     };
     let threads = std::thread::available_parallelism()
         .map_or(1, |n| n.get())
@@ -126,7 +132,7 @@ pub fn build(
             });
         }
     });
-    let built: Vec<(Chain, Vec<Option<usize>>)> = slots
+    let built: Vec<Built> = slots
         .into_iter()
         .map(|slot| {
             slot.into_inner()
@@ -135,8 +141,17 @@ pub fn build(
                 .unwrap_or(Err(ChainError::Cancelled))
         })
         .collect::<Result<_, _>>()?;
-    let (chains, materials) = built.into_iter().unzip();
-    Ok(SceneChains { chains, materials })
+    let mut out = SceneChains {
+        chains: Vec::with_capacity(built.len()),
+        materials: Vec::with_capacity(built.len()),
+        target_bounds: Vec::with_capacity(built.len()),
+    };
+    for (chain, materials, bounds) in built {
+        out.chains.push(chain);
+        out.materials.push(materials);
+        out.target_bounds.push(bounds);
+    }
+    Ok(out)
 }
 
 impl SceneChains {
@@ -202,12 +217,7 @@ impl SceneChains {
                         };
                         let target_errors = (0..m.targets.len())
                             .map(|t| {
-                                let mut shape = lod.clone();
-                                for (p, d) in
-                                    shape.positions.iter_mut().zip(&extras.targets[t].positions)
-                                {
-                                    *p += *d;
-                                }
+                                let shape = extras.targets[t].applied(lod);
                                 let original = m.target_shape(t);
                                 let measured =
                                     crate::distance::hausdorff_mesh_mesh(&original, &shape, &opts)
@@ -247,13 +257,15 @@ impl SceneChains {
             .iter()
             .zip(&self.chains)
             .zip(measures)
-            .map(|((m, chain), measures)| {
+            .zip(&self.target_bounds)
+            .map(|(((m, chain), measures), target_bounds)| {
                 let lods: Vec<Value> = chain
                     .lods
                     .iter()
                     .zip(&chain.coverages)
                     .zip(measures)
-                    .map(|((l, c), measured)| {
+                    .zip(target_bounds)
+                    .map(|(((l, c), measured), target_bounds)| {
                         let world: Vec<f32> =
                             m.instances.iter().map(|i| i.scale() * l.bound()).collect();
                         // Where the coverage falls to `c` (LOD k is left for
@@ -273,6 +285,9 @@ impl SceneChains {
                             "screen_coverage": c,
                             "switch_distances": distances,
                         });
+                        if !target_bounds.is_empty() {
+                            j["target_bounds"] = json!(target_bounds);
+                        }
                         if let (Value::Object(o), Ok(Value::Object(more))) =
                             (&mut j, serde_json::to_value(measured))
                         {

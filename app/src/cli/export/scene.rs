@@ -172,6 +172,28 @@ fn report(
             if !targets.is_empty() {
                 j["target_errors"] = serde_json::json!(targets);
             }
+            // Certified per target, per morphing mesh: in mesh space and in
+            // world space over the mesh's instances (σ_max · bound).
+            let target_bounds: Vec<serde_json::Value> = (scene.meshes.iter())
+                .zip(&chains.target_bounds)
+                .filter_map(|(m, per_lod)| {
+                    let bounds = per_lod.get(k.min(per_lod.len().saturating_sub(1)))?;
+                    let scale = m.instances.iter().map(|i| i.scale()).fold(0.0f32, f32::max);
+                    Some(bounds.iter().map(move |b| {
+                        serde_json::json!({
+                            "mesh": m.index,
+                            "target": b.target,
+                            "name": b.name,
+                            "bound": b.bound,
+                            "world_bound": scale * b.bound,
+                        })
+                    }))
+                })
+                .flatten()
+                .collect();
+            if !target_bounds.is_empty() {
+                j["target_bounds"] = serde_json::json!(target_bounds);
+            }
             // UV errors over the textured meshes, weighted by LOD area.
             let uv: Vec<_> = measures
                 .iter()
