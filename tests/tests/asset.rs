@@ -1,7 +1,8 @@
 //! Nothing is dropped silently (issue 49, item 6): what a glTF asset holds
 //! besides its triangles is counted by `info --json` and, where an export
 //! leaves it out, listed in `dropped` and on stderr; an extension the file
-//! requires and lodstudio cannot read refuses it with exit 2, by name.
+//! requires and lodstudio cannot read refuses it with exit 2, by name;
+//! meshopt-compressed files are decoded.
 
 use std::path::Path;
 
@@ -177,7 +178,6 @@ fn a_required_extension_is_refused_by_name() {
     let tmp = tempfile::tempdir().unwrap();
     for (ext, word) in [
         ("KHR_draco_mesh_compression", "Draco"),
-        ("EXT_meshopt_compression", "meshopt"),
         ("EXT_made_up", "cannot carry"),
     ] {
         let file = triangle_gltf(
@@ -199,5 +199,201 @@ fn a_required_extension_is_refused_by_name() {
             );
             assert!(!Path::new(&out).exists());
         }
+    }
+}
+
+/// `glb` (one primitive, as `gltf_writer::write_glb` writes it) stored the
+/// way gltfpack `-c` stores it: every view compressed by meshoptimizer's
+/// codecs into buffer 0, decoded places in a fallback buffer 1 with no
+/// bytes, normals octahedral-filtered to 8 bits (KHR_mesh_quantization).
+/// `tamper` edits each view's extension object before it is written.
+fn meshopt_compressed(glb: &[u8], tamper: &dyn Fn(&mut Value)) -> Vec<u8> {
+    use lodstudio_core::io::{gltf, gltf_writer};
+    let (json, bin) = gltf::split_glb(glb, "x.bin").unwrap();
+    let mut doc: Value = serde_json::from_slice(&json).unwrap();
+    let prim = doc["meshes"][0]["primitives"][0].clone();
+    let at = |v: &Value| v.as_u64().unwrap() as usize;
+    let (normal, index) = (at(&prim["attributes"]["NORMAL"]), at(&prim["indices"]));
+    let vertices = doc["accessors"][at(&prim["attributes"]["POSITION"])]["count"]
+        .as_u64()
+        .unwrap() as usize;
+    let mut accessors: Vec<usize> = prim["attributes"]
+        .as_object()
+        .unwrap()
+        .values()
+        .map(at)
+        .collect();
+    accessors.push(index);
+    let (mut packed, mut fallback, mut views) = (Vec::<u8>::new(), 0usize, Vec::new());
+    for a in accessors {
+        let acc = doc["accessors"][a].clone();
+        let view = &doc["bufferViews"][at(&acc["bufferView"])];
+        let start = view["byteOffset"].as_u64().unwrap_or(0) as usize
+            + acc["byteOffset"].as_u64().unwrap_or(0) as usize;
+        let count = at(&acc["count"]);
+        let word = |i: usize| bin[start + 4 * i..start + 4 * i + 4].try_into().unwrap();
+        let floats = |w: usize| -> Vec<f32> {
+            (0..count * w)
+                .map(|i| f32::from_le_bytes(word(i)))
+                .collect()
+        };
+        let (stride, mode, filter, encoded) = if a == index {
+            assert_eq!(acc["componentType"], 5125, "u32 indices");
+            let ix: Vec<u32> = (0..count).map(|i| u32::from_le_bytes(word(i))).collect();
+            (
+                4,
+                "TRIANGLES",
+                "NONE",
+                meshopt::encode_index_buffer(&ix, vertices).unwrap(),
+            )
+        } else if a == normal {
+            let n: Vec<[f32; 4]> = floats(3)
+                .chunks(3)
+                .map(|c| [c[0], c[1], c[2], 0.0])
+                .collect();
+            let oct: Vec<[i8; 4]> = meshopt::encode_filter_oct(&n, 8);
+            doc["accessors"][a]["componentType"] = json!(5120);
+            doc["accessors"][a]["normalized"] = json!(true);
+            (
+                4,
+                "ATTRIBUTES",
+                "OCTAHEDRAL",
+                meshopt::encode_vertex_buffer(&oct).unwrap(),
+            )
+        } else {
+            let encoded = match acc["type"].as_str().unwrap() {
+                "VEC3" => meshopt::encode_vertex_buffer(
+                    &floats(3)
+                        .chunks(3)
+                        .map(|c| [c[0], c[1], c[2]])
+                        .collect::<Vec<_>>(),
+                ),
+                _ => meshopt::encode_vertex_buffer(
+                    &floats(2)
+                        .chunks(2)
+                        .map(|c| [c[0], c[1]])
+                        .collect::<Vec<_>>(),
+                ),
+            };
+            let width = if acc["type"] == "VEC3" { 12 } else { 8 };
+            (width, "ATTRIBUTES", "NONE", encoded.unwrap())
+        };
+        while packed.len() % 4 != 0 {
+            packed.push(0);
+        }
+        let mut ext = json!({"buffer": 0, "byteOffset": packed.len(), "byteLength": encoded.len(),
+            "byteStride": stride, "count": count, "mode": mode, "filter": filter});
+        tamper(&mut ext);
+        packed.extend(&encoded);
+        let mut v = json!({"buffer": 1, "byteOffset": fallback, "byteLength": stride * count,
+            "extensions": {"EXT_meshopt_compression": ext}});
+        if mode == "ATTRIBUTES" {
+            v["byteStride"] = json!(stride);
+        }
+        fallback += (stride * count).next_multiple_of(4);
+        views.push(v);
+        doc["accessors"][a]["bufferView"] = json!(views.len() - 1);
+        doc["accessors"][a]
+            .as_object_mut()
+            .unwrap()
+            .remove("byteOffset");
+    }
+    doc["bufferViews"] = json!(views);
+    while packed.len() % 4 != 0 {
+        packed.push(0);
+    }
+    doc["buffers"] = json!([{"byteLength": packed.len()},
+        {"byteLength": fallback, "extensions": {"EXT_meshopt_compression": {"fallback": true}}}]);
+    let used = json!(["EXT_meshopt_compression", "KHR_mesh_quantization"]);
+    doc["extensionsUsed"] = used.clone();
+    doc["extensionsRequired"] = used;
+    gltf_writer::glb(&doc, packed)
+}
+
+/// A meshopt-compressed file (EXT_meshopt_compression, as gltfpack writes
+/// it) reads as the plain one: the same positions to the bit, the same
+/// triangles, normals within their 8-bit octahedral quantization; it
+/// exports the same LODs, written plain; a compressed view the format does
+/// not allow, or bytes that do not decode, are refused with exit 2.
+#[test]
+fn meshopt_compressed_inputs_are_decoded() {
+    use lodstudio_core::io::{gltf, gltf_writer};
+    let tmp = tempfile::tempdir().unwrap();
+    let torus = lodstudio_core::builtins::torus(1.0, 0.35, 48, 24);
+    let plain = gltf_writer::write_glb(&torus);
+    let compressed = meshopt_compressed(&plain, &|_| {});
+    assert!(
+        compressed.len() < plain.len(),
+        "{} bytes from {}",
+        compressed.len(),
+        plain.len()
+    );
+    let (a, _) = gltf::read(&plain, None).unwrap();
+    let (b, report) = gltf::read(&compressed, None).unwrap();
+    assert_eq!(a.positions, b.positions);
+    assert_eq!(a.triangles, b.triangles);
+    for (n, m) in a
+        .normals
+        .as_ref()
+        .unwrap()
+        .iter()
+        .zip(b.normals.as_ref().unwrap())
+    {
+        assert!(n.distance(*m) < 0.02, "{n} / {m}");
+    }
+    assert!(
+        report
+            .extensions
+            .contains(&"EXT_meshopt_compression".to_string())
+    );
+
+    let write = |name: &str, bytes: &[u8]| {
+        let path = tmp.path().join(name);
+        std::fs::write(&path, bytes).unwrap();
+        path.display().to_string()
+    };
+    let (p, c) = (write("plain.glb", &plain), write("packed.glb", &compressed));
+    let export = |input: &str, out: &str| {
+        let out = tmp.path().join(out).display().to_string();
+        let j = lodstudio_json(&["export", input, "--lods", "source,simplify:1%", "-o", &out]);
+        (j, out)
+    };
+    let ((jp, _), (jc, out)) = (export(&p, "p.glb"), export(&c, "c.glb"));
+    for k in 0..2 {
+        assert_eq!(
+            jp["lods"][k]["triangles"], jc["lods"][k]["triangles"],
+            "LOD {k}"
+        );
+    }
+    let written = std::fs::read(&out).unwrap();
+    let (json, _) = gltf::split_glb(&written, "x.bin").unwrap();
+    let doc: Value = serde_json::from_slice(&json).unwrap();
+    assert!(!String::from_utf8_lossy(&json).contains("meshopt"), "{doc}");
+    assert!(doc["buffers"].as_array().unwrap().len() == 1);
+    let (reread, _) = gltf::read(&written, None).unwrap();
+    assert_eq!(reread.positions.len(), b.positions.len());
+
+    // Hostile: a stride the vertex codec asserts against, a filter on
+    // indices, and compressed bytes cut short.
+    let bad: [(&str, &dyn Fn(&mut Value)); 3] = [
+        ("stride", &|e| e["byteStride"] = json!(6)),
+        ("filter", &|e| {
+            if e["mode"] == "TRIANGLES" {
+                e["filter"] = json!("OCTAHEDRAL")
+            }
+        }),
+        ("short", &|e| {
+            e["byteLength"] = json!(e["byteLength"].as_u64().unwrap() / 2)
+        }),
+    ];
+    for (what, tamper) in bad {
+        let file = write(&format!("{what}.glb"), &meshopt_compressed(&plain, tamper));
+        let run = lodstudio(&["info", &file]);
+        let stderr = String::from_utf8_lossy(&run.stderr);
+        assert_eq!(run.status.code(), Some(2), "{what}: {stderr}");
+        assert!(
+            stderr.contains("EXT_meshopt_compression"),
+            "{what}: {stderr}"
+        );
     }
 }

@@ -60,9 +60,6 @@ fn required_why(name: &str) -> &'static str {
         "KHR_draco_mesh_compression" => {
             "Draco-compressed geometry, which lodstudio cannot decode (no maintained Rust decoder): decompress it first, e.g. `gltf-transform copy IN OUT`"
         }
-        "EXT_meshopt_compression" | "KHR_meshopt_compression" => {
-            "meshopt-compressed buffers, which lodstudio does not decode yet: decompress it first, e.g. `gltfpack -i IN -o OUT -noq`"
-        }
         _ => "an extension lodstudio cannot carry",
     }
 }
@@ -90,8 +87,13 @@ pub fn check_required(root: &Value) -> ParseResult<()> {
 
 /// Extensions whose content the reader takes in whole: quantized
 /// attributes are dequantized on load (`gltf::dequantized`), so the outputs
-/// carry the same geometry in floats.
-pub const READ: [&str; 1] = ["KHR_mesh_quantization"];
+/// carry the same geometry in floats; compressed views are decoded
+/// (`meshopt_compression`), so the outputs carry them plain.
+pub const READ: [&str; 3] = [
+    "KHR_mesh_quantization",
+    super::meshopt_compression::NAMES[0],
+    super::meshopt_compression::NAMES[1],
+];
 
 /// Material textures beside the base colour, which the outputs leave out.
 const OTHER_TEXTURES: [(&str, &str); 4] = [

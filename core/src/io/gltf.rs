@@ -15,6 +15,7 @@ use glam::{Mat3, Mat4, Vec2, Vec3};
 use super::asset::{self, AssetReport, audit_gltf, check_required};
 use super::confine;
 use super::error::{ParseError, ParseResult};
+use super::meshopt_compression;
 use crate::geom::{AlphaMode, Image, Material, Materials, TriMesh, VertexAttributes};
 
 /// The gltf crate subtracts the 12-byte header from a GLB's declared length
@@ -111,7 +112,7 @@ pub fn read(data: &[u8], base: Option<&Path>) -> ParseResult<(TriMesh, AssetRepo
         .map(|s| s.index());
     let report = audit_gltf(&raw, scene, asset::Carried::Flat)?;
     let roots = scene_roots(&g.document);
-    Ok((read_nodes(&g, base, roots)?, report))
+    Ok((read_nodes(&g, &raw, base, roots)?, report))
 }
 
 /// Level `lod` of the `MSFT_lod` chain that `export` writes: LOD 0 is the
@@ -142,7 +143,7 @@ pub fn read_lod(data: &[u8], base: Option<&Path>, lod: usize) -> ParseResult<Tri
             format!("expected MSFT_lod ids among the nodes, found {index}"),
         )
     })?;
-    read_nodes(&g, base, vec![node])
+    read_nodes(&g, &raw, base, vec![node])
 }
 
 pub(super) fn scene_roots(document: &gltf::Document) -> Vec<gltf::Node<'_>> {
@@ -189,8 +190,13 @@ pub const MAX_INSTANCES: usize = 1 << 20;
 /// primitives use it; the instances are concatenated once at the end, so
 /// the cost is linear in the instances (appending one by one recounted the
 /// parts each time).
-fn read_nodes(g: &gltf::Gltf, base: Option<&Path>, roots: Vec<gltf::Node>) -> ParseResult<TriMesh> {
-    let buffers = load_buffers(&g.document, base, g.blob.clone())?;
+fn read_nodes(
+    g: &gltf::Gltf,
+    root: &serde_json::Value,
+    base: Option<&Path>,
+    roots: Vec<gltf::Node>,
+) -> ParseResult<TriMesh> {
+    let buffers = load_buffers(&g.document, root, base, g.blob.clone())?;
     let mut images = ImageCache::new(&g.document, base);
     let mut materials_read: Vec<Option<Material>> = vec![None; g.document.materials().len() + 1];
     let mut pieces: Vec<TriMesh> = Vec::new();
@@ -335,13 +341,28 @@ fn mesh_triangles(mesh: &gltf::Mesh) -> u64 {
 /// padded to 4 bytes as the gltf crate's readers expect.
 pub(super) fn load_buffers(
     document: &gltf::Document,
+    root: &serde_json::Value,
     base: Option<&Path>,
     mut blob: Option<Vec<u8>>,
 ) -> ParseResult<Vec<gltf::buffer::Data>> {
     let mut out = Vec::with_capacity(document.buffers().len());
     for buffer in document.buffers() {
         let what = format!("buffer {}", buffer.index());
+        let fallback = meshopt_compression::is_fallback(root, buffer.index());
         let mut data = match buffer.source() {
+            // Filled by the views decoded into it.
+            _ if fallback && buffer.length() <= super::limits::current().memory_budget as usize => {
+                vec![0; buffer.length()]
+            }
+            _ if fallback => {
+                return Err(ParseError::item(
+                    &what,
+                    format!(
+                        "expected a fallback buffer within the memory budget, found {} bytes",
+                        buffer.length()
+                    ),
+                ));
+            }
             gltf::buffer::Source::Bin => blob
                 .take()
                 .ok_or_else(|| ParseError::item(&what, "expected the GLB's binary chunk"))?,
@@ -358,6 +379,7 @@ pub(super) fn load_buffers(
         }
         out.push(gltf::buffer::Data(data));
     }
+    meshopt_compression::decode(root, &mut out)?;
     Ok(out)
 }
 

@@ -14,6 +14,7 @@ pub mod gltf_writer;
 pub mod hierarchy_file;
 pub mod image;
 pub mod limits;
+pub mod meshopt_compression;
 pub mod obj;
 pub mod off;
 pub mod ply;

@@ -159,7 +159,9 @@ pub fn read(data: &[u8], base: Option<&Path>) -> ParseResult<Scene> {
         .or_else(|| document.scenes().next())
         .map(|s| s.index());
     let report = audit_gltf(&doc, scene, Carried::Scene)?;
-    let buffers = load_buffers(document, base, g.blob.clone())?;
+    let buffers = load_buffers(document, &doc, base, g.blob.clone())?;
+    // Decoded: the scene carries the views' bytes as plain ones.
+    super::meshopt_compression::strip(&mut doc);
     let mut images = ImageCache::new(document, base);
     let mut materials: Vec<Option<Material>> = vec![None; document.materials().len() + 1];
     let mut meshes: Vec<SceneMesh> = Vec::new();
@@ -324,20 +326,7 @@ fn read_tangents(
         out.extend(std::iter::repeat_n([1.0, 0.0, 0.0, 1.0], n));
         return Ok(false);
     };
-    if acc.data_type() != gltf::accessor::DataType::F32
-        || acc.dimensions() != gltf::accessor::Dimensions::Vec4
-    {
-        return Err(ParseError::item(
-            format!("accessor {}", acc.index()),
-            "expected float VEC4 tangents",
-        ));
-    }
-    check_accessor(&acc, buffers)?;
-    let reader = prim.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
-    let read: Vec<[f32; 4]> = reader
-        .read_tangents()
-        .map(Iterator::collect)
-        .unwrap_or_default();
+    let read: Vec<[f32; 4]> = floats(&acc, buffers)?;
     if read.len() != n {
         return Err(ParseError::item(
             format!("mesh primitive {}", prim.index()),
@@ -346,6 +335,23 @@ fn read_tangents(
     }
     out.extend(read);
     Ok(true)
+}
+
+/// The elements of a float or quantized (KHR_mesh_quantization: tangents
+/// and target deltas as normalized or plain 8/16-bit integers) accessor of
+/// `N` components, checked against its buffer.
+fn floats<const N: usize>(
+    acc: &gltf::Accessor,
+    buffers: &[gltf::buffer::Data],
+) -> ParseResult<Vec<[f32; N]>> {
+    if acc.dimensions().multiplicity() != N || acc.data_type() == gltf::accessor::DataType::U32 {
+        return Err(ParseError::item(
+            format!("accessor {}", acc.index()),
+            format!("expected {N} float or 8/16-bit components"),
+        ));
+    }
+    check_accessor(acc, buffers)?;
+    Ok(super::gltf::dequantized::<N>(acc, buffers))
 }
 
 /// Appends the primitive's target deltas for its `n` vertices (zero where
@@ -357,23 +363,24 @@ fn read_targets(
     targets: &mut [MorphTarget],
 ) -> ParseResult<()> {
     let what = || format!("mesh primitive {}", prim.index());
+    let mut read = Vec::new();
     for t in prim.morph_targets() {
-        for acc in [t.positions(), t.normals(), t.tangents()]
-            .into_iter()
-            .flatten()
-        {
-            check_accessor(&acc, buffers)?;
-        }
+        let vec3s = |acc: Option<gltf::Accessor>| -> ParseResult<Option<Vec<Vec3>>> {
+            acc.map(|a| {
+                Ok(floats::<3>(&a, buffers)?
+                    .into_iter()
+                    .map(Vec3::from)
+                    .collect())
+            })
+            .transpose()
+        };
+        read.push((vec3s(t.positions())?, vec3s(t.normals())?));
     }
-    let reader = prim.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
-    let mut read = reader.read_morph_targets();
+    let mut read = read.into_iter();
     let before = targets.first().map_or(0, |t| t.positions.len());
     for target in targets.iter_mut() {
         let (positions, normals) = match read.next() {
-            Some((p, nr, _)) => (
-                p.map(|p| p.map(Vec3::from_array).collect::<Vec<_>>()),
-                nr.map(|nr| nr.map(Vec3::from_array).collect::<Vec<_>>()),
-            ),
+            Some(read) => read,
             None => (None, None),
         };
         let positions = positions.unwrap_or_else(|| vec![Vec3::ZERO; n]);
