@@ -375,7 +375,8 @@ fn meshopt_compressed_inputs_are_decoded() {
 
     // Hostile: a stride the vertex codec asserts against, a filter on
     // indices, and compressed bytes cut short.
-    let bad: [(&str, &dyn Fn(&mut Value)); 3] = [
+    type Tamper<'a> = (&'a str, &'a dyn Fn(&mut Value));
+    let bad: [Tamper; 3] = [
         ("stride", &|e| e["byteStride"] = json!(6)),
         ("filter", &|e| {
             if e["mode"] == "TRIANGLES" {

@@ -379,10 +379,7 @@ fn read_targets(
     let mut read = read.into_iter();
     let before = targets.first().map_or(0, |t| t.positions.len());
     for target in targets.iter_mut() {
-        let (positions, normals) = match read.next() {
-            Some(read) => read,
-            None => (None, None),
-        };
+        let (positions, normals) = read.next().unwrap_or_default();
         let positions = positions.unwrap_or_else(|| vec![Vec3::ZERO; n]);
         if positions.len() != n || normals.as_ref().is_some_and(|v| v.len() != n) {
             return Err(ParseError::item(
