@@ -532,3 +532,81 @@ fn each_morph_target_shape_is_certified() {
         assert_eq!(top.as_array().unwrap().len(), 2, "{top}");
     }
 }
+
+/// `--compress meshopt` (EXT_meshopt_compression): the milk truck's scene
+/// in every layout reads back, through lodstudio's own decoder, with the
+/// positions, triangles (up to the rotation of a triangle's corners, which
+/// the index codec allows), UVs and keyframes of the plain export to the
+/// bit (the codecs are lossless there, so every bound holds as reported),
+/// normals within their 8-bit octahedral step, in a smaller file.
+#[test]
+fn a_meshopt_compressed_export_reads_back_as_the_plain_one() {
+    let tmp = tempfile::tempdir().unwrap();
+    let input = shared_model("CesiumMilkTruck.glb");
+    for layout in ["msft_lod", "nodes", "files"] {
+        let run = |compress: &str| {
+            let out = tmp.path().join(format!("truck-{layout}-{compress}.glb"));
+            let j = lodstudio_json(&[
+                "export",
+                input.to_str().unwrap(),
+                "--lods",
+                "source,simplify:1%",
+                "--layout",
+                layout,
+                "--compress",
+                compress,
+                "-o",
+                out.to_str().unwrap(),
+            ]);
+            assert_eq!(j["compress"], compress);
+            j
+        };
+        let (plain, packed) = (run("none"), run("meshopt"));
+        assert_eq!(plain["lods"], packed["lods"], "{layout}: the same LODs");
+        let outputs = |j: &Value| -> Vec<String> {
+            j["outputs"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .map(|o| o.as_str().unwrap().to_string())
+                .collect()
+        };
+        for (p, c) in outputs(&plain).iter().zip(outputs(&packed)) {
+            let (p, c) = (Path::new(p), Path::new(&c));
+            let doc = doc_of(c);
+            assert!(
+                doc["extensionsRequired"]
+                    .as_array()
+                    .unwrap()
+                    .contains(&json!("EXT_meshopt_compression")),
+                "{layout}"
+            );
+            let size = |f: &Path| std::fs::metadata(f).unwrap().len();
+            assert!(size(c) < size(p), "{layout}: {} ≥ {}", size(c), size(p));
+            let (a, b) = (read_scene(p), read_scene(c));
+            assert_eq!(a.meshes.len(), b.meshes.len(), "{layout}");
+            for (m, n) in a.meshes.iter().zip(&b.meshes) {
+                assert_eq!(m.mesh.positions, n.mesh.positions, "{layout} {}", m.name);
+                // The index codec may rotate a triangle's corners (its
+                // winding kept).
+                let rotated = |t: &[[u32; 3]]| -> Vec<[u32; 3]> {
+                    t.iter()
+                        .map(|&[a, b, c]| match () {
+                            _ if a <= b && a <= c => [a, b, c],
+                            _ if b <= c => [b, c, a],
+                            _ => [c, a, b],
+                        })
+                        .collect()
+                };
+                let same = rotated(&m.mesh.triangles) == rotated(&n.mesh.triangles);
+                assert!(same, "{layout} {}: the triangles", m.name);
+                assert_eq!(m.mesh.uvs, n.mesh.uvs, "{layout} {}", m.name);
+                let normals = m.mesh.normals.iter().flatten();
+                for (x, y) in normals.zip(n.mesh.normals.iter().flatten()) {
+                    assert!(x.distance(*y) < 0.02, "{layout}: {x} / {y}");
+                }
+            }
+            assert_eq!(sampler_bytes(&a), sampler_bytes(&b), "{layout}");
+        }
+    }
+}

@@ -68,6 +68,12 @@ pub struct ExportArgs {
     /// recipe's, else msft_lod].
     #[arg(long, value_name = "msft_lod|nodes|files", value_parser = str::parse::<lodstudio_core::scene::Layout>)]
     layout: Option<lodstudio_core::scene::Layout>,
+    /// How the GLBs store their buffers: none, or meshopt
+    /// (EXT_meshopt_compression: meshoptimizer's codecs, lossless for
+    /// positions and every bound; normals 8-bit octahedral) [default: the
+    /// recipe's, else none].
+    #[arg(long, value_name = "none|meshopt", value_parser = str::parse::<lodstudio_core::io::meshopt_compression::Compression>)]
+    compress: Option<lodstudio_core::io::meshopt_compression::Compression>,
     /// Skinned glTF meshes: poses sampled evenly in time from each
     /// animation, at which the skinned LOD is measured against the
     /// skinned original (JSON lods[].pose_error).
@@ -123,6 +129,9 @@ pub fn run(args: ExportArgs) -> Result<(), CliError> {
     };
     if let Some(layout) = args.layout {
         recipe.layout = layout;
+    }
+    if let Some(compress) = args.compress {
+        recipe.compress = compress;
     }
     if let Some(path) = &args.save_recipe {
         check_output(path, args.report.force)?;

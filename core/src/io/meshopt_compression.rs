@@ -13,9 +13,57 @@
 //! they assert the strides and counts the format allows: those are checked
 //! here first, so a hostile file gets an error, not an abort.
 
-use serde_json::Value;
+use serde_json::{Value, json};
 
 use super::error::{ParseError, ParseResult};
+
+/// How exported GLBs store their buffers.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Compression {
+    /// Plain buffer views.
+    #[default]
+    None,
+    /// EXT_meshopt_compression ([`compress`]).
+    Meshopt,
+}
+
+impl Compression {
+    pub fn name(self) -> &'static str {
+        match self {
+            Compression::None => "none",
+            Compression::Meshopt => "meshopt",
+        }
+    }
+
+    /// `glb` stored this way.
+    pub fn apply(self, glb: Vec<u8>) -> Vec<u8> {
+        match self {
+            Compression::None => glb,
+            Compression::Meshopt => compress_glb(&glb).unwrap_or(glb),
+        }
+    }
+}
+
+impl std::str::FromStr for Compression {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        [Compression::None, Compression::Meshopt]
+            .into_iter()
+            .find(|c| c.name() == s)
+            .ok_or_else(|| format!("{s:?} is not one of none, meshopt"))
+    }
+}
+
+/// A GLB with its buffer compressed ([`compress`]); `None` for bytes that
+/// are no GLB (which the writers never make).
+fn compress_glb(glb: &[u8]) -> Option<Vec<u8>> {
+    let g = gltf::binary::Glb::from_slice(glb).ok()?;
+    let mut doc: Value = serde_json::from_slice(&g.json).ok()?;
+    let bin = g.bin.map(|b| b.into_owned()).unwrap_or_default();
+    let out = compress(&mut doc, &bin);
+    Some(super::gltf_writer::glb(&doc, out))
+}
 
 /// The extension's names: the vendor one and its ratified successor (the
 /// same bitstreams, plus the COLOR filter).
@@ -227,4 +275,286 @@ pub fn strip(doc: &mut Value) {
             }
         }
     }
+}
+
+/// How a view is compressed: its mode, stride and filter.
+struct Plan {
+    mode: &'static str,
+    stride: usize,
+    count: usize,
+    /// Read as a vertex attribute (its view then states its stride, which
+    /// glTF forbids on views of other accessors).
+    vertex: bool,
+    /// Normals: octahedral, 8 bits per component (KHR_mesh_quantization).
+    octahedral: bool,
+}
+
+/// The plan for each buffer view of `doc`: `None` leaves it plain (shared
+/// by accessors, read by an image or a sparse accessor, interleaved, or of
+/// a stride the codecs do not take).
+fn plans(doc: &Value) -> Vec<Option<Plan>> {
+    let views = doc["bufferViews"].as_array().map_or(0, Vec::len);
+    let accessors = doc["accessors"].as_array().map_or(&[][..], |a| a);
+    let mut users = vec![0usize; views];
+    let mut plain = vec![false; views];
+    let at = |v: &Value| v.as_u64().map(|i| i as usize);
+    for a in accessors {
+        if let Some(v) = at(&a["bufferView"]).filter(|&v| v < views) {
+            users[v] += 1;
+        }
+        for part in ["indices", "values"] {
+            if let Some(v) = at(&a["sparse"][part]["bufferView"]).filter(|&v| v < views) {
+                plain[v] = true;
+            }
+        }
+    }
+    for image in doc["images"].as_array().into_iter().flatten() {
+        if let Some(v) = at(&image["bufferView"]).filter(|&v| v < views) {
+            plain[v] = true;
+        }
+    }
+    // Accessors read as triangle indices, other indices, and unit normals.
+    let (mut triangles, mut indices, mut normals, mut vertex) = (vec![], vec![], vec![], vec![]);
+    for mesh in doc["meshes"].as_array().into_iter().flatten() {
+        for p in mesh["primitives"].as_array().into_iter().flatten() {
+            if let Some(i) = at(&p["indices"]) {
+                match p["mode"].as_u64().unwrap_or(4) {
+                    4 => triangles.push(i),
+                    _ => indices.push(i),
+                }
+            }
+            normals.extend(at(&p["attributes"]["NORMAL"]));
+            let targets = p["targets"].as_array().into_iter().flatten();
+            for set in std::iter::once(&p["attributes"]).chain(targets) {
+                vertex.extend(
+                    set.as_object()
+                        .into_iter()
+                        .flatten()
+                        .filter_map(|(_, a)| at(a)),
+                );
+            }
+        }
+    }
+    let mut out: Vec<Option<Plan>> = (0..views).map(|_| None).collect();
+    for (i, a) in accessors.iter().enumerate() {
+        let Some(v) = at(&a["bufferView"]).filter(|&v| v < views && users[v] == 1 && !plain[v])
+        else {
+            continue;
+        };
+        let view = &doc["bufferViews"][v];
+        let component = match a["componentType"].as_u64() {
+            Some(5120 | 5121) => 1,
+            Some(5122 | 5123) => 2,
+            Some(5125 | 5126) => 4,
+            _ => continue,
+        };
+        let width = match a["type"].as_str() {
+            Some("SCALAR") => 1,
+            Some("VEC2") => 2,
+            Some("VEC3") => 3,
+            Some("VEC4" | "MAT2") => 4,
+            Some("MAT3") => 9,
+            Some("MAT4") => 16,
+            _ => continue,
+        };
+        let size = component * width;
+        let count = a["count"].as_u64().unwrap_or(0) as usize;
+        let tight = a["byteOffset"].as_u64().unwrap_or(0) == 0
+            && view["byteStride"]
+                .as_u64()
+                .is_none_or(|s| s as usize == size)
+            && view["byteLength"].as_u64() == Some((size * count) as u64);
+        let triangle = triangles.contains(&i);
+        let plan = match () {
+            _ if !tight || count == 0 => None,
+            _ if triangle || indices.contains(&i) => (component >= 2).then(|| Plan {
+                mode: match triangle && count.is_multiple_of(3) {
+                    true => "TRIANGLES",
+                    false => "INDICES",
+                },
+                stride: component,
+                count,
+                vertex: false,
+                octahedral: false,
+            }),
+            _ if normals.contains(&i) && a["componentType"] == 5126 && width == 3 => Some(Plan {
+                mode: "ATTRIBUTES",
+                stride: 4,
+                count,
+                vertex: true,
+                octahedral: true,
+            }),
+            _ => (size.is_multiple_of(4) && size <= 256).then_some(Plan {
+                mode: "ATTRIBUTES",
+                stride: size,
+                count,
+                vertex: vertex.contains(&i),
+                octahedral: false,
+            }),
+        };
+        out[v] = plan;
+    }
+    out
+}
+
+/// The encoded bytes of a view's `data` as `plan` says.
+fn encode(plan: &Plan, data: &[u8]) -> Vec<u8> {
+    let count = plan.count;
+    let words = |d: &[u8]| -> Vec<u32> {
+        d.chunks_exact(4)
+            .map(|w| u32::from_le_bytes([w[0], w[1], w[2], w[3]]))
+            .collect()
+    };
+    match plan.mode {
+        "TRIANGLES" | "INDICES" => {
+            let ix: Vec<u32> = match plan.stride {
+                2 => data
+                    .chunks_exact(2)
+                    .map(|b| u16::from_le_bytes([b[0], b[1]]) as u32)
+                    .collect(),
+                _ => words(data),
+            };
+            let vertices = ix.iter().max().map_or(0, |&m| m as usize + 1);
+            let encoded = match plan.mode {
+                "TRIANGLES" => meshopt::encode_index_buffer(&ix, vertices),
+                _ => meshopt::encode_index_sequence(&ix, vertices),
+            };
+            encoded.unwrap_or_default()
+        }
+        _ => {
+            let stream: Vec<u32> = match plan.octahedral {
+                true => {
+                    let unit: Vec<[f32; 4]> = words(data)
+                        .chunks_exact(3)
+                        .map(|c| {
+                            let n = glam::Vec3::new(
+                                f32::from_bits(c[0]),
+                                f32::from_bits(c[1]),
+                                f32::from_bits(c[2]),
+                            );
+                            let n = n.try_normalize().unwrap_or(glam::Vec3::Z);
+                            [n.x, n.y, n.z, 0.0]
+                        })
+                        .collect();
+                    meshopt::encode_filter_oct::<i8>(&unit, 8)
+                        .iter()
+                        .map(|c| u32::from_ne_bytes(c.map(|b| b as u8)))
+                        .collect()
+                }
+                false => data
+                    .chunks_exact(4)
+                    .map(|w| u32::from_ne_bytes([w[0], w[1], w[2], w[3]]))
+                    .collect(),
+            };
+            // SAFETY: `stream` holds count·stride bytes (a stride the codec
+            // takes: a multiple of 4 up to 256), `out` the bound the encoder
+            // asks for.
+            let bound =
+                unsafe { meshopt::ffi::meshopt_encodeVertexBufferBound(count, plan.stride) };
+            let mut out = vec![0u8; bound];
+            // Version 0: the one EXT_meshopt_compression allows.
+            let size = unsafe {
+                meshopt::ffi::meshopt_encodeVertexBufferLevel(
+                    out.as_mut_ptr(),
+                    out.len(),
+                    stream.as_ptr().cast(),
+                    count,
+                    plan.stride,
+                    2,
+                    0,
+                )
+            };
+            out.truncate(size);
+            out
+        }
+    }
+}
+
+/// `doc` and its one buffer `bin` stored with EXT_meshopt_compression, as
+/// gltfpack `-c` stores them: each view that one accessor reads tightly is
+/// encoded by meshoptimizer's codecs (index codec for indices, vertex codec
+/// for the rest) into buffer 0 after the plain views, and decodes into a
+/// fallback buffer 1 that holds no bytes. Positions and every other float
+/// keep their bits (the vertex codec is lossless), so every bound holds as
+/// written; unit normals go to 8-bit octahedral (KHR_mesh_quantization),
+/// at most 1/127 off per component. The new buffer.
+pub fn compress(doc: &mut Value, bin: &[u8]) -> Vec<u8> {
+    let plans = plans(doc);
+    let mut out: Vec<u8> = Vec::with_capacity(bin.len() / 2);
+    let mut fallback = 0usize;
+    let mut encoded_any = false;
+    let mut octahedral = Vec::new();
+    for (v, view) in doc["bufferViews"]
+        .as_array_mut()
+        .into_iter()
+        .flatten()
+        .enumerate()
+    {
+        let start = view["byteOffset"].as_u64().unwrap_or(0) as usize;
+        let length = view["byteLength"].as_u64().unwrap_or(0) as usize;
+        let data = bin.get(start..start.saturating_add(length)).unwrap_or(&[]);
+        while !out.len().is_multiple_of(4) {
+            out.push(0);
+        }
+        let Some(plan) = plans[v].as_ref().filter(|_| data.len() == length) else {
+            view["buffer"] = json!(0);
+            view["byteOffset"] = json!(out.len());
+            out.extend_from_slice(data);
+            continue;
+        };
+        let count = plan.count;
+        let encoded = encode(plan, data);
+        let mut extension = json!({"buffer": 0, "byteOffset": out.len(),
+            "byteLength": encoded.len(), "byteStride": plan.stride, "count": count,
+            "mode": plan.mode});
+        if plan.octahedral {
+            extension["filter"] = json!("OCTAHEDRAL");
+            octahedral.push(v);
+        }
+        out.extend_from_slice(&encoded);
+        view["buffer"] = json!(1);
+        view["byteOffset"] = json!(fallback);
+        view["byteLength"] = json!(plan.stride * count);
+        match plan.vertex {
+            true => view["byteStride"] = json!(plan.stride),
+            false => {
+                view.as_object_mut().map(|o| o.remove("byteStride"));
+            }
+        }
+        view["extensions"] = json!({NAMES[0]: extension});
+        fallback += (plan.stride * count).next_multiple_of(4);
+        encoded_any = true;
+    }
+    while !out.len().is_multiple_of(4) {
+        out.push(0);
+    }
+    if !encoded_any {
+        doc["buffers"] = json!([{"byteLength": out.len()}]);
+        return out;
+    }
+    doc["buffers"] = json!([{"byteLength": out.len()},
+        {"byteLength": fallback, "extensions": {NAMES[0]: {"fallback": true}}}]);
+    for a in doc["accessors"].as_array_mut().into_iter().flatten() {
+        if a["bufferView"]
+            .as_u64()
+            .is_some_and(|v| octahedral.contains(&(v as usize)))
+        {
+            a["componentType"] = json!(5120);
+            a["normalized"] = json!(true);
+        }
+    }
+    let mut required = vec![NAMES[0]];
+    if !octahedral.is_empty() {
+        required.push("KHR_mesh_quantization");
+    }
+    for key in ["extensionsUsed", "extensionsRequired"] {
+        let mut list: Vec<Value> = doc[key].as_array().cloned().unwrap_or_default();
+        for name in &required {
+            if !list.iter().any(|e| e == name) {
+                list.push(json!(name));
+            }
+        }
+        doc[key] = json!(list);
+    }
+    out
 }

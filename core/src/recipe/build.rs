@@ -73,7 +73,8 @@ impl Chain {
     /// the studio's export and `lodstudio export` share.
     pub fn glb(&self) -> Vec<u8> {
         let sets: Vec<DrawSet> = self.lods.iter().map(|l| l.set.clone()).collect();
-        write_lod_chain(&sets, &self.coverages, self.recipe.points_as)
+        let glb = write_lod_chain(&sets, &self.coverages, self.recipe.points_as);
+        self.recipe.compress.apply(glb)
     }
 
     /// The bounding sphere's radius the coverages assume.

@@ -15,6 +15,7 @@ use serde::{Deserialize, Serialize};
 use crate::geom::Weld;
 use crate::hybrid::HybridOptions;
 use crate::io::gltf_writer::PointsAs;
+use crate::io::meshopt_compression::Compression;
 use crate::io::scene_writer::Layout;
 use crate::lod::{Method, Params};
 use crate::voxel::PostSimplify;
@@ -63,12 +64,20 @@ pub struct Recipe {
     /// not the default, so older recipes read and write the same).
     #[serde(default, skip_serializing_if = "is_default_layout")]
     pub layout: Layout,
+    /// How the exported GLBs store their buffers (written only when not the
+    /// default, as `layout`).
+    #[serde(default, skip_serializing_if = "is_default_compression")]
+    pub compress: Compression,
     /// LOD0…LODn as asked; the chain orders them by certified bound.
     pub rows: Vec<Row>,
 }
 
 fn is_default_layout(layout: &Layout) -> bool {
     *layout == Layout::default()
+}
+
+fn is_default_compression(c: &Compression) -> bool {
+    *c == Compression::default()
 }
 
 fn one() -> f32 {
@@ -339,6 +348,7 @@ impl Recipe {
             coverage: 1.0,
             points_as: PointsAs::default(),
             layout: Layout::default(),
+            compress: Compression::default(),
             keep_seams: false,
             lock_borders: false,
             weld: WeldSpec::default(),
@@ -599,6 +609,13 @@ mod tests {
         recipe.pixels = 2.0;
         recipe.weld = WeldSpec::Tolerance(1e-4);
         recipe.points_as = PointsAs::Discs;
+        let plain = recipe.to_json();
+        assert!(
+            !String::from_utf8_lossy(&plain).contains("compress"),
+            "a default left out"
+        );
+        recipe.layout = Layout::Nodes;
+        recipe.compress = Compression::Meshopt;
         let bytes = recipe.to_json();
         let back = Recipe::from_json(&bytes).unwrap();
         assert_eq!(back, recipe);

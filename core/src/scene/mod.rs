@@ -155,7 +155,8 @@ pub fn build(
 }
 
 impl SceneChains {
-    /// The scene with its LODs in `layout`: one GLB, or one per level.
+    /// The scene with its LODs in `layout`: one GLB, or one per level,
+    /// stored as the recipe says (`Recipe::compress`).
     pub fn write(&self, scene: &Scene, layout: Layout, points_as: PointsAs) -> Vec<Vec<u8>> {
         let transfers: Vec<transfer::Transfer> =
             scene.meshes.iter().map(transfer::Transfer::new).collect();
@@ -177,7 +178,11 @@ impl SceneChains {
                 extras,
             })
             .collect();
+        let compress = self.chains.first().map(|c| c.recipe.compress);
         scene_writer::write(scene, &lods, layout, points_as)
+            .into_iter()
+            .map(|glb| compress.unwrap_or_default().apply(glb))
+            .collect()
     }
 
     /// Measures every LOD of every mesh: pose errors of skinned meshes at

@@ -215,6 +215,7 @@ fn report(
     serde_json::json!({
         "file": file.display().to_string(),
         "layout": recipe.layout.name(),
+        "compress": recipe.compress.name(),
         "method": match recipe.rows.iter().all(|r| r.method == recipe.rows[0].method) {
             true => recipe.rows[0].method.tag(),
             false => "mixed",
