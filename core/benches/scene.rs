@@ -55,7 +55,7 @@ fn timed(mut f: impl FnMut()) -> f64 {
 /// Builds and writes `scene`'s chains; the seconds writing took.
 fn export(scene: &scene::Scene, recipe: &Recipe) -> f64 {
     let p = Progress::new();
-    let chains = lodstudio_core::scene::build(scene, recipe, &RepairOptions::default(), &p)
+    let chains = lodstudio_core::scene::build(scene, recipe, &[], &RepairOptions::default(), &p)
         .expect("the engine's chains");
     let t = Instant::now();
     let written = chains.write(scene, Layout::MsftLod, PointsAs::Points);
@@ -146,6 +146,7 @@ fn main() {
     let chains = lodstudio_core::scene::build(
         &unique,
         &recipe,
+        &[],
         &RepairOptions::default(),
         &Progress::new(),
     )

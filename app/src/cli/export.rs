@@ -174,7 +174,7 @@ pub fn run(args: ExportArgs) -> Result<(), CliError> {
     if format == Format::Gltf {
         check_output(&args.output.with_extension("bin"), args.report.force)?;
     }
-    let j = match scene::is_scene(file) {
+    let j = match io::scene::is_scene(file) {
         true => scene::export_scene(
             &args.input,
             &recipe,

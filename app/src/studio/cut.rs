@@ -60,6 +60,12 @@ impl StudioApp {
             self.viewport.swap_scene(preview);
             return;
         }
+        // A glTF asset as its nodes place it, when asked for.
+        if let Some(asset) = self.asset.as_mut().filter(|a| a.show) {
+            let scene = asset.view_scene();
+            self.viewport.swap_scene(&scene);
+            return;
+        }
         // A chain row or the switch preview, when one is asked for.
         if self.view.shows_lod()
             && let Some(scene) = self

@@ -18,6 +18,14 @@ impl StudioApp {
             .show(ui, |ui| self.build_bar(ui));
         egui::ScrollArea::vertical().show(ui, |ui| {
             self.model_section(ui);
+            if let Some(asset) = &mut self.asset {
+                ui.separator();
+                egui::CollapsingHeader::new("Asset")
+                    .default_open(true)
+                    .show(ui, |ui| {
+                        super::asset::asset_ui(ui, asset, &self.chain.settings.recipe)
+                    });
+            }
             ui.separator();
             self.method_section(ui);
         });

@@ -65,6 +65,8 @@ pub(super) struct Finished {
     volume: Option<VolumeGrid>,
     /// A saved hierarchy's own structure, to cut live without rebuilding.
     reopened: Option<build::Reopened>,
+    /// A glTF read as a scene too (or why it could not be).
+    asset: Option<Result<lodstudio_core::io::scene::Scene, String>>,
 }
 
 /// An open-file dialog on a worker thread, so the UI keeps drawing; the
@@ -152,12 +154,22 @@ impl StudioApp {
             } else {
                 None
             };
+            let asset = lodstudio_core::io::scene::is_scene(&worker_path).then(|| {
+                progress.stage("reading the scene");
+                lodstudio_core::io::read_file(&worker_path, progress)
+                    .map_err(|e| e.to_string())
+                    .and_then(|bytes| {
+                        lodstudio_core::io::scene::read(&bytes, worker_path.parent())
+                            .map_err(|e| LoadError::malformed(&worker_path, e).to_string())
+                    })
+            });
             Ok(Ok(Box::new(Finished {
                 loaded,
                 summary,
                 scene,
                 volume,
                 reopened,
+                asset,
             })))
         });
         match spawned {
@@ -198,6 +210,7 @@ impl StudioApp {
                     scene,
                     volume,
                     reopened,
+                    asset,
                 } = *done;
                 let seconds = job.elapsed().as_secs_f32();
                 let counts = match (summary.triangles, summary.points) {
@@ -215,6 +228,14 @@ impl StudioApp {
                 }
                 self.forget_result();
                 self.chain.forget();
+                self.asset = match asset {
+                    Some(Ok(asset)) => Some(super::asset::AssetState::new(asset)),
+                    Some(Err(why)) => {
+                        self.info(format!("{name}: not opened as a scene: {why}"));
+                        None
+                    }
+                    None => None,
+                };
                 if volume.is_some() && self.threshold_volume.as_ref() != Some(&path) {
                     self.methods.voxel.threshold = None;
                     self.threshold_volume = Some(path.clone());

@@ -7,6 +7,7 @@
 //! them each frame so it never blocks, and a failed or cancelled load or build
 //! keeps the previous model and result.
 
+pub mod asset;
 mod building;
 mod chain;
 mod chain_glue;
@@ -55,6 +56,8 @@ const POLL_INTERVAL: Duration = Duration::from_millis(250);
 /// 0.99–1.24×; benchmarks/studio.md).
 const LONG_BUILD: Duration = Duration::from_secs(1);
 const LONG_POLL_INTERVAL: Duration = Duration::from_secs(1);
+/// Between the frames of a playing animation.
+const ASSET_FRAME: Duration = Duration::from_millis(33);
 
 /// The model on screen.
 struct Current {
@@ -149,6 +152,8 @@ pub struct StudioApp {
     autosave: Autosave,
     /// The in-app file browser, where the desktop has no dialog.
     file_dialog: crate::file_dialog::InApp,
+    /// A glTF scene's nodes, meshes, chains and animations.
+    asset: Option<asset::AssetState>,
 }
 
 impl StudioApp {
@@ -267,6 +272,7 @@ impl StudioApp {
             render_state: render_state.cloned(),
             autosave: Autosave::off(),
             file_dialog: Default::default(),
+            asset: None,
         }
     }
 
@@ -335,10 +341,22 @@ impl StudioApp {
     /// input (`None`: not before the next input): at [`POLL_INTERVAL`], or at
     /// [`LONG_POLL_INTERVAL`] while only builds older than [`LONG_BUILD`] run.
     pub fn poll_interval(&self) -> Option<Duration> {
+        if self
+            .asset
+            .as_ref()
+            .is_some_and(asset::AssetState::is_moving)
+        {
+            // An animation playing: a new pose every frame, at most 30 a second.
+            return Some(ASSET_FRAME);
+        }
         let quick = self.job.is_some()
             || self.picker.is_some()
             || self.export.is_some()
-            || self.is_measuring_difference();
+            || self.is_measuring_difference()
+            || self
+                .asset
+                .as_ref()
+                .is_some_and(asset::AssetState::is_building);
         let builds = [
             self.build.as_ref().map(Job::elapsed),
             self.chain.building_for(),
@@ -350,6 +368,27 @@ impl StudioApp {
             Some(_) => Some(POLL_INTERVAL),
             None => None,
         }
+    }
+
+    /// A finished asset build, and the clock of a playing animation.
+    fn poll_asset(&mut self, ctx: &egui::Context) {
+        let Some(asset) = &mut self.asset else {
+            return;
+        };
+        let message = asset.poll();
+        asset.tick(ctx.input(|i| i.stable_dt).min(0.1));
+        if let Some(m) = message {
+            self.info(m);
+        }
+    }
+
+    /// The glTF asset on screen (its outliner, chains and timeline).
+    pub fn asset(&self) -> Option<&asset::AssetState> {
+        self.asset.as_ref()
+    }
+
+    pub fn asset_mut(&mut self) -> Option<&mut asset::AssetState> {
+        self.asset.as_mut()
     }
 
     pub fn result(&self) -> Option<&Built> {
@@ -386,6 +425,7 @@ impl StudioApp {
         self.poll_preview();
         self.poll_export();
         self.poll_chain(&ctx);
+        self.poll_asset(&ctx);
         self.start_build_when_due(&ctx);
         self.autosave(&ctx);
 

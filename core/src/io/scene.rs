@@ -146,6 +146,13 @@ impl SceneMesh {
     }
 }
 
+/// Whether `file` is read as a scene: a glTF or GLB named as itself
+/// (`FILE.glb#lodN` is one level of a chain, read as a mesh).
+pub fn is_scene(file: &Path) -> bool {
+    let name = file.to_string_lossy();
+    !name.contains("#lod") && matches!(super::extension(file).as_str(), "gltf" | "glb")
+}
+
 /// Reads `data` (a .gltf or .glb whose files lie in `base`) as a scene.
 ///
 /// # Errors

@@ -11,6 +11,7 @@
 //! sphere grows by the same σ_max (`scene_writer::COVERAGE_NOTE`).
 
 pub mod bones;
+pub mod drawing;
 pub mod pose;
 pub mod targets;
 pub mod transfer;
@@ -67,22 +68,35 @@ pub struct TargetError {
 }
 
 /// Builds `recipe`'s chain for each mesh of `scene`, each repaired as
-/// loading repairs a model (`repair`).
+/// loading repairs a model (`repair`); a mesh whose entry in `excluded` is
+/// true keeps only its source (LOD0 at every level).
 ///
 /// # Errors
 /// A mesh the recipe does not fit (named), or cancellation.
 pub fn build(
     scene: &Scene,
     recipe: &Recipe,
+    excluded: &[bool],
     repair: &RepairOptions,
     progress: &Progress,
 ) -> Result<SceneChains, ChainError> {
+    let source_only = Recipe {
+        rows: vec![crate::recipe::Row::new(
+            crate::lod::Method::EdgeCollapse,
+            crate::recipe::RowTolerance::Source,
+        )],
+        ..recipe.clone()
+    };
     // Meshes are independent: built on as many threads as there are cores,
     // each chain as alone (the output does not depend on the thread count).
     // Plain threads, not rayon's: a chain build blocks on threads of its
     // own that use rayon, which starved the pool from inside its workers.
     type Built = (Chain, Vec<Option<usize>>, Vec<Vec<targets::TargetBound>>);
-    let one = |m: &crate::io::scene::SceneMesh| -> Result<Built, ChainError> {
+    let one = |i: usize, m: &crate::io::scene::SceneMesh| -> Result<Built, ChainError> {
+        let recipe = match excluded.get(i) {
+            Some(true) => &source_only,
+            _ => recipe,
+        };
         let (mesh, parts) = match &m.skin {
             Some(skin) => bones::split_by_bone(&m.mesh, skin, &m.materials),
             None => (m.mesh.clone(), m.materials.clone()),
@@ -121,7 +135,7 @@ pub fn build(
                 while !failed.load(std::sync::atomic::Ordering::Relaxed) {
                     let i = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
                     let Some(m) = scene.meshes.get(i) else { break };
-                    let result = one(m);
+                    let result = one(i, m);
                     if result.is_err() {
                         failed.store(true, std::sync::atomic::Ordering::Relaxed);
                     }

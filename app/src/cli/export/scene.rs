@@ -7,13 +7,6 @@ use super::*;
 use lodstudio_core::io::scene;
 use lodstudio_core::scene::{Layout, SceneChains};
 
-/// Whether `file` is exported as a scene: a glTF or GLB named as itself
-/// (`FILE.glb#lodN` is one level of a chain, read as a mesh).
-pub fn is_scene(file: &Path) -> bool {
-    let name = file.to_string_lossy();
-    !name.contains("#lod") && matches!(io::extension(file).as_str(), "gltf" | "glb")
-}
-
 /// The files a layout writes at `output`: it, and for `files` one per
 /// level after the first (`OUT_LOD1.glb`…).
 pub fn outputs(output: &Path, layout: Layout, levels: usize) -> Vec<PathBuf> {
@@ -58,11 +51,12 @@ pub fn export_scene(
         )));
     }
     let start = std::time::Instant::now();
-    let chains = lodstudio_core::scene::build(&scene, recipe, &options.repair, &Progress::new())
-        .map_err(|e| match e {
-            ChainError::BadInput(m) => CliError::BadInput(format!("{}: {m}", file.display())),
-            ChainError::Cancelled => CliError::Failure("cancelled".into()),
-        })?;
+    let chains =
+        lodstudio_core::scene::build(&scene, recipe, &[], &options.repair, &Progress::new())
+            .map_err(|e| match e {
+                ChainError::BadInput(m) => CliError::BadInput(format!("{}: {m}", file.display())),
+                ChainError::Cancelled => CliError::Failure("cancelled".into()),
+            })?;
     let paths = outputs(output, recipe.layout, chains.levels());
     for path in &paths[1..] {
         check_output(path, force)?;
