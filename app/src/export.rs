@@ -5,6 +5,7 @@ use std::path::{Path, PathBuf};
 
 use lodstudio_core::io::{cut_writer, write_atomic};
 use lodstudio_core::lod::DrawSet;
+use lodstudio_core::scene::Layout;
 
 /// Extensions the cut writer writes, the dialog's default (it holds every
 /// primitive type) first.
@@ -72,6 +73,35 @@ pub fn write_chain(glb: &[u8], path: &Path) -> Saved {
             beside: Vec::new(),
         },
         Err(e) => Saved::Failed(e),
+    }
+}
+
+/// Asks where to save a scene's LODs (suggesting `file_name`), then writes
+/// them as [`write_scene`] does.
+pub fn choose_and_write_scene(glbs: &[Vec<u8>], layout: Layout, file_name: &str) -> Saved {
+    let filters: [(&str, &[&str]); 2] = [
+        ("glTF binary (glb)", &["glb"]),
+        ("glTF with its buffer beside (gltf)", &["gltf"]),
+    ];
+    save_dialog("Export the scene's LODs", file_name, &filters)
+        .map_or(Saved::NoFile, |p| write_scene(glbs, layout, &p))
+}
+
+/// Writes a scene's GLBs at `path` as `lodstudio export` does (`files`:
+/// `OUT_LOD1.glb`… beside it), each atomically.
+pub fn write_scene(glbs: &[Vec<u8>], layout: Layout, path: &Path) -> Saved {
+    let paths = layout.outputs(path, glbs.len());
+    let mut bytes = 0;
+    for (p, glb) in paths.iter().zip(glbs) {
+        match lodstudio_core::io::gltf_writer::write_file(p, glb) {
+            Ok(n) => bytes += n,
+            Err(e) => return Saved::Failed(e),
+        }
+    }
+    Saved::Written {
+        path: path.to_path_buf(),
+        bytes,
+        beside: paths[1..].to_vec(),
     }
 }
 

@@ -82,8 +82,8 @@ fn the_outliner_lists_the_engines_nodes_by_name() {
 }
 
 /// The simple skin: "Build for every mesh" builds the chain panel's rows
-/// (`source,simplify:1%`), LOD1 is drawn with its own triangles, and Play
-/// moves its vertices, on screen too.
+/// (`source,simplify:1%`), Export scene… writes the CLI's bytes, LOD1 is
+/// drawn with its own triangles, and Play moves its vertices, on screen too.
 #[test]
 fn a_skinned_lod_moves_when_its_animation_plays() {
     let mut harness = studio(Some(shared("production/simple_skin/simple_skin.gltf")));
@@ -98,6 +98,33 @@ fn a_skinned_lod_moves_when_its_animation_plays() {
         s.asset().is_some_and(|a| a.is_building())
     });
     assert_eq!(harness.state().asset().unwrap().levels(), 2);
+    // Export scene… writes what `lodstudio export` writes, byte for byte.
+    let tmp = tempfile::tempdir().unwrap();
+    let (studio_glb, cli_glb) = (tmp.path().join("studio.glb"), tmp.path().join("cli.glb"));
+    let ctx = harness.ctx.clone();
+    harness.state_mut().export_asset_to(&studio_glb, &ctx);
+    wait_while(&mut harness, "exporting", StudioApp::is_exporting);
+    let cli = std::process::Command::new(env!("CARGO_BIN_EXE_lodstudio"))
+        .args([
+            "export",
+            shared("production/simple_skin/simple_skin.gltf")
+                .to_str()
+                .unwrap(),
+        ])
+        .args([
+            "--lods",
+            "source,simplify:1%",
+            "-o",
+            cli_glb.to_str().unwrap(),
+        ])
+        .output()
+        .unwrap();
+    assert!(
+        cli.status.success(),
+        "{}",
+        String::from_utf8_lossy(&cli.stderr)
+    );
+    assert!(std::fs::read(&studio_glb).unwrap() == std::fs::read(&cli_glb).unwrap());
     harness.get_by_label("LOD1").click();
     harness.run();
     let rest = harness.state().asset().unwrap().drawn().clone();

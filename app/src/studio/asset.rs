@@ -14,6 +14,7 @@ use lodstudio_core::io::LoadOptions;
 use lodstudio_core::io::scene::Scene as Asset;
 use lodstudio_core::recipe::{ChainError, Recipe};
 use lodstudio_core::scene::drawing::{Drawing, Drawn};
+use lodstudio_core::scene::{Layout, SceneChains};
 use serde_json::Value;
 
 use crate::job::{Job, Poll};
@@ -51,7 +52,9 @@ pub struct AssetState {
     /// Seconds into the animation.
     pub time: f32,
     drawing: Arc<Drawing>,
-    job: Option<Job<Result<Drawing, ChainError>>>,
+    /// The last build's chains (what Export scene… writes).
+    chains: Option<Arc<SceneChains>>,
+    job: Option<Job<Result<(SceneChains, Drawing), ChainError>>>,
     note: Option<String>,
     /// Reused each frame the asset moves.
     mesh: TriMesh,
@@ -76,6 +79,7 @@ impl AssetState {
             playing: false,
             time: 0.0,
             drawing,
+            chains: None,
             job: None,
             note: None,
             mesh: TriMesh::default(),
@@ -125,7 +129,10 @@ impl AssetState {
             let built = lodstudio_core::scene::build(&asset, &recipe, &excluded, &repair, progress);
             progress.check()?;
             progress.stage("carrying skins to the LODs");
-            Ok(built.map(|chains| Drawing::new(&asset, Some(&chains))))
+            Ok(built.map(|chains| {
+                let drawing = Drawing::new(&asset, Some(&chains));
+                (chains, drawing)
+            }))
         });
         match spawned {
             Ok(job) => {
@@ -147,7 +154,8 @@ impl AssetState {
         };
         let seconds = self.job.take().map_or(0.0, |j| j.elapsed().as_secs_f32());
         match outcome {
-            Ok(drawing) => {
+            Ok((chains, drawing)) => {
+                self.chains = Some(Arc::new(chains));
                 self.drawing = Arc::new(drawing);
                 self.level = self.level.min(self.drawing.levels() - 1);
                 self.view = None;
@@ -163,6 +171,18 @@ impl AssetState {
                 Some(format!("Building the asset's chains failed: {e}"))
             }
         }
+    }
+
+    /// The scene with its built LODs, as `lodstudio export` writes it (in
+    /// the layout and compression of the recipe built with), and the
+    /// layout; `None` before a build.
+    pub fn export(&self) -> Option<impl FnOnce() -> (Vec<Vec<u8>>, Layout) + Send + 'static> {
+        let (asset, chains) = (Arc::clone(&self.asset), Arc::clone(self.chains.as_ref()?));
+        Some(move || {
+            let recipe = &chains.chains[0].recipe;
+            let layout = recipe.layout;
+            (chains.write(&asset, layout, recipe.points_as), layout)
+        })
     }
 
     /// Advances a playing animation by `dt` seconds (looping).
@@ -275,10 +295,19 @@ fn outline(asset: &Asset) -> Vec<OutlineRow> {
     rows
 }
 
+/// What the asset section asks of the studio.
+#[derive(Default)]
+pub struct AssetResponse {
+    /// What the viewport shows changed.
+    pub changed: bool,
+    /// Export scene… was clicked.
+    pub export: bool,
+}
+
 /// The asset section: outliner, chain for every mesh, level and timeline.
-/// True when what the viewport shows changed.
-pub fn asset_ui(ui: &mut egui::Ui, state: &mut AssetState, recipe: &Recipe) -> bool {
+pub fn asset_ui(ui: &mut egui::Ui, state: &mut AssetState, recipe: &Recipe) -> AssetResponse {
     let mut changed = false;
+    let mut export = false;
     changed |= ui
         .checkbox(&mut state.show, "Show the asset")
         .on_hover_text("Draw the scene as its nodes place it: the shown level, posed by the animation, the selected node highlighted.")
@@ -327,6 +356,11 @@ pub fn asset_ui(ui: &mut egui::Ui, state: &mut AssetState, recipe: &Recipe) -> b
         if build.clicked() {
             state.start_build(recipe, ui.ctx());
         }
+        export = ui
+            .add_enabled(state.chains.is_some(), egui::Button::new("Export scene…"))
+            .on_hover_text("Write the scene with every mesh's LODs, as `lodstudio export` does (the recipe's layout and compression).")
+            .on_disabled_hover_text("Build for every mesh first.")
+            .clicked();
     });
     if let Some(job) = &state.job
         && job.progress_row(ui)
@@ -394,5 +428,5 @@ pub fn asset_ui(ui: &mut egui::Ui, state: &mut AssetState, recipe: &Recipe) -> b
     if changed {
         state.view = None;
     }
-    changed
+    AssetResponse { changed, export }
 }

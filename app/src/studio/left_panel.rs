@@ -20,11 +20,15 @@ impl StudioApp {
             self.model_section(ui);
             if let Some(asset) = &mut self.asset {
                 ui.separator();
-                egui::CollapsingHeader::new("Asset")
+                let response = egui::CollapsingHeader::new("Asset")
                     .default_open(true)
                     .show(ui, |ui| {
                         super::asset::asset_ui(ui, asset, &self.chain.settings.recipe)
-                    });
+                    })
+                    .body_returned;
+                if response.is_some_and(|r| r.export) {
+                    self.export_asset_dialog(ui.ctx());
+                }
             }
             ui.separator();
             self.method_section(ui);

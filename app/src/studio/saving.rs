@@ -40,6 +40,36 @@ impl StudioApp {
         self.start_export(ctx, move |set| export::choose_and_write(set, &name));
     }
 
+    /// Asks where to write the asset's scene with its LODs, then writes it.
+    pub(super) fn export_asset_dialog(&mut self, ctx: &egui::Context) {
+        let (Some(current), Some(write)) =
+            (&self.current, self.asset.as_ref().and_then(|a| a.export()))
+        else {
+            return;
+        };
+        let name = format!(
+            "{}-lods.glb",
+            current.name.split('.').next().unwrap_or("scene")
+        );
+        self.spawn_save(ctx, move || {
+            let (glbs, layout) = write();
+            export::choose_and_write_scene(&glbs, layout, &name)
+        });
+    }
+
+    /// Writes the asset's scene with its LODs to `path` on a worker (no
+    /// dialog), as `lodstudio export` would.
+    pub fn export_asset_to(&mut self, path: impl Into<PathBuf>, ctx: &egui::Context) {
+        let path = path.into();
+        match self.asset.as_ref().and_then(|a| a.export()) {
+            Some(write) => self.spawn_save(ctx, move || {
+                let (glbs, layout) = write();
+                export::write_scene(&glbs, layout, &path)
+            }),
+            None => self.error("Nothing to export: build for every mesh first".into()),
+        }
+    }
+
     /// The running result's hierarchy as saved-hierarchy bytes, with the
     /// parameters it was built with.
     fn hierarchy_bytes(&self) -> Option<Vec<u8>> {

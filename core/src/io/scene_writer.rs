@@ -37,6 +37,20 @@ pub enum Layout {
 impl Layout {
     pub const ALL: [Layout; 3] = [Layout::MsftLod, Layout::Nodes, Layout::Files];
 
+    /// The files this layout writes at `output`: it, and for `files` one
+    /// per level after the first (`OUT_LOD1.glb`…).
+    pub fn outputs(self, output: &std::path::Path, levels: usize) -> Vec<std::path::PathBuf> {
+        let mut out = vec![output.to_path_buf()];
+        if self == Layout::Files {
+            let stem = output.file_stem().unwrap_or_default().to_string_lossy();
+            let ext = output.extension().unwrap_or_default().to_string_lossy();
+            for k in 1..levels {
+                out.push(output.with_file_name(format!("{stem}_LOD{k}.{ext}")));
+            }
+        }
+        out
+    }
+
     pub fn name(self) -> &'static str {
         match self {
             Layout::MsftLod => "msft_lod",

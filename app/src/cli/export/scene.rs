@@ -5,21 +5,7 @@ use std::path::{Path, PathBuf};
 
 use super::*;
 use lodstudio_core::io::scene;
-use lodstudio_core::scene::{Layout, SceneChains};
-
-/// The files a layout writes at `output`: it, and for `files` one per
-/// level after the first (`OUT_LOD1.glb`…).
-pub fn outputs(output: &Path, layout: Layout, levels: usize) -> Vec<PathBuf> {
-    let mut out = vec![output.to_path_buf()];
-    if layout == Layout::Files {
-        let stem = output.file_stem().unwrap_or_default().to_string_lossy();
-        let ext = output.extension().unwrap_or_default().to_string_lossy();
-        for k in 1..levels {
-            out.push(output.with_file_name(format!("{stem}_LOD{k}.{ext}")));
-        }
-    }
-    out
-}
+use lodstudio_core::scene::SceneChains;
 
 /// Builds `recipe`'s chains of the scene `file`, writes them to `output`
 /// (and beside it, for `files`) and returns the JSON report.
@@ -57,7 +43,7 @@ pub fn export_scene(
                 ChainError::BadInput(m) => CliError::BadInput(format!("{}: {m}", file.display())),
                 ChainError::Cancelled => CliError::Failure("cancelled".into()),
             })?;
-    let paths = outputs(output, recipe.layout, chains.levels());
+    let paths = recipe.layout.outputs(output, chains.levels());
     for path in &paths[1..] {
         check_output(path, force)?;
         if io::extension(path) == "gltf" {
