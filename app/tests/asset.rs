@@ -1,8 +1,9 @@
 //! A glTF asset in the studio (issue 49, item 7), driven headlessly through
 //! egui_kittest: the outliner lists the engine's nodes by name and a click
 //! highlights the node's instances in the viewport's drawing of the scene;
-//! the simple skin's chain is built for every mesh from the chain panel's
-//! rows, and its LOD moves when its animation plays.
+//! the skinned two-bone cylinder's chain is built for every mesh from the
+//! chain panel's rows, exported as the CLI exports it, and its LOD moves
+//! when its animation plays.
 
 use std::path::PathBuf;
 
@@ -81,12 +82,14 @@ fn the_outliner_lists_the_engines_nodes_by_name() {
     );
 }
 
-/// The simple skin: "Build for every mesh" builds the chain panel's rows
+/// The two-bone cylinder (`assets/`): "Build for every mesh" builds the chain panel's rows
 /// (`source,simplify:1%`), Export scene… writes the CLI's bytes, LOD1 is
 /// drawn with its own triangles, and Play moves its vertices, on screen too.
 #[test]
 fn a_skinned_lod_moves_when_its_animation_plays() {
-    let mut harness = studio(Some(shared("production/simple_skin/simple_skin.gltf")));
+    let cylinder =
+        PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../assets/two-bone-cylinder.glb");
+    let mut harness = studio(Some(cylinder.clone()));
     wait_while(&mut harness, "loading", StudioApp::is_loading);
     harness
         .state_mut()
@@ -99,21 +102,17 @@ fn a_skinned_lod_moves_when_its_animation_plays() {
     });
     assert_eq!(harness.state().asset().unwrap().levels(), 2);
     // Export scene… writes what `lodstudio export` writes, byte for byte.
-    let tmp = tempfile::tempdir().unwrap();
-    let (studio_glb, cli_glb) = (tmp.path().join("studio.glb"), tmp.path().join("cli.glb"));
+    let tmp = PathBuf::from(env!("CARGO_TARGET_TMPDIR"));
+    let (studio_glb, cli_glb) = (tmp.join("asset-studio.glb"), tmp.join("asset-cli.glb"));
     let ctx = harness.ctx.clone();
     harness.state_mut().export_asset_to(&studio_glb, &ctx);
     wait_while(&mut harness, "exporting", StudioApp::is_exporting);
     let cli = std::process::Command::new(env!("CARGO_BIN_EXE_lodstudio"))
-        .args([
-            "export",
-            shared("production/simple_skin/simple_skin.gltf")
-                .to_str()
-                .unwrap(),
-        ])
+        .args(["export", cylinder.to_str().unwrap()])
         .args([
             "--lods",
             "source,simplify:1%",
+            "--force",
             "-o",
             cli_glb.to_str().unwrap(),
         ])
@@ -134,10 +133,11 @@ fn a_skinned_lod_moves_when_its_animation_plays() {
         "LOD1 has {} of {original} triangles",
         rest.triangles.len()
     );
-    let still = viewport_image(&mut harness, "asset-skin-lod1-rest");
+    let still = viewport_image(&mut harness, "asset-cylinder-lod1-rest");
     harness.get_by_label("Play").click();
     let mut moved = 0.0f32;
-    for _ in 0..120 {
+    // 1 s of the 2 s loop: the upper joint at its 60°.
+    for _ in 0..60 {
         harness.step();
         let now = harness.state().asset().unwrap().drawn();
         assert_eq!(now.triangles, rest.triangles);
@@ -152,7 +152,7 @@ fn a_skinned_lod_moves_when_its_animation_plays() {
     let time = harness.state().asset().unwrap().time;
     assert!(time > 0.0 && !harness.state().asset().unwrap().is_moving());
     // On screen too (both images are saved for a person to look at).
-    let posed = viewport_image(&mut harness, "asset-skin-lod1-posed");
+    let posed = viewport_image(&mut harness, "asset-cylinder-lod1-posed");
     let differ = still.iter().zip(&posed).filter(|(a, b)| a != b).count();
     assert!(differ > 100, "{differ} pixels changed at t = {time} s");
 }

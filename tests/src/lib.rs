@@ -153,3 +153,132 @@ pub fn lod_meshes(doc: &serde_json::Value, l: usize) -> Vec<usize> {
     }
     out
 }
+
+/// A skinned, animated cylinder (the issue's "two-bone cylinder with one
+/// animation", `assets/two-bone-cylinder.glb`): radius 0.25 and height 2
+/// along +y, 25 rings of 24 vertices; joint `root` at the origin and joint
+/// `bend` at y = 1 under it, each vertex weighted between them by a
+/// smoothstep over 0.6 ≤ y ≤ 1.4; animation `bend` turns the upper joint
+/// about z to 60° and back over 2 s. Node `cylinder` draws it with the skin.
+pub fn two_bone_cylinder() -> Vec<u8> {
+    use glam::{Mat4, Quat, Vec3};
+    use serde_json::json;
+    const RINGS: u32 = 25;
+    const SEGMENTS: u32 = 24;
+    let mut positions = Vec::new();
+    let mut normals = Vec::new();
+    let mut influences: Vec<([u16; 4], [f32; 4])> = Vec::new();
+    for i in 0..RINGS {
+        let y = 2.0 * i as f32 / (RINGS - 1) as f32;
+        let s = ((y - 0.6) / 0.8).clamp(0.0, 1.0);
+        let w = s * s * (3.0 - 2.0 * s);
+        for j in 0..SEGMENTS {
+            let a = std::f32::consts::TAU * j as f32 / SEGMENTS as f32;
+            positions.push(Vec3::new(0.25 * a.cos(), y, 0.25 * a.sin()));
+            normals.push(Vec3::new(a.cos(), 0.0, a.sin()));
+            // A joint only where it weighs (glTF: no joint at weight 0).
+            influences.push(match w {
+                0.0 => ([0, 0, 0, 0], [1.0, 0.0, 0.0, 0.0]),
+                1.0 => ([1, 0, 0, 0], [1.0, 0.0, 0.0, 0.0]),
+                _ => ([0, 1, 0, 0], [1.0 - w, w, 0.0, 0.0]),
+            });
+        }
+    }
+    let mut indices: Vec<u16> = Vec::new();
+    for i in 0..RINGS - 1 {
+        for j in 0..SEGMENTS {
+            let v = |i: u32, j: u32| (i * SEGMENTS + j % SEGMENTS) as u16;
+            let (a, b, c, d) = (v(i, j), v(i, j + 1), v(i + 1, j), v(i + 1, j + 1));
+            indices.extend([a, c, b, b, c, d]);
+        }
+    }
+    let bend = Quat::from_rotation_z(std::f32::consts::FRAC_PI_3);
+    let times = [0.0f32, 1.0, 2.0];
+    let rotations = [Quat::IDENTITY, bend, Quat::IDENTITY];
+    let inverse_bind = [
+        Mat4::IDENTITY,
+        Mat4::from_translation(Vec3::new(0.0, -1.0, 0.0)),
+    ];
+    let mut bin: Vec<u8> = Vec::new();
+    let mut views = Vec::new();
+    let mut push = |bytes: Vec<u8>, target: Option<u32>| {
+        while bin.len() % 4 != 0 {
+            bin.push(0);
+        }
+        let mut view = json!({"buffer": 0, "byteOffset": bin.len(), "byteLength": bytes.len()});
+        if let Some(t) = target {
+            view["target"] = json!(t);
+        }
+        bin.extend(bytes);
+        views.push(view);
+        views.len() - 1
+    };
+    let floats =
+        |v: &mut dyn Iterator<Item = f32>| -> Vec<u8> { v.flat_map(f32::to_le_bytes).collect() };
+    let p = push(
+        floats(&mut positions.iter().flat_map(|p| p.to_array())),
+        Some(34962),
+    );
+    let n = push(
+        floats(&mut normals.iter().flat_map(|p| p.to_array())),
+        Some(34962),
+    );
+    let joints: Vec<u8> = influences
+        .iter()
+        .flat_map(|(j, _)| *j)
+        .flat_map(u16::to_le_bytes)
+        .collect();
+    let jv = push(joints, Some(34962));
+    let wv = push(
+        floats(&mut influences.iter().flat_map(|(_, w)| *w)),
+        Some(34962),
+    );
+    let iv = push(
+        indices.iter().flat_map(|i| i.to_le_bytes()).collect(),
+        Some(34963),
+    );
+    let ibm = push(
+        floats(&mut inverse_bind.iter().flat_map(|m| m.to_cols_array())),
+        None,
+    );
+    let tv = push(floats(&mut times.iter().copied()), None);
+    let rv = push(
+        floats(&mut rotations.iter().flat_map(|q| q.to_array())),
+        None,
+    );
+    let count = positions.len();
+    let (lo, hi) = positions.iter().fold(
+        (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN)),
+        |(lo, hi), p| (lo.min(*p), hi.max(*p)),
+    );
+    let doc = json!({
+        "asset": {"version": "2.0", "generator": "lodstudio-tests two_bone_cylinder"},
+        "scene": 0,
+        "scenes": [{"nodes": [0, 1]}],
+        "nodes": [
+            {"name": "cylinder", "mesh": 0, "skin": 0},
+            {"name": "root", "children": [2]},
+            {"name": "bend", "translation": [0.0, 1.0, 0.0]}
+        ],
+        "meshes": [{"name": "cylinder", "primitives": [{
+            "attributes": {"POSITION": 0, "NORMAL": 1, "JOINTS_0": 2, "WEIGHTS_0": 3},
+            "indices": 4, "mode": 4}]}],
+        "skins": [{"joints": [1, 2], "inverseBindMatrices": 5, "skeleton": 1}],
+        "animations": [{"name": "bend", "channels": [{"sampler": 0, "target": {"node": 2, "path": "rotation"}}],
+            "samplers": [{"input": 6, "output": 7, "interpolation": "LINEAR"}]}],
+        "accessors": [
+            {"bufferView": p, "componentType": 5126, "count": count, "type": "VEC3",
+             "min": lo.to_array(), "max": hi.to_array()},
+            {"bufferView": n, "componentType": 5126, "count": count, "type": "VEC3"},
+            {"bufferView": jv, "componentType": 5123, "count": count, "type": "VEC4"},
+            {"bufferView": wv, "componentType": 5126, "count": count, "type": "VEC4"},
+            {"bufferView": iv, "componentType": 5123, "count": indices.len(), "type": "SCALAR"},
+            {"bufferView": ibm, "componentType": 5126, "count": 2, "type": "MAT4"},
+            {"bufferView": tv, "componentType": 5126, "count": 3, "type": "SCALAR", "min": [0.0], "max": [2.0]},
+            {"bufferView": rv, "componentType": 5126, "count": 3, "type": "VEC4"}
+        ],
+        "bufferViews": views,
+        "buffers": [{"byteLength": bin.len()}]
+    });
+    lodstudio_core::io::gltf_writer::glb(&doc, bin)
+}

@@ -610,3 +610,55 @@ fn a_meshopt_compressed_export_reads_back_as_the_plain_one() {
         }
     }
 }
+
+/// `assets/two-bone-cylinder.glb` is what `two_bone_cylinder` makes
+/// (`UPDATE_ASSETS=1` writes it again), and its LODs keep the skin: the
+/// bind-pose bound holds against an independent measurement, every
+/// sampled pose is measured, the LODs' joints are the skin's and their
+/// weights sum to 1.
+#[test]
+fn the_two_bone_cylinder_keeps_its_skin_through_its_lods() {
+    let asset = Path::new(env!("CARGO_MANIFEST_DIR")).join("../assets/two-bone-cylinder.glb");
+    let made = lodstudio_tests::two_bone_cylinder();
+    if std::env::var_os("UPDATE_ASSETS").is_some() {
+        std::fs::write(&asset, &made).unwrap();
+    }
+    assert!(
+        std::fs::read(&asset).unwrap() == made,
+        "UPDATE_ASSETS=1 writes it"
+    );
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("cylinder.glb");
+    let j = export(&asset, "source,simplify:1%,simplify:4%", "files", &out);
+    let original = read_scene(&asset);
+    let mut coarser = usize::MAX;
+    for (k, o) in j["outputs"].as_array().unwrap().iter().enumerate() {
+        let lod = read_scene(Path::new(o.as_str().unwrap()));
+        let m = &lod.meshes[0];
+        assert!(m.mesh.triangles.len() < coarser, "LOD {k} is coarser");
+        coarser = m.mesh.triangles.len();
+        let skin = m.skin.as_ref().expect("skinned");
+        for (js, ws) in skin.joints.iter().zip(&skin.weights) {
+            assert!(js.iter().zip(ws).all(|(&i, &w)| i < 2 || w == 0.0));
+            assert!((ws.iter().sum::<f32>() - 1.0).abs() < 1e-5);
+        }
+        let lods = &j["meshes"][0]["lods"][k];
+        let bound = lods["error_bound"].as_f64().unwrap() as f32;
+        let measured = hausdorff_mesh_mesh(
+            &original.meshes[0].mesh,
+            &m.mesh,
+            &SamplingOptions {
+                samples: 50_000,
+                seed: 7,
+            },
+        )
+        .two_sided();
+        assert!(
+            measured <= bound * 1.0001 + 1e-6,
+            "LOD {k}: {measured} > {bound}"
+        );
+        let pose = &lods["pose_error"];
+        assert_eq!(pose["per_pose"].as_array().unwrap().len(), 8, "{pose}");
+    }
+    assert!(coarser < 300, "the coarsest LOD has {coarser} triangles");
+}
