@@ -202,7 +202,7 @@ pub fn two_bone_cylinder() -> Vec<u8> {
     let mut bin: Vec<u8> = Vec::new();
     let mut views = Vec::new();
     let mut push = |bytes: Vec<u8>, target: Option<u32>| {
-        while bin.len() % 4 != 0 {
+        while !bin.len().is_multiple_of(4) {
             bin.push(0);
         }
         let mut view = json!({"buffer": 0, "byteOffset": bin.len(), "byteLength": bytes.len()});
