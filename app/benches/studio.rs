@@ -18,6 +18,11 @@
 //!   collapse, hybrid, the default chain and the chain with one row edited),
 //!   and whether an idle studio asks for frames.
 //!
+//! - issue 49: with `-- --asset [MODEL…]`, a glTF asset shown as its nodes
+//!   place it: the UI step while an animation plays (a new pose each frame)
+//!   or, for an asset without one, while the selected node changes each
+//!   frame (goal: at most 5 ms of the studio's own CPU).
+//!
 //! Run with `cargo bench -p lodstudio --bench studio` (horse, engine, dragon)
 //! or name models: `cargo bench -p lodstudio --bench studio -- horse.ply`.
 //! Prints a Markdown table.
@@ -269,8 +274,68 @@ fn chain_row(h: &mut Harness<'_, StudioApp>, model: &str) {
     );
 }
 
+/// An asset shown and moving for 60 frames: playing its first animation,
+/// or selecting its outliner's rows one a frame.
+fn asset_row(h: &mut Harness<'_, StudioApp>, model: &str) {
+    let (mut steps, mut frames) = (Vec::new(), Vec::new());
+    let animated = {
+        let asset = h.state_mut().asset_mut().expect("a glTF scene");
+        asset.show = true;
+        asset.playing = true;
+        asset.is_moving()
+    };
+    h.step();
+    let rows = h.state().asset().map_or(0, |a| a.outline_labels().count());
+    for i in 0..60 {
+        if !animated {
+            let asset = h.state_mut().asset_mut().expect("a glTF scene");
+            asset.selected = Some(i % rows.max(1));
+            asset.redraw();
+        }
+        let (s, f) = frame(h);
+        steps.push(s);
+        frames.push(f);
+    }
+    let asset = h.state().asset().expect("a glTF scene");
+    println!(
+        "| {model} | {} | {} | {} | {} | {} |",
+        asset.triangles(0).1,
+        if animated { "playing" } else { "selection" },
+        steps.len(),
+        spread(&steps),
+        spread(&frames),
+    );
+}
+
 fn main() {
     let shared = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../shared/models");
+    if std::env::args().any(|a| a == "--asset") {
+        // `cargo bench -p lodstudio --bench studio -- --asset [MODEL...]`
+        let assets = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../assets");
+        let mut models: Vec<PathBuf> = std::env::args()
+            .skip(1)
+            .filter(|a| !a.starts_with('-'))
+            .map(|m| shared.join(m))
+            .collect();
+        if models.is_empty() {
+            models = vec![
+                assets.join("two-bone-cylinder.glb"),
+                shared.join("CesiumMilkTruck.glb"),
+                shared.join("2CylinderEngine.gltf"),
+            ];
+        }
+        println!(
+            "| asset | triangles drawn | moving by | frames | UI step ms (median / max) | frame ms |"
+        );
+        println!("|---|---|---|---|---|---|");
+        for model in models {
+            let mut h = studio(Some(model.clone()));
+            wait_while(&mut h, "loading", StudioApp::is_loading);
+            let name = model.file_name().unwrap_or_default().to_string_lossy();
+            asset_row(&mut h, &name);
+        }
+        return;
+    }
     let ratio = std::env::args().any(|a| a == "--ratio");
     let args: Vec<String> = std::env::args()
         .skip(1)

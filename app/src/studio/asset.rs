@@ -13,7 +13,7 @@ use lodstudio_core::TriMesh;
 use lodstudio_core::io::LoadOptions;
 use lodstudio_core::io::scene::Scene as Asset;
 use lodstudio_core::recipe::{ChainError, Recipe};
-use lodstudio_core::scene::drawing::{Drawing, Drawn};
+use lodstudio_core::scene::drawing::Drawing;
 use lodstudio_core::scene::{Layout, SceneChains};
 use serde_json::Value;
 
@@ -51,14 +51,12 @@ pub struct AssetState {
     pub playing: bool,
     /// Seconds into the animation.
     pub time: f32,
-    drawing: Arc<Drawing>,
+    drawing: Drawing,
     /// The last build's chains (what Export scene… writes).
     chains: Option<Arc<SceneChains>>,
     job: Option<Job<Result<(SceneChains, Drawing), ChainError>>>,
     note: Option<String>,
     /// Reused each frame the asset moves.
-    mesh: TriMesh,
-    drawn: Vec<Drawn>,
     colors: Vec<Vec3>,
     /// What the viewport draws; `None` once something changed.
     view: Option<Arc<Scene>>,
@@ -67,7 +65,7 @@ pub struct AssetState {
 impl AssetState {
     pub fn new(asset: Asset) -> AssetState {
         let rows = outline(&asset);
-        let drawing = Arc::new(Drawing::new(&asset, None));
+        let drawing = Drawing::new(&asset, None);
         AssetState {
             excluded: vec![false; asset.meshes.len()],
             asset: Arc::new(asset),
@@ -82,8 +80,6 @@ impl AssetState {
             chains: None,
             job: None,
             note: None,
-            mesh: TriMesh::default(),
-            drawn: Vec::new(),
             colors: Vec::new(),
             view: None,
         }
@@ -94,9 +90,12 @@ impl AssetState {
         self.rows.iter().map(|r| r.label.as_str())
     }
 
-    /// The mesh last drawn for the viewport (world space, posed).
-    pub fn drawn(&self) -> &TriMesh {
-        &self.mesh
+    /// The mesh drawn for the viewport (world space, posed) now.
+    pub fn drawn(&mut self) -> &TriMesh {
+        let animation = (!self.asset.rig.animations.is_empty()).then_some(self.animation);
+        self.drawing
+            .draw(&self.asset, self.level, animation, self.time)
+            .0
     }
 
     /// The levels the chains have (1 before a build).
@@ -156,7 +155,7 @@ impl AssetState {
         match outcome {
             Ok((chains, drawing)) => {
                 self.chains = Some(Arc::new(chains));
-                self.drawing = Arc::new(drawing);
+                self.drawing = drawing;
                 self.level = self.level.min(self.drawing.levels() - 1);
                 self.view = None;
                 let (once, drawn) = self.triangles(self.levels() - 1);
@@ -185,6 +184,12 @@ impl AssetState {
         })
     }
 
+    /// Draws it again at the next frame (after a change made from outside
+    /// the section, as scripted sessions and the bench make).
+    pub fn redraw(&mut self) {
+        self.view = None;
+    }
+
     /// Advances a playing animation by `dt` seconds (looping).
     pub fn tick(&mut self, dt: f32) {
         if !self.is_moving() {
@@ -197,35 +202,27 @@ impl AssetState {
     }
 
     /// What the viewport draws: the asset at its level and pose, the
-    /// selected node's triangles highlighted. Drawn again only after a
-    /// change; the vertex buffers are reused.
+    /// selected node's triangles highlighted (else in their materials).
+    /// Drawn again only after a change, posing the positions in place.
     pub fn view_scene(&mut self) -> Arc<Scene> {
         if let Some(view) = &self.view {
             return Arc::clone(view);
         }
         let animation = (!self.asset.rig.animations.is_empty()).then_some(self.animation);
-        self.drawing.draw(
-            &self.asset,
-            self.level,
-            animation,
-            self.time,
-            &mut self.mesh,
-            &mut self.drawn,
-        );
+        let (mesh, drawn) = self
+            .drawing
+            .draw(&self.asset, self.level, animation, self.time);
         self.colors.clear();
         if let Some(r) = self.selected.filter(|&r| r < self.rows.len()) {
             let under = &self.rows[r..self.rows[r].end];
-            self.colors.resize(self.mesh.triangles.len(), DIMMED);
-            for d in &self.drawn {
+            self.colors.resize(mesh.triangles.len(), DIMMED);
+            for d in drawn {
                 if under.iter().any(|r| r.node == d.node) {
                     self.colors[d.triangles.clone()].fill(HIGHLIGHT);
                 }
             }
         }
-        let view = Arc::new(Scene::from_mesh_with_triangle_colors(
-            &self.mesh,
-            &self.colors,
-        ));
+        let view = Arc::new(Scene::from_mesh_with_triangle_colors(mesh, &self.colors));
         self.view = Some(Arc::clone(&view));
         view
     }

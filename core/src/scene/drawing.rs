@@ -11,15 +11,28 @@ use std::ops::Range;
 use glam::Mat4;
 
 use super::SceneChains;
-use super::pose::{node_worlds, skinned};
+use super::pose::{node_worlds, skin_into};
 use super::transfer::Transfer;
 use crate::geom::TriMesh;
 use crate::io::scene::{Scene, Skinning};
 
-/// One mesh at one level, in mesh space, with its skin.
+/// One mesh at one level, in mesh space: one vertex per wedge (each corner
+/// its side of a UV seam, materials and parts kept), normals left to the
+/// viewer to derive from the posed surface; with its skin.
 struct Level {
     mesh: TriMesh,
     skin: Option<Skinning>,
+}
+
+impl Level {
+    fn new(mesh: &TriMesh, transfer: &Transfer) -> Level {
+        let mut mesh = mesh.unwelded();
+        mesh.normals = None;
+        Level {
+            skin: transfer.extras(&mesh).skin,
+            mesh,
+        }
+    }
 }
 
 /// The meshes of a scene at every level of their chains, ready to pose.
@@ -27,6 +40,15 @@ pub struct Drawing {
     /// Per scene mesh, per level (LOD0 first; a mesh without a chain has
     /// only its source).
     levels: Vec<Vec<Level>>,
+    /// Every instance at the level drawn last, whose positions each pose
+    /// rewrites in place (the rest is made once per level).
+    shown: Option<Shown>,
+}
+
+struct Shown {
+    level: usize,
+    mesh: TriMesh,
+    drawn: Vec<Drawn>,
 }
 
 /// Where one instance lies in a drawn mesh.
@@ -35,6 +57,11 @@ pub struct Drawn {
     pub node: usize,
     /// Its triangles in the drawn mesh.
     pub triangles: Range<usize>,
+    /// Its vertices, and the scene mesh (its place in `Scene::meshes`) and
+    /// instance they come from.
+    vertices: Range<usize>,
+    mesh: usize,
+    instance: usize,
 }
 
 impl Drawing {
@@ -46,25 +73,21 @@ impl Drawing {
             .iter()
             .enumerate()
             .map(|(i, m)| {
-                let source = Level {
-                    mesh: m.mesh.clone(),
-                    skin: m.skin.clone(),
-                };
-                let Some(chain) = chains.and_then(|c| c.chains.get(i)) else {
-                    return vec![source];
-                };
                 let transfer = Transfer::new(m);
-                chain
-                    .lods
-                    .iter()
-                    .map(|l| Level {
-                        skin: transfer.extras(&l.set.mesh).skin,
-                        mesh: l.set.mesh.clone(),
-                    })
-                    .collect()
+                match chains.and_then(|c| c.chains.get(i)) {
+                    None => vec![Level::new(&m.mesh, &transfer)],
+                    Some(chain) => chain
+                        .lods
+                        .iter()
+                        .map(|l| Level::new(&l.set.mesh, &transfer))
+                        .collect(),
+                }
             })
             .collect();
-        Drawing { levels }
+        Drawing {
+            levels,
+            shown: None,
+        }
     }
 
     /// The most levels a mesh has.
@@ -72,67 +95,88 @@ impl Drawing {
         self.levels.iter().map(Vec::len).max().unwrap_or(0)
     }
 
-    /// Triangles at `level` (a mesh with fewer levels at its coarsest), each
-    /// mesh counted once and once per instance.
+    /// Mesh `m`'s level `level` (its coarsest where it has fewer).
+    fn level(&self, m: usize, level: usize) -> &Level {
+        let levels = &self.levels[m];
+        &levels[level.min(levels.len() - 1)]
+    }
+
+    /// Triangles at `level`, each mesh counted once and once per instance.
     pub fn triangles(&self, scene: &Scene, level: usize) -> (usize, usize) {
         let mut once = 0;
         let mut drawn = 0;
-        for (m, levels) in scene.meshes.iter().zip(&self.levels) {
-            let t = levels[level.min(levels.len() - 1)].mesh.triangles.len();
+        for (i, m) in scene.meshes.iter().enumerate() {
+            let t = self.level(i, level).mesh.triangles.len();
             once += t;
             drawn += t * m.instances.len();
         }
         (once, drawn)
     }
 
-    /// Draws `scene` at `level` and time `t` of animation `animation`
-    /// (`None`: the rest pose) into `out`, and where each instance lies
-    /// into `drawn`; both are cleared first (the studio reuses them).
+    /// `scene` at `level`, posed at time `t` of animation `animation`
+    /// (`None`: the rest pose), and where each instance lies in it.
     pub fn draw(
-        &self,
+        &mut self,
         scene: &Scene,
         level: usize,
         animation: Option<usize>,
         t: f32,
-        out: &mut TriMesh,
-        drawn: &mut Vec<Drawn>,
-    ) {
-        out.positions.clear();
-        out.triangles.clear();
-        out.normals = None;
-        out.uvs = None;
-        out.colors = None;
-        out.parts = None;
-        out.materials = None;
-        drawn.clear();
+    ) -> (&TriMesh, &[Drawn]) {
+        if self.shown.as_ref().is_none_or(|s| s.level != level) {
+            self.shown = Some(self.instances(scene, level));
+        }
         let worlds = node_worlds(
             &scene.rig,
             animation.and_then(|a| scene.rig.animations.get(a)),
             t,
         );
-        for (m, levels) in scene.meshes.iter().zip(&self.levels) {
+        let Some(shown) = self.shown.as_mut() else {
+            unreachable!("made above")
+        };
+        for d in &shown.drawn {
+            let levels = &self.levels[d.mesh];
             let l = &levels[level.min(levels.len() - 1)];
-            for instance in &m.instances {
-                let base = out.positions.len() as u32;
-                let first = out.triangles.len();
-                match (instance.skin, &l.skin) {
-                    (Some(s), Some(skin)) => {
-                        let posed = skinned(&l.mesh, skin, &scene.rig, s, &worlds);
-                        out.positions.extend(posed.positions);
-                    }
-                    _ => {
-                        let world = worlds.get(instance.node).copied().unwrap_or(Mat4::IDENTITY);
-                        out.positions
-                            .extend(l.mesh.positions.iter().map(|&p| world.transform_point3(p)));
+            let instance = &scene.meshes[d.mesh].instances[d.instance];
+            let out = &mut shown.mesh.positions[d.vertices.clone()];
+            match (instance.skin, &l.skin) {
+                (Some(s), Some(skin)) => {
+                    skin_into(&l.mesh.positions, skin, &scene.rig, s, &worlds, out)
+                }
+                _ => {
+                    let world = worlds.get(instance.node).copied().unwrap_or(Mat4::IDENTITY);
+                    for (o, p) in out.iter_mut().zip(&l.mesh.positions) {
+                        *o = world.transform_point3(*p);
                     }
                 }
-                out.triangles
-                    .extend(l.mesh.triangles.iter().map(|t| t.map(|i| i + base)));
+            }
+        }
+        (&shown.mesh, &shown.drawn)
+    }
+
+    /// Every instance at `level`, in mesh space, one after the other.
+    fn instances(&self, scene: &Scene, level: usize) -> Shown {
+        let mut pieces = Vec::new();
+        let mut drawn = Vec::new();
+        let (mut vertices, mut triangles) = (0, 0);
+        for (i, m) in scene.meshes.iter().enumerate() {
+            let l = self.level(i, level);
+            for (k, instance) in m.instances.iter().enumerate() {
+                let (v, t) = (l.mesh.positions.len(), l.mesh.triangles.len());
                 drawn.push(Drawn {
                     node: instance.node,
-                    triangles: first..out.triangles.len(),
+                    triangles: triangles..triangles + t,
+                    vertices: vertices..vertices + v,
+                    mesh: i,
+                    instance: k,
                 });
+                (vertices, triangles) = (vertices + v, triangles + t);
+                pieces.push(l.mesh.clone());
             }
+        }
+        Shown {
+            level,
+            mesh: TriMesh::concat(&pieces),
+            drawn,
         }
     }
 }
@@ -152,18 +196,17 @@ mod tests {
             panic!("{} is a shared model", path.display());
         };
         let scene = crate::io::scene::read(&bytes, path.parent()).unwrap();
-        let drawing = Drawing::new(&scene, None);
+        let mut drawing = Drawing::new(&scene, None);
         assert_eq!(drawing.levels(), 1);
-        let (mut rest, mut posed) = (TriMesh::default(), TriMesh::default());
-        let mut drawn = Vec::new();
-        drawing.draw(&scene, 0, None, 0.0, &mut rest, &mut drawn);
+        let (rest, drawn) = drawing.draw(&scene, 0, None, 0.0);
+        let rest = rest.clone();
         assert_eq!(drawn.len(), 1);
         assert_eq!(drawn[0].triangles, 0..rest.triangles.len());
         let (start, end) = scene.rig.animations[0].span();
         let mut moved = 0;
         for k in 1..8 {
             let t = start + (end - start) * k as f32 / 8.0;
-            drawing.draw(&scene, 0, Some(0), t, &mut posed, &mut drawn);
+            let (posed, _) = drawing.draw(&scene, 0, Some(0), t);
             assert_eq!(rest.triangles, posed.triangles);
             let here = (rest.positions.iter().zip(&posed.positions))
                 .filter(|(a, b)| a.distance(**b) > 1e-3)

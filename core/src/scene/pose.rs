@@ -120,8 +120,31 @@ pub fn skinned(
     skin_index: usize,
     worlds: &[Mat4],
 ) -> TriMesh {
+    let mut out = TriMesh::new(mesh.positions.clone(), mesh.triangles.clone());
+    skin_into(
+        &mesh.positions,
+        skin,
+        rig,
+        skin_index,
+        worlds,
+        &mut out.positions,
+    );
+    out
+}
+
+/// [`skinned`] positions written into `out` (as long as `positions`): the
+/// studio poses its vertex buffer in place every frame. Unchanged without
+/// the skin.
+pub fn skin_into(
+    positions: &[Vec3],
+    skin: &Skinning,
+    rig: &Rig,
+    skin_index: usize,
+    worlds: &[Mat4],
+    out: &mut [Vec3],
+) {
     let Some(def) = rig.skins.get(skin_index) else {
-        return mesh.clone();
+        return;
     };
     let joint: Vec<Mat4> = def
         .joints
@@ -129,20 +152,15 @@ pub fn skinned(
         .zip(&def.inverse_bind)
         .map(|(&j, ibm)| worlds.get(j).copied().unwrap_or(Mat4::IDENTITY) * *ibm)
         .collect();
-    let mut out = TriMesh::new(
-        Vec::with_capacity(mesh.positions.len()),
-        mesh.triangles.clone(),
-    );
-    for (i, &p) in mesh.positions.iter().enumerate() {
+    for (i, (&p, o)) in positions.iter().zip(out.iter_mut()).enumerate() {
         let mut m = Mat4::ZERO;
-        for (j, w) in skin.joints[i].iter().zip(skin.weights[i]) {
+        for (&j, w) in skin.joints[i].iter().zip(skin.weights[i]) {
             if w != 0.0 {
-                m += joint.get(*j as usize).copied().unwrap_or(Mat4::IDENTITY) * w;
+                m += joint.get(j as usize).copied().unwrap_or(Mat4::IDENTITY) * w;
             }
         }
-        out.positions.push(m.transform_point3(p));
+        *o = m.transform_point3(p);
     }
-    out
 }
 
 /// The distance between `original` and `lod` (each with its skin) at
