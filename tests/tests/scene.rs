@@ -662,3 +662,106 @@ fn the_two_bone_cylinder_keeps_its_skin_through_its_lods() {
     }
     assert!(coarser < 300, "the coarsest LOD has {coarser} triangles");
 }
+
+/// Two meshes in one scene, each drawn by its own node.
+fn two_mesh_scene(a: &lodstudio_core::TriMesh, b: &lodstudio_core::TriMesh) -> Vec<u8> {
+    let split = |m: &lodstudio_core::TriMesh| {
+        let (json, bin) = gltf::split_glb(&gltf_writer::write_glb(m), "x.bin").unwrap();
+        (serde_json::from_slice::<Value>(&json).unwrap(), bin)
+    };
+    let ((mut doc, mut bin), (other, more)) = (split(a), split(b));
+    while !bin.len().is_multiple_of(4) {
+        bin.push(0);
+    }
+    let (views, accessors) = (
+        doc["bufferViews"].as_array().unwrap().len(),
+        doc["accessors"].as_array().unwrap().len(),
+    );
+    let materials = doc["materials"].as_array().map_or(0, Vec::len);
+    for mut v in other["bufferViews"].as_array().unwrap().clone() {
+        v["byteOffset"] = json!(v["byteOffset"].as_u64().unwrap_or(0) + bin.len() as u64);
+        doc["bufferViews"].as_array_mut().unwrap().push(v);
+    }
+    for mut a in other["accessors"].as_array().unwrap().clone() {
+        a["bufferView"] = json!(a["bufferView"].as_u64().unwrap() + views as u64);
+        doc["accessors"].as_array_mut().unwrap().push(a);
+    }
+    for m in other["materials"].as_array().into_iter().flatten() {
+        doc["materials"].as_array_mut().unwrap().push(m.clone());
+    }
+    let mut mesh = other["meshes"][0].clone();
+    for p in mesh["primitives"].as_array_mut().unwrap() {
+        for (_, a) in p["attributes"].as_object_mut().unwrap() {
+            *a = json!(a.as_u64().unwrap() + accessors as u64);
+        }
+        p["indices"] = json!(p["indices"].as_u64().unwrap() + accessors as u64);
+        if let Some(m) = p.get("material").and_then(Value::as_u64) {
+            p["material"] = json!(m + materials as u64);
+        }
+    }
+    doc["meshes"].as_array_mut().unwrap().push(mesh);
+    bin.extend(more);
+    doc["buffers"] = json!([{"byteLength": bin.len()}]);
+    doc["nodes"] = json!([{"name": "big", "mesh": 0},
+        {"name": "small", "mesh": 1, "translation": [3.0, 0.0, 0.0]}]);
+    doc["scenes"] = json!([{"nodes": [0, 1]}]);
+    gltf_writer::glb(&doc, bin)
+}
+
+/// A row one mesh of a scene does not fit (an AMG impostor of an
+/// icosahedron: 12 points, too few for its neighbourhoods) is left out of
+/// that mesh's chain and said (stderr, `meshes[].skipped_rows`), while the
+/// other mesh keeps it; before, the whole export failed.
+#[test]
+fn a_row_a_small_mesh_does_not_fit_is_left_out_of_its_chain_only() {
+    let tmp = tempfile::tempdir().unwrap();
+    let big = lodstudio_core::builtins::torus(1.0, 0.35, 48, 24);
+    let small = lodstudio_core::builtins::icosphere(Vec3::ZERO, 0.3, 0);
+    let input = tmp.path().join("two.glb");
+    std::fs::write(&input, two_mesh_scene(&big, &small)).unwrap();
+    let out = tmp.path().join("two-out.glb");
+    let run = lodstudio_tests::lodstudio(&[
+        "export",
+        input.to_str().unwrap(),
+        "--lods",
+        "simplify:1%,amg:15%",
+        "-o",
+        out.to_str().unwrap(),
+        "--json",
+    ]);
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert!(run.status.success(), "{stderr}");
+    let j: Value = serde_json::from_slice(&run.stdout).unwrap();
+    let meshes = j["meshes"].as_array().unwrap();
+    assert_eq!(meshes[0]["lods"].as_array().unwrap().len(), 2);
+    assert!(meshes[0].get("skipped_rows").is_none());
+    assert_eq!(meshes[1]["lods"].as_array().unwrap().len(), 1);
+    let skipped = &meshes[1]["skipped_rows"][0];
+    assert_eq!(
+        (skipped["row"].as_u64(), skipped["label"].as_str()),
+        (Some(1), Some("amg:15%"))
+    );
+    assert!(stderr.contains("rows[1] (amg:15%) left out"), "{stderr}");
+    assert!(meshes[0]["lods"][1]["splats"].as_u64().unwrap() > 0);
+}
+
+/// `--layout nodes|files` lays out a scene: on one mesh it is refused,
+/// not ignored.
+#[test]
+fn a_layout_for_one_mesh_is_refused() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("sphere.glb");
+    let run = lodstudio_tests::lodstudio(&[
+        "export",
+        "builtin:sphere",
+        "--lods",
+        "simplify:1%",
+        "--layout",
+        "nodes",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(run.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&run.stderr).contains("--layout nodes"));
+    assert!(!out.exists());
+}

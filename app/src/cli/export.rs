@@ -174,7 +174,16 @@ pub fn run(args: ExportArgs) -> Result<(), CliError> {
     if format == Format::Gltf {
         check_output(&args.output.with_extension("bin"), args.report.force)?;
     }
-    let j = match io::scene::is_scene(file) {
+    let scene_input = io::scene::is_scene(file);
+    // One mesh has no scene to lay out: its chain is MSFT_lod nodes.
+    if !scene_input && recipe.layout != lodstudio_core::scene::Layout::MsftLod {
+        return Err(CliError::BadInput(format!(
+            "{}: --layout {} lays out a glTF scene's nodes; this input is one mesh, written as an MSFT_lod chain (leave --layout out)",
+            file.display(),
+            recipe.layout.name()
+        )));
+    }
+    let j = match scene_input {
         true => scene::export_scene(
             &args.input,
             &recipe,
@@ -269,8 +278,8 @@ fn export_one(
     let loaded = open_input(file, &options)?;
     let start = std::time::Instant::now();
     let chain = build_chain(&loaded.model, recipe, &Progress::new()).map_err(|e| match e {
-        ChainError::BadInput(m) => CliError::BadInput(format!("{}: {m}", file.display())),
         ChainError::Cancelled => CliError::Failure("cancelled".into()),
+        e => CliError::BadInput(format!("{}: {e}", file.display())),
     })?;
     let mut bytes = 0;
     for (path, data) in

@@ -154,6 +154,18 @@ impl AssetState {
         let seconds = self.job.take().map_or(0.0, |j| j.elapsed().as_secs_f32());
         match outcome {
             Ok((chains, drawing)) => {
+                let skipped: usize = chains.skipped.iter().map(Vec::len).sum();
+                self.note = (skipped > 0).then(|| {
+                    let first = (self.asset.meshes.iter().zip(&chains.skipped))
+                        .find_map(|(m, s)| Some((m, s.first()?)));
+                    match first {
+                        Some((m, s)) => format!(
+                            "{skipped} row(s) left out where a mesh does not fit them, e.g. {} on \"{}\": {}",
+                            s.label, m.name, s.why
+                        ),
+                        None => String::new(),
+                    }
+                });
                 self.chains = Some(Arc::new(chains));
                 self.drawing = drawing;
                 self.level = self.level.min(self.drawing.levels() - 1);

@@ -75,8 +75,10 @@ pub const COVERAGE_NOTE: &str = "MSFT_screencoverage[i]: the smallest screen cov
      is shown, coverage being the projected diameter of the node's bounding sphere (the mesh's \
      bounding sphere, its radius times the largest singular value of the node's world matrix) over \
      the viewport height; LOD i's certified error then projects to at most the recipe's pixel \
-     tolerance. It is a height share, not an area share: for Babylon's addLODLevel, or any client \
-     that takes an area, square it.";
+     tolerance. It is a height share, not an area share: Babylon's addLODLevel with \
+     useLODScreenCoverage compares the sphere's projected disc against the screen's area, \
+     pi*c*c/(4*aspect) for this c; a camera distance d = r*sigma/(c*tan(fovY/2)) is exact for every \
+     client. The nodes layout keeps the same values in the parent's extras.lod_screencoverage.";
 
 /// One mesh's LOD chain, as the writer needs it.
 pub struct MeshLods<'a> {

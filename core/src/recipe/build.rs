@@ -58,6 +58,10 @@ pub enum ChainError {
     /// a point set): names the row.
     #[error("{0}")]
     BadInput(String),
+    /// One row does not fit the model (`rest` follows `rows[row]` in the
+    /// message: ".tolerance: …", ": …", " (source) …").
+    #[error("rows[{row}]{rest}")]
+    Row { row: usize, rest: String },
     #[error("cancelled")]
     Cancelled,
 }
@@ -265,10 +269,9 @@ fn build(
 
 /// A source row's LOD: the mesh as loaded, its bound 0 (nothing simplified).
 fn source_lod(recipe: &Recipe, j: usize, mesh: Option<&TriMesh>) -> Result<ChainLod, ChainError> {
-    let mesh = mesh.ok_or_else(|| {
-        ChainError::BadInput(format!(
-            "rows[{j}] (source) needs a triangle mesh, not a point set"
-        ))
+    let mesh = mesh.ok_or_else(|| ChainError::Row {
+        row: j,
+        rest: " (source) needs a triangle mesh, not a point set".into(),
     })?;
     Ok(ChainLod {
         rows: vec![j],
@@ -313,7 +316,10 @@ fn build_group(
                 (None, cache) => (
                     lod::build(&params, model, progress).map_err(|e| match e {
                         BuildError::Cancelled => ChainError::Cancelled,
-                        e => ChainError::BadInput(format!("rows[{first}]: {e}")),
+                        e => ChainError::Row {
+                            row: first,
+                            rest: format!(": {e}"),
+                        },
                     })?,
                     cache,
                 ),
@@ -325,10 +331,13 @@ fn build_group(
             sets?
         }
         (params, None) => {
-            return Err(ChainError::BadInput(format!(
-                "rows[{first}] ({}) needs a triangle mesh, not a point set (only amg rows take points)",
-                params.method().tag()
-            )));
+            return Err(ChainError::Row {
+                row: first,
+                rest: format!(
+                    " ({}) needs a triangle mesh, not a point set (only amg rows take points)",
+                    params.method().tag()
+                ),
+            });
         }
     };
     Ok(Hit {
@@ -358,10 +367,13 @@ fn simplify_rows(
             match target {
                 // A finite tolerance can still overflow in object space.
                 Target::Error(e) | Target::RelativeError(e) if !e.is_finite() => {
-                    Err(ChainError::BadInput(format!(
-                        "rows[{j}].tolerance: {} is no finite error on this model",
-                        recipe.rows[j].label()
-                    )))
+                    Err(ChainError::Row {
+                        row: j,
+                        rest: format!(
+                            ".tolerance: {} is no finite error on this model",
+                            recipe.rows[j].label()
+                        ),
+                    })
                 }
                 t => Ok(t),
             }
@@ -369,7 +381,10 @@ fn simplify_rows(
         .collect::<Result<_, _>>()?;
     let results = simplify::simplify_chain(mesh, &targets, collapse, false, progress).map_err(
         |e| match e {
-            SimplifyError::BadTarget(m) => ChainError::BadInput(format!("rows[{}]: {m}", group[0])),
+            SimplifyError::BadTarget(m) => ChainError::Row {
+                row: group[0],
+                rest: format!(": {m}"),
+            },
             SimplifyError::Cancelled => ChainError::Cancelled,
         },
     )?;
@@ -413,8 +428,10 @@ fn hierarchy_rows(
             if let ChainItem::Error(f) = wanted
                 && set.error_bound > f * diag * (1.0 + 1e-6)
             {
-                return Err(ChainError::BadInput(format!(
-                    "rows[{j}].tolerance: {}: no {} cut is that fine (the finest bound is {:.3}% of the diagonal{})",
+                return Err(ChainError::Row {
+                    row: j,
+                    rest: format!(
+                    ".tolerance: {}: no {} cut is that fine (the finest bound is {:.3}% of the diagonal{})",
                     row.label(),
                     row.method.tag(),
                     100.0 * set.error_bound / diag,
@@ -423,7 +440,8 @@ fn hierarchy_rows(
                     } else {
                         ""
                     },
-                )));
+                    ),
+                });
             }
             Ok(set)
         })

@@ -39,6 +39,20 @@ pub struct SceneChains {
     /// Per chain, per LOD: each morph target's certified bound ([`targets`];
     /// the LOD's own bound is already the largest over them).
     pub target_bounds: Vec<Vec<Vec<targets::TargetBound>>>,
+    /// Per chain: the recipe's rows its mesh does not fit, left out of its
+    /// chain (its levels then end sooner), with why.
+    pub skipped: Vec<Vec<Skipped>>,
+}
+
+/// A recipe row one mesh of a scene does not fit (an AMG row on a bolt of
+/// 48 vertices, a tolerance no cut of it meets): the scene's other meshes
+/// keep it, this mesh's chain goes on without it.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct Skipped {
+    /// Its index in the recipe, and its label (`amg:15%`).
+    pub row: usize,
+    pub label: String,
+    pub why: String,
 }
 
 /// What is measured of one LOD of a skinned or morphing mesh.
@@ -91,11 +105,16 @@ pub fn build(
     // each chain as alone (the output does not depend on the thread count).
     // Plain threads, not rayon's: a chain build blocks on threads of its
     // own that use rayon, which starved the pool from inside its workers.
-    type Built = (Chain, Vec<Option<usize>>, Vec<Vec<targets::TargetBound>>);
+    type Built = (
+        Chain,
+        Vec<Option<usize>>,
+        Vec<Vec<targets::TargetBound>>,
+        Vec<Skipped>,
+    );
     let one = |i: usize, m: &crate::io::scene::SceneMesh| -> Result<Built, ChainError> {
-        let recipe = match excluded.get(i) {
-            Some(true) => &source_only,
-            _ => recipe,
+        let mut recipe = match excluded.get(i) {
+            Some(true) => source_only.clone(),
+            _ => recipe.clone(),
         };
         let (mesh, parts) = match &m.skin {
             Some(skin) => bones::split_by_bone(&m.mesh, skin, &m.materials),
@@ -108,14 +127,37 @@ pub fn build(
                 m.index, m.name
             )));
         }
-        let mut chain = build_chain(&Model::Mesh(mesh), recipe, progress).map_err(|e| match e {
-            ChainError::BadInput(why) => {
-                ChainError::BadInput(format!("mesh {} \"{}\": {why}", m.index, m.name))
+        // A row this mesh does not fit is left out of its chain and said;
+        // the recipe's original index of each row still in it:
+        let mut rows: Vec<usize> = (0..recipe.rows.len()).collect();
+        let mut skipped = Vec::new();
+        let model = Model::Mesh(mesh);
+        let mut chain = loop {
+            match build_chain(&model, &recipe, progress) {
+                Ok(chain) => break chain,
+                Err(ChainError::Row { row, rest }) if row < rows.len() => {
+                    skipped.push(Skipped {
+                        row: rows[row],
+                        label: recipe.rows[row].label(),
+                        why: rest.trim_start_matches([':', ' ']).to_string(),
+                    });
+                    rows.remove(row);
+                    recipe.rows.remove(row);
+                    if recipe.rows.is_empty() {
+                        recipe.rows = source_only.rows.clone();
+                    }
+                }
+                Err(ChainError::BadInput(why)) => {
+                    return Err(ChainError::BadInput(format!(
+                        "mesh {} \"{}\": {why}",
+                        m.index, m.name
+                    )));
+                }
+                Err(e) => return Err(e),
             }
-            other => other,
-        })?;
+        };
         let bounds = targets::certify(m, &mut chain, progress)?;
-        Ok((chain, parts, bounds))
+        Ok((chain, parts, bounds, skipped))
     };
     let threads = std::thread::available_parallelism()
         .map_or(1, |n| n.get())
@@ -159,11 +201,13 @@ pub fn build(
         chains: Vec::with_capacity(built.len()),
         materials: Vec::with_capacity(built.len()),
         target_bounds: Vec::with_capacity(built.len()),
+        skipped: Vec::with_capacity(built.len()),
     };
-    for (chain, materials, bounds) in built {
+    for (chain, materials, bounds, skipped) in built {
         out.chains.push(chain);
         out.materials.push(materials);
         out.target_bounds.push(bounds);
+        out.skipped.push(skipped);
     }
     Ok(out)
 }
@@ -277,7 +321,8 @@ impl SceneChains {
             .zip(&self.chains)
             .zip(measures)
             .zip(&self.target_bounds)
-            .map(|(((m, chain), measures), target_bounds)| {
+            .zip(&self.skipped)
+            .map(|((((m, chain), measures), target_bounds), skipped)| {
                 let lods: Vec<Value> = chain
                     .lods
                     .iter()
@@ -315,7 +360,7 @@ impl SceneChains {
                         j
                     })
                     .collect();
-                json!({
+                let mut j = json!({
                     "index": m.index,
                     "name": m.name,
                     "instances": m.instances.iter().map(|i| i.node).collect::<Vec<_>>(),
@@ -324,7 +369,11 @@ impl SceneChains {
                     "skinned": m.skin.is_some(),
                     "morph_targets": m.targets.len(),
                     "lods": lods,
-                })
+                });
+                if !skipped.is_empty() {
+                    j["skipped_rows"] = json!(skipped);
+                }
+                j
             })
             .collect();
         Value::Array(meshes)

@@ -40,9 +40,22 @@ pub fn export_scene(
     let chains =
         lodstudio_core::scene::build(&scene, recipe, &[], &options.repair, &Progress::new())
             .map_err(|e| match e {
-                ChainError::BadInput(m) => CliError::BadInput(format!("{}: {m}", file.display())),
                 ChainError::Cancelled => CliError::Failure("cancelled".into()),
+                e => CliError::BadInput(format!("{}: {e}", file.display())),
             })?;
+    for (m, skipped) in scene.meshes.iter().zip(&chains.skipped) {
+        for s in skipped {
+            eprintln!(
+                "lodstudio: {}: mesh {} \"{}\": rows[{}] ({}) left out of its chain: {}",
+                file.display(),
+                m.index,
+                m.name,
+                s.row,
+                s.label,
+                s.why
+            );
+        }
+    }
     let paths = recipe.layout.outputs(output, chains.levels());
     for path in &paths[1..] {
         check_output(path, force)?;
@@ -111,9 +124,12 @@ fn report(
                 .filter_map(at)
                 .flat_map(|m| m.target_errors)
                 .collect();
-            // What the rows asked, from the first mesh's chain (every mesh
-            // answers the same rows); primitives summed over the meshes.
-            let first = &chains.chains[0];
+            // What the rows asked, from the longest chain (a mesh a row
+            // does not fit goes without it, `meshes[].skipped_rows`);
+            // primitives summed over the meshes.
+            let first = (chains.chains.iter())
+                .max_by_key(|c| c.lods.len())
+                .unwrap_or(&chains.chains[0]);
             let l0 = &first.lods[k.min(first.lods.len() - 1)];
             let tolerances: Vec<String> = l0
                 .rows

@@ -53,8 +53,8 @@ impl From<Cancelled> for ChainError {
 impl From<lodstudio_core::recipe::ChainError> for ChainError {
     fn from(e: lodstudio_core::recipe::ChainError) -> Self {
         match e {
-            lodstudio_core::recipe::ChainError::BadInput(m) => ChainError::BadInput(m),
             lodstudio_core::recipe::ChainError::Cancelled => ChainError::Cancelled,
+            e => ChainError::BadInput(e.to_string()),
         }
     }
 }
