@@ -24,6 +24,9 @@ use crate::render::Scene;
 const HIGHLIGHT: Vec3 = Vec3::new(1.0, 0.55, 0.1);
 const DIMMED: Vec3 = Vec3::new(0.55, 0.57, 0.6);
 
+/// What a build hands back: the chains, their drawing, the worker's seconds.
+type Built = (SceneChains, Drawing, f64);
+
 /// One row of the outliner: a node at its depth in the scene's tree.
 struct OutlineRow {
     node: usize,
@@ -54,7 +57,11 @@ pub struct AssetState {
     drawing: Drawing,
     /// The last build's chains (what Export scene… writes).
     chains: Option<Arc<SceneChains>>,
-    job: Option<Job<Result<(SceneChains, Drawing), ChainError>>>,
+    /// The build on its worker: the chains, their drawing, and the
+    /// worker's own seconds (what the log reports).
+    job: Option<Job<Result<Built, ChainError>>>,
+    /// Seconds the last build took on its worker.
+    pub last_build_seconds: Option<f64>,
     note: Option<String>,
     /// Reused each frame the asset moves.
     colors: Vec<Vec3>,
@@ -79,6 +86,7 @@ impl AssetState {
             drawing,
             chains: None,
             job: None,
+            last_build_seconds: None,
             note: None,
             colors: Vec::new(),
             view: None,
@@ -112,6 +120,12 @@ impl AssetState {
         self.job.is_some()
     }
 
+    /// How long the running build has run (the studio polls long builds
+    /// less often).
+    pub fn building_for(&self) -> Option<std::time::Duration> {
+        self.job.as_ref().map(Job::elapsed)
+    }
+
     /// Whether it changes by itself (playing), so frames keep coming.
     pub fn is_moving(&self) -> bool {
         self.show && self.playing && !self.asset.rig.animations.is_empty()
@@ -124,13 +138,14 @@ impl AssetState {
         repair.weld = recipe.weld();
         let recipe = recipe.clone();
         let spawned = Job::spawn("asset chains", "every mesh".into(), ctx, move |progress| {
+            let start = std::time::Instant::now();
             progress.stage("building each mesh's chain");
             let built = lodstudio_core::scene::build(&asset, &recipe, &excluded, &repair, progress);
             progress.check()?;
             progress.stage("carrying skins to the LODs");
             Ok(built.map(|chains| {
                 let drawing = Drawing::new(&asset, Some(&chains));
-                (chains, drawing)
+                (chains, drawing, start.elapsed().as_secs_f64())
             }))
         });
         match spawned {
@@ -151,9 +166,10 @@ impl AssetState {
                 "the build stopped (internal error)".into(),
             )),
         };
-        let seconds = self.job.take().map_or(0.0, |j| j.elapsed().as_secs_f32());
+        self.job = None;
         match outcome {
-            Ok((chains, drawing)) => {
+            Ok((chains, drawing, seconds)) => {
+                self.last_build_seconds = Some(seconds);
                 let skipped: usize = chains.skipped.iter().map(Vec::len).sum();
                 self.note = (skipped > 0).then(|| {
                     let first = (self.asset.meshes.iter().zip(&chains.skipped))

@@ -352,14 +352,13 @@ impl StudioApp {
         let quick = self.job.is_some()
             || self.picker.is_some()
             || self.export.is_some()
-            || self.is_measuring_difference()
-            || self
-                .asset
-                .as_ref()
-                .is_some_and(asset::AssetState::is_building);
+            || self.is_measuring_difference();
         let builds = [
             self.build.as_ref().map(Job::elapsed),
             self.chain.building_for(),
+            self.asset
+                .as_ref()
+                .and_then(asset::AssetState::building_for),
         ];
         let long = builds.iter().flatten().all(|t| *t > LONG_BUILD);
         match builds.iter().flatten().next() {
