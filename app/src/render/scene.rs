@@ -779,6 +779,7 @@ mod tests {
             normals: None,
             colors: None,
             uvs: Some((0..6).map(|w| Vec2::splat(w as f32 / 10.0)).collect()),
+            payload: None,
         });
         mesh.parts = Some(vec![0, 0]);
         mesh.materials = Some(Materials::single(textured.clone()));

@@ -5,7 +5,7 @@
 
 use glam::{Vec2, Vec3};
 
-use super::{Materials, TriMesh, Wedges};
+use super::{Materials, Payload, TriMesh, Wedges};
 
 /// A mesh's arrays, borrowed. `parts` and wedge corners have one entry per
 /// triangle of `triangles`.
@@ -19,6 +19,7 @@ pub struct MeshArrays<'a> {
     pub parts: Option<&'a [u32]>,
     pub materials: Option<&'a Materials>,
     pub wedges: Option<&'a Wedges>,
+    pub payload: Option<&'a Payload>,
 }
 
 impl TriMesh {
@@ -32,6 +33,7 @@ impl TriMesh {
             parts: self.parts.as_deref(),
             materials: self.materials.as_ref(),
             wedges: self.wedges.as_ref(),
+            payload: self.payload.as_ref(),
         }
     }
 }
@@ -60,6 +62,9 @@ impl MeshArrays<'_> {
         out.normals = self.normals.map(|a| pick(a, &order));
         out.colors = self.colors.map(|a| pick(a, &order));
         out.uvs = self.uvs.map(|a| pick(a, &order));
+        out.payload = self
+            .payload
+            .map(|p| p.pick(order.iter().map(|&v| v as usize)));
         if let Some(p) = self.parts {
             let parts: Vec<u32> = kept.iter().map(|t| p[*t as usize]).collect();
             if parts.iter().any(|p| *p != 0) {

@@ -5,6 +5,7 @@ pub mod adjacency;
 pub mod gather;
 pub mod material;
 pub mod normals;
+pub mod payload;
 pub mod repair;
 pub mod topology;
 pub mod wedges;
@@ -14,6 +15,7 @@ use glam::{Vec2, Vec3};
 pub use adjacency::Adjacency;
 pub use gather::MeshArrays;
 pub use material::{AlphaMode, Image, Material, Materials, VertexAttributes};
+pub use payload::Payload;
 pub use repair::{RepairOptions, RepairReport, Weld};
 pub use topology::{ComponentTopology, Topology};
 pub use wedges::Wedges;
@@ -168,6 +170,9 @@ pub struct TriMesh {
     /// Each corner's own attributes where welded vertices' corners differ
     /// (UV and normal seams, parts' colours); `None`: the per-vertex ones hold.
     pub wedges: Option<Wedges>,
+    /// What the vertices carry for their asset (skin, morph deltas), per
+    /// vertex; per wedge in `wedges` where those exist.
+    pub payload: Option<Payload>,
 }
 
 impl TriMesh {
@@ -193,6 +198,9 @@ impl TriMesh {
         }
         if let Some(w) = &self.wedges {
             w.check(nt, nv)?;
+        }
+        if let Some(p) = &self.payload {
+            p.check("payload", nv)?;
         }
         Ok(())
     }
@@ -300,6 +308,11 @@ impl TriMesh {
             other.positions.len(),
             Vec2::ZERO,
         );
+        self.payload = match (&self.payload, &other.payload) {
+            (Some(a), Some(b)) => a.joined(b),
+            (None, Some(b)) if n_self_v == 0 => Some(b.clone()),
+            _ => None,
+        };
         if self.materials.is_some() || other.materials.is_some() {
             let mut m = self.materials.take().unwrap_or_else(|| {
                 let mut m = Materials::default();
@@ -350,10 +363,9 @@ impl TriMesh {
             wedges: self.wedges.as_ref().map(|w| Wedges {
                 corners: keep.iter().map(|&t| w.corners[t as usize]).collect(),
                 vertex: w.vertex.iter().map(|v| remap[*v as usize]).collect(),
-                normals: w.normals.clone(),
-                colors: w.colors.clone(),
-                uvs: w.uvs.clone(),
+                ..w.clone()
             }),
+            payload: self.payload.as_ref().map(|p| p.pick(order.iter().copied())),
         }
     }
 

@@ -54,6 +54,9 @@ impl TriMesh {
                 if let Some(u) = &mut self.uvs {
                     u.push(u[v]);
                 }
+                if let Some(p) = &mut self.payload {
+                    p.push_copy(v);
+                }
                 *corner = own;
             }
         }

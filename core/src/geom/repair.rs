@@ -280,6 +280,9 @@ fn drop_unused_vertices(mesh: &mut TriMesh) -> usize {
     if let Some(v) = &mut mesh.uvs {
         filter_by(v, &used);
     }
+    if let Some(p) = &mut mesh.payload {
+        p.retain(&used);
+    }
     dropped
 }
 

@@ -23,10 +23,12 @@ pub struct Wedges {
     pub normals: Option<Vec<Vec3>>,
     pub colors: Option<Vec<Vec3>>,
     pub uvs: Option<Vec<Vec2>>,
+    /// Per wedge, what it carries for the asset ([`super::Payload`]).
+    pub payload: Option<super::Payload>,
 }
 
 /// A wedge's attributes as bits, for finding equal ones.
-type Key = (u32, [u32; 3], [u32; 3], [u32; 2]);
+type Key = (u32, [u32; 3], [u32; 3], [u32; 2], Vec<u32>);
 
 fn bits<const N: usize>(v: [f32; N]) -> [u32; N] {
     // +0.0 and -0.0 are the same value.
@@ -48,7 +50,11 @@ impl Wedges {
         super::check_indices("wedge vertex", self.vertex.iter().copied(), vertices)?;
         super::check_len("wedge normals", self.normals.as_ref(), n)?;
         super::check_len("wedge colours", self.colors.as_ref(), n)?;
-        super::check_len("wedge UVs", self.uvs.as_ref(), n)
+        super::check_len("wedge UVs", self.uvs.as_ref(), n)?;
+        match &self.payload {
+            Some(p) => p.check("wedge payload", n),
+            None => Ok(()),
+        }
     }
 
     /// The wedges of `records` (one attribute set per vertex record, as read)
@@ -56,7 +62,11 @@ impl Wedges {
     /// sets of one vertex share a wedge. `None` when every vertex keeps a
     /// single set (nothing welded across a seam).
     pub fn of_welded(records: &TriMesh, remap: &[u32]) -> Option<Wedges> {
-        if records.normals.is_none() && records.colors.is_none() && records.uvs.is_none() {
+        if records.normals.is_none()
+            && records.colors.is_none()
+            && records.uvs.is_none()
+            && records.payload.is_none()
+        {
             return None;
         }
         let key = |i: usize| -> Key {
@@ -75,6 +85,7 @@ impl Wedges {
                         .map_or([0.0; 3], |c| c[i].to_array()),
                 ),
                 bits(records.uvs.as_ref().map_or([0.0; 2], |u| u[i].to_array())),
+                records.payload.as_ref().map_or(Vec::new(), |p| p.bits(i)),
             )
         };
         let mut ids: HashMap<Key, u32> = HashMap::new();
@@ -112,6 +123,10 @@ impl Wedges {
                 .uvs
                 .as_ref()
                 .map(|u| first.iter().map(|&r| u[r]).collect()),
+            payload: records
+                .payload
+                .as_ref()
+                .map(|p| p.pick(first.iter().copied())),
         })
     }
 
@@ -123,6 +138,7 @@ impl Wedges {
             normals: mesh.normals.clone(),
             colors: mesh.colors.clone(),
             uvs: mesh.uvs.clone(),
+            payload: mesh.payload.clone(),
         }
     }
 
@@ -153,6 +169,9 @@ impl Wedges {
         if let Some(u) = &mut self.uvs {
             u.push(u[f].lerp(u[t], s));
         }
+        if let Some(p) = &mut self.payload {
+            p.push_lerp(f, t, s);
+        }
         self.vertex.push(vertex);
         self.vertex.len() as u32 - 1
     }
@@ -165,6 +184,9 @@ impl Wedges {
         }
         if let Some(u) = &mut self.uvs {
             u.pop();
+        }
+        if let Some(p) = &mut self.payload {
+            p.pop();
         }
     }
 
@@ -189,19 +211,25 @@ impl Wedges {
                 .uvs
                 .as_ref()
                 .map(|u| order.iter().map(|&x| u[x as usize]).collect()),
+            payload: w
+                .payload
+                .as_ref()
+                .map(|p| p.pick(order.iter().map(|&x| x as usize))),
         }
     }
 
-    /// Whether wedges `a` and `b` show the same surface: equal UVs and
-    /// colours. Only those seams constrain collapses: a texture or colour
-    /// taken from across one is plainly wrong, while a normal is carried
-    /// softly (interpolated, or kept, then oriented on export), so a
-    /// faceted model, whose every edge is a normal seam, still simplifies.
+    /// Whether wedges `a` and `b` show the same surface: equal UVs,
+    /// colours and hard payload (skin weights, target deltas). Only those
+    /// seams constrain collapses: a texture or colour taken from across one
+    /// is plainly wrong, while a normal is carried softly (interpolated, or
+    /// kept, then oriented on export), so a faceted model, whose every edge
+    /// is a normal seam, still simplifies.
     pub fn same_surface(&self, a: u32, b: u32) -> bool {
         let (a, b) = (a as usize, b as usize);
         a == b
             || self.colors.as_ref().is_none_or(|c| c[a] == c[b])
                 && self.uvs.as_ref().is_none_or(|u| u[a] == u[b])
+                && self.payload.as_ref().is_none_or(|p| p.same_hard(a, b))
     }
 
     /// Whether wedges `a` and `b` hold the same attributes.
@@ -210,6 +238,7 @@ impl Wedges {
         self.normals.as_ref().is_none_or(|n| n[a] == n[b])
             && self.colors.as_ref().is_none_or(|c| c[a] == c[b])
             && self.uvs.as_ref().is_none_or(|u| u[a] == u[b])
+            && self.payload.as_ref().is_none_or(|p| p.same(a, b))
     }
 
     /// Appends `other` (its vertices offset by `vertex_base`); an attribute
@@ -220,6 +249,11 @@ impl Wedges {
         super::merge_attr(&mut self.normals, n_self, &other.normals, n_other, Vec3::Z);
         super::merge_attr(&mut self.colors, n_self, &other.colors, n_other, Vec3::ONE);
         super::merge_attr(&mut self.uvs, n_self, &other.uvs, n_other, Vec2::ZERO);
+        self.payload = match (&self.payload, &other.payload) {
+            (Some(a), Some(b)) => a.joined(b),
+            (None, Some(b)) if n_self == 0 => Some(b.clone()),
+            _ => None,
+        };
         self.vertex
             .extend(other.vertex.iter().map(|v| v + vertex_base));
         self.corners
@@ -349,6 +383,7 @@ impl TriMesh {
             parts: self.parts.clone(),
             materials: self.materials.clone(),
             wedges: None,
+            payload: w.payload.as_ref().map(|p| p.pick(order.iter().copied())),
         }
     }
 }
@@ -381,6 +416,32 @@ mod tests {
             Vec2::new(0.0, 0.5),
         ]);
         m
+    }
+
+    /// A payload that differs across the diagonal (a morph target that
+    /// opens the square like lips) makes a seam as UVs do: both sides keep
+    /// their own floats through welding, and unwelding gives them back.
+    #[test]
+    fn a_payload_seam_keeps_both_sides() {
+        let mut records = square_with_uv_seam();
+        records.uvs = None;
+        let mut payload = crate::geom::Payload::new(1, 1, 0);
+        payload.values = vec![0.0, 0.0, 0.0, 1.0, 1.0, 1.0];
+        records.payload = Some(payload);
+        let (m, _) = repair_mesh(records.clone(), &RepairOptions::default());
+        assert_eq!(m.positions.len(), 4);
+        let w = m.wedges.as_ref().expect("the payload seam needs wedges");
+        assert_eq!(w.len(), 6);
+        assert!(!w.same_surface(w.corners[0][0], w.corners[1][0]));
+        let back = m.unwelded();
+        let (read, written) = (records.payload.unwrap(), back.payload.unwrap());
+        for t in 0..2 {
+            for k in 0..3 {
+                let r = records.triangles[t][k] as usize;
+                let b = back.triangles[t][k] as usize;
+                assert_eq!(read.get(r), written.get(b), "triangle {t} corner {k}");
+            }
+        }
     }
 
     #[test]

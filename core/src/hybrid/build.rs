@@ -222,6 +222,7 @@ pub fn build_observed(
     mrg.colors = vertex_attribute(&col, |v| col.color(v));
     mrg.normals = vertex_attribute(&col, |v| col.normal(v));
     mrg.uvs = vertex_attribute(&col, |v| col.uv(v));
+    mrg.payload = col.arrays().payload.cloned();
     mrg.materials = col.materials().cloned();
     mrg.wedges = col.wedges().cloned();
 

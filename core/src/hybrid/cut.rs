@@ -505,6 +505,10 @@ impl HybridCut {
             .uvs
             .as_ref()
             .map(|u| order.iter().map(|&v| u[v as usize]).collect());
+        mesh.payload = mrg
+            .payload
+            .as_ref()
+            .map(|p| p.pick(order.iter().map(|&v| v as usize)));
         mesh.parts = parts.iter().any(|p| *p != 0).then_some(parts);
         mesh.materials = mrg.materials.clone();
         out.mesh = mesh;

@@ -229,6 +229,8 @@ pub struct Mrg {
     pub colors: Option<Vec<Vec3>>,
     pub normals: Option<Vec<Vec3>>,
     pub uvs: Option<Vec<Vec2>>,
+    /// What every vertex carries for its asset (`geom::payload`).
+    pub payload: Option<crate::geom::Payload>,
     /// Every triangle ever made (the collapser's ids); the first
     /// `input_triangles` are the original ones.
     pub triangles: Vec<[u32; 3]>,
@@ -499,6 +501,9 @@ impl Mrg {
         check_len("colours", self.colors.as_ref(), nv)?;
         check_len("normals", self.normals.as_ref(), nv)?;
         check_len("UVs", self.uvs.as_ref(), nv)?;
+        if let Some(p) = &self.payload {
+            p.check("payload", nv)?;
+        }
         check_indices("vertex", self.triangles.iter().flatten().copied(), nv)?;
         // No parts: every triangle is in part 0.
         if !self.parts.is_empty() {

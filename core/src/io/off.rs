@@ -298,6 +298,7 @@ pub fn read(data: &[u8], progress: &Progress) -> ParseResult<Model> {
             parts: None,
             materials: None,
             wedges: None,
+            payload: None,
         })
     })
 }

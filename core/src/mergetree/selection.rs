@@ -409,6 +409,10 @@ impl MergeTreeView {
             }),
             materials: src.materials.clone(),
             wedges,
+            payload: src
+                .payload
+                .as_ref()
+                .map(|p| p.pick(order.iter().map(|&v| v as usize))),
             triangles,
         };
         DrawSet {

@@ -8,7 +8,10 @@
 //! sides' corners show different surfaces, `geom::wedges`) are constrained the
 //! same way, and every corner keeps its own side's wedge through each
 //! collapse, so no face ever takes a UV or a colour from across a seam;
-//! normals follow their wedges softly. Each collapse kills both endpoints and
+//! normals follow their wedges softly. A vertex's payload (skin weights,
+//! morph deltas: `geom::payload`) is interpolated like its UVs, in its
+//! wedges as in the vertex, and a collapse never joins two vertices that
+//! share no joint of their skin (bone boundaries). Each collapse kills both endpoints and
 //! every triangle around them and creates a new vertex and new triangles, so a
 //! caller building a hierarchy (the hybrid MRG) gets distinct ids for every
 //! primitive. The order comes from a caller-supplied cost; by default
@@ -21,7 +24,7 @@ use glam::{Vec2, Vec3};
 use super::quadric::Quadric;
 use super::queue::CollapseQueue;
 use crate::distance::closest_point_on_triangle;
-use crate::geom::{Adjacency, Materials, MeshArrays, TriMesh, Wedges};
+use crate::geom::{Adjacency, Materials, MeshArrays, Payload, TriMesh, Wedges};
 
 /// The sliver and fold guards' range (a quality, a cosine; 0 turns either off).
 pub const GUARD_RANGE: std::ops::RangeInclusive<f32> = 0.0..=1.0;
@@ -128,6 +131,7 @@ pub struct EdgeCollapser {
     normals: Option<Vec<Vec3>>,
     colors: Option<Vec<Vec3>>,
     uvs: Option<Vec<Vec2>>,
+    payload: Option<Payload>,
     /// Parts keep their materials: collapses never join parts.
     materials: Option<Materials>,
     /// The input's wedges, with `corners` for every triangle ever made.
@@ -420,6 +424,7 @@ impl EdgeCollapser {
             materials: mesh.materials.clone(),
             wedges: mesh.wedges.clone(),
             uvs: mesh.uvs.clone(),
+            payload: mesh.payload.clone(),
             tris: mesh.triangles.clone(),
             tri_part,
             tri_alive: vec![true; nt],
@@ -703,6 +708,14 @@ impl EdgeCollapser {
     }
 
     fn topology_allows(&self, a: u32, b: u32, shared: usize) -> bool {
+        // Bone boundaries: vertices no joint moves together stay apart.
+        if self
+            .payload
+            .as_ref()
+            .is_some_and(|p| !p.share_joint(a as usize, b as usize))
+        {
+            return false;
+        }
         let mut guard = self.mark.borrow_mut();
         let (mark, stamp) = &mut *guard;
         link_condition(&self.vtris, &self.tris, mark, stamp, [a, b], shared)
@@ -881,6 +894,9 @@ impl EdgeCollapser {
         if let Some(uv) = &mut self.uvs {
             uv.push(uv[a as usize].lerp(uv[b as usize], s));
         }
+        if let Some(pl) = &mut self.payload {
+            pl.push_lerp(a as usize, b as usize, s);
+        }
         let q = Quadric::sum(&self.quadric[a as usize], &self.quadric[b as usize]);
         self.quadric.push(q);
         self.constrained
@@ -1019,6 +1035,7 @@ impl EdgeCollapser {
             parts: Some(&self.tri_part),
             materials: self.materials.as_ref(),
             wedges: self.wedges.as_ref(),
+            payload: self.payload.as_ref(),
         }
     }
 
@@ -1034,6 +1051,48 @@ mod tests {
     use super::*;
     use crate::builtins::{icosphere, torus};
     use crate::geom::Topology;
+
+    /// A torus whose two halves two joints move: with the skin as payload
+    /// no collapse joins the halves' vertices (none weighs both joints),
+    /// while the same floats read as no skin are blended across; the
+    /// payload's soft float (x) is interpolated with the position.
+    #[test]
+    fn payload_rides_each_collapse_and_bones_stay_apart() {
+        let mut mesh = torus(1.0, 0.35, 48, 24);
+        let run = |mesh: &TriMesh| {
+            let mut s = EdgeCollapser::new(mesh, CollapseOptions::default());
+            s.run(300, |_, _| true);
+            s.mesh().0
+        };
+        let mut payload = Payload::new(3, 2, 2);
+        for p in &mesh.positions {
+            let left = f32::from(u8::from(p.y >= 0.0));
+            payload.values.extend([left, 1.0 - left, p.x]);
+        }
+        mesh.payload = Some(payload.clone());
+        let out = run(&mesh);
+        let p = out.payload.as_ref().expect("carried");
+        assert_eq!(p.len(), out.positions.len());
+        assert!(out.triangles.len() <= 300);
+        for (v, pos) in out.positions.iter().enumerate() {
+            let x = p.get(v);
+            assert!(x[0] == 0.0 || x[1] == 0.0, "vertex {v} weighs both: {x:?}");
+            assert!(
+                (x[2] - pos.x).abs() < 0.35,
+                "x {} carried as {}",
+                pos.x,
+                x[2]
+            );
+        }
+        payload.weights = 0;
+        mesh.payload = Some(payload);
+        let out = run(&mesh);
+        let p = out.payload.as_ref().unwrap();
+        assert!(
+            (0..p.len()).any(|v| p.get(v)[0] > 0.0 && p.get(v)[1] > 0.0),
+            "without the guard some collapse blends the halves"
+        );
+    }
 
     #[test]
     fn collapses_keep_topology_and_report_their_triangles() {
