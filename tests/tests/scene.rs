@@ -661,6 +661,108 @@ fn the_two_bone_cylinder_keeps_its_skin_through_its_lods() {
     assert!(coarser < 300, "the coarsest LOD has {coarser} triangles");
 }
 
+/// The cylinder with each vertex's two joints split over `JOINTS_0` (joint
+/// 0) and `JOINTS_1` (joint 1): read, the eight influences are the
+/// cylinder's own, so the source LOD writes the cylinder's skin back
+/// (folded into `_0`) and poses as it does; the fold is listed in
+/// `dropped`; the collapse LODs carried their weights through the build.
+#[test]
+fn a_second_set_of_influences_is_folded_not_lost() {
+    let tmp = tempfile::tempdir().unwrap();
+    let cylinder = lodstudio_tests::two_bone_cylinder();
+    let (json, mut bin) = gltf::split_glb(&cylinder, "x.bin").unwrap();
+    let mut doc: Value = serde_json::from_slice(&json).unwrap();
+    doc["buffers"][0].as_object_mut().unwrap().remove("uri");
+    let original = scene::read(&cylinder, None).unwrap();
+    let skin = original.meshes[0].skin.as_ref().unwrap();
+    let weight_of = |v: usize, joint: u16| -> f32 {
+        (skin.joints[v].iter().zip(skin.weights[v]))
+            .filter(|(j, w)| **j == joint && *w > 0.0)
+            .map(|(_, w)| w)
+            .sum()
+    };
+    let n = skin.joints.len();
+    let mut add = |bytes: Vec<u8>, component: u32| {
+        let offset = bin.len();
+        bin.extend(bytes);
+        let views = doc["bufferViews"].as_array_mut().unwrap();
+        views.push(json!({"buffer": 0, "byteOffset": offset, "byteLength": bin.len() - offset, "target": 34962}));
+        let v = views.len() - 1;
+        let accessors = doc["accessors"].as_array_mut().unwrap();
+        accessors
+            .push(json!({"bufferView": v, "componentType": component, "count": n, "type": "VEC4"}));
+        accessors.len() - 1
+    };
+    let sets: Vec<[f32; 4]> = (0..n).map(|v| [weight_of(v, 0), 0.0, 0.0, 0.0]).collect();
+    let more: Vec<[f32; 4]> = (0..n).map(|v| [weight_of(v, 1), 0.0, 0.0, 0.0]).collect();
+    let floats = |w: &[[f32; 4]]| w.iter().flatten().flat_map(|x| x.to_le_bytes()).collect();
+    let j0 = add(vec![0u8; 8 * n], 5123);
+    let w0 = add(floats(&sets), 5126);
+    let j1 = add(
+        (0..n).flat_map(|_| [1u8, 0, 0, 0, 0, 0, 0, 0]).collect(),
+        5123,
+    );
+    let w1 = add(floats(&more), 5126);
+    let attributes = &mut doc["meshes"][0]["primitives"][0]["attributes"];
+    for (k, a) in [
+        ("JOINTS_0", j0),
+        ("WEIGHTS_0", w0),
+        ("JOINTS_1", j1),
+        ("WEIGHTS_1", w1),
+    ] {
+        attributes[k] = json!(a);
+    }
+    doc["buffers"][0]["byteLength"] = json!(bin.len());
+    let input = tmp.path().join("eight.glb");
+    std::fs::write(&input, gltf_writer::glb(&doc, bin)).unwrap();
+
+    let out = tmp.path().join("eight-out.glb");
+    let j = export(&input, "source,simplify:1%", "files", &out);
+    let dropped = j["dropped"].as_array().unwrap();
+    assert!(
+        dropped
+            .iter()
+            .any(|d| d["what"].as_str().unwrap().contains("JOINTS_1")),
+        "{dropped:?}"
+    );
+    let lods = j["meshes"][0]["lods"].as_array().unwrap();
+    for l in lods {
+        assert_eq!(l["vertex_data"], "carried", "{l}");
+    }
+    assert!(lods[0]["pose_error"]["max"].as_f64().unwrap() < 1e-5);
+    let plain = export(
+        Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("../assets/two-bone-cylinder.glb")
+            .as_path(),
+        "source,simplify:1%",
+        "files",
+        &tmp.path().join("plain.glb"),
+    );
+    assert_eq!(
+        lods[1]["pose_error"], plain["meshes"][0]["lods"][1]["pose_error"],
+        "the same skin, the same LOD, the same poses"
+    );
+    let written = read_scene(Path::new(j["outputs"][0].as_str().unwrap()));
+    let back = written.meshes[0].skin.as_ref().unwrap();
+    assert!(back.more.is_empty(), "written in one set");
+    // The source's vertices in the order written: matched by position.
+    for (v, p) in written.meshes[0].mesh.positions.iter().enumerate() {
+        let o = (original.meshes[0].mesh.positions.iter())
+            .position(|q| q == p)
+            .unwrap();
+        for joint in [0u16, 1] {
+            let w: f32 = (back.joints[v].iter().zip(back.weights[v]))
+                .filter(|(j, w)| **j == joint && *w > 0.0)
+                .map(|(_, w)| w)
+                .sum();
+            assert!(
+                (w - weight_of(o, joint)).abs() < 1e-6,
+                "vertex {v} joint {joint}"
+            );
+        }
+    }
+}
+
 /// Two meshes in one scene, each drawn by its own node.
 fn two_mesh_scene(a: &lodstudio_core::TriMesh, b: &lodstudio_core::TriMesh) -> Vec<u8> {
     let split = |m: &lodstudio_core::TriMesh| {

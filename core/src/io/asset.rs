@@ -116,8 +116,9 @@ pub enum Carried {
     Scene,
 }
 
-/// The attributes a scene's primitives are read and written with.
-const SCENE_ATTRIBUTES: [&str; 7] = [
+/// The attributes a scene's primitives are read and written with
+/// (`JOINTS_1`/`WEIGHTS_1` are read, and written folded into `_0`).
+const SCENE_ATTRIBUTES: [&str; 9] = [
     "POSITION",
     "NORMAL",
     "TANGENT",
@@ -125,6 +126,8 @@ const SCENE_ATTRIBUTES: [&str; 7] = [
     "COLOR_0",
     "JOINTS_0",
     "WEIGHTS_0",
+    "JOINTS_1",
+    "WEIGHTS_1",
 ];
 
 /// The report of a glTF's JSON `root`, whose scene `scene` (its index) is
@@ -221,6 +224,16 @@ pub fn audit_gltf(
                         if !SCENE_ATTRIBUTES.contains(&name.as_str()) {
                             drop(&format!("attribute {name}"), at());
                         }
+                    }
+                    if attributes.contains_key("JOINTS_1") {
+                        drop(
+                            "influences past four (JOINTS_1/WEIGHTS_1)",
+                            format!(
+                                "{}: all eight are read and carried; each written vertex keeps \
+                                 its four largest, renormalised, in JOINTS_0/WEIGHTS_0",
+                                at()
+                            ),
+                        );
                     }
                 }
                 let targets = prim.get("targets").and_then(Value::as_array);

@@ -108,6 +108,19 @@ pub fn largest_singular_value(m: glam::Mat3) -> f32 {
 pub struct Skinning {
     pub joints: Vec<[u16; 4]>,
     pub weights: Vec<[f32; 4]>,
+    /// Per vertex, the four more in `JOINTS_1`/`WEIGHTS_1` where the file
+    /// has them (empty otherwise): an input's influences, up to eight. A
+    /// LOD's blend keeps the four largest (`scene::carry`).
+    pub more: Vec<([u16; 4], [f32; 4])>,
+}
+
+impl Skinning {
+    /// Vertex `v`'s joints and weights, both sets.
+    pub fn influences(&self, v: usize) -> impl Iterator<Item = (u16, f32)> + '_ {
+        let more = self.more.get(v).into_iter();
+        (self.joints[v].iter().copied().zip(self.weights[v]))
+            .chain(more.flat_map(|(j, w)| j.iter().copied().zip(*w)))
+    }
 }
 
 /// One morph target of a mesh: its name and its deltas per vertex.
@@ -279,45 +292,54 @@ fn target_names(mesh: &gltf::Mesh) -> Vec<MorphTarget> {
         .collect()
 }
 
-/// Appends the primitive's `JOINTS_0`/`WEIGHTS_0` for its `n` vertices
-/// (none: joint 0 at weight 0, which a skinned client ignores); whether
-/// it had them.
+/// Appends the primitive's `JOINTS_0`/`WEIGHTS_0` (and `_1`) for its
+/// `n` vertices (none: joint 0 at weight 0, which a skinned client
+/// ignores); whether it had them.
 fn read_skin(
     prim: &gltf::Primitive,
     buffers: &[gltf::buffer::Data],
     n: usize,
     skin: &mut Skinning,
 ) -> ParseResult<bool> {
-    let reader = prim.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
-    let (j, w) = (
-        prim.get(&gltf::Semantic::Joints(0)),
-        prim.get(&gltf::Semantic::Weights(0)),
-    );
-    let had = j.is_some() && w.is_some();
-    let mut joints: Vec<[u16; 4]> = Vec::new();
-    let mut weights: Vec<[f32; 4]> = Vec::new();
-    if let (Some(ja), Some(wa)) = (j, w) {
+    let before = skin.joints.len();
+    type Set = (Vec<[u16; 4]>, Vec<[f32; 4]>);
+    let set = |k: u32| -> ParseResult<Option<Set>> {
+        let (Some(ja), Some(wa)) = (
+            prim.get(&gltf::Semantic::Joints(k)),
+            prim.get(&gltf::Semantic::Weights(k)),
+        ) else {
+            return Ok(None);
+        };
         check_accessor(&ja, buffers)?;
         check_accessor(&wa, buffers)?;
-        joints = reader
-            .read_joints(0)
+        let reader = prim.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
+        let joints: Vec<[u16; 4]> = reader
+            .read_joints(k)
             .map(|j| j.into_u16().collect())
             .unwrap_or_default();
-        weights = reader
-            .read_weights(0)
+        let weights: Vec<[f32; 4]> = reader
+            .read_weights(k)
             .map(|w| w.into_f32().collect())
             .unwrap_or_default();
-    }
-    if had && (joints.len() != n || weights.len() != n) {
-        return Err(ParseError::item(
-            format!("mesh primitive {}", prim.index()),
-            format!("expected JOINTS_0 and WEIGHTS_0 for its {n} vertices"),
-        ));
-    }
-    joints.resize(n, [0; 4]);
-    weights.resize(n, [0.0; 4]);
+        if joints.len() != n || weights.len() != n {
+            return Err(ParseError::item(
+                format!("mesh primitive {}", prim.index()),
+                format!("expected JOINTS_{k} and WEIGHTS_{k} for its {n} vertices"),
+            ));
+        }
+        Ok(Some((joints, weights)))
+    };
+    let first = set(0)?;
+    let had = first.is_some();
+    let (joints, weights) = first.unwrap_or_else(|| (vec![[0; 4]; n], vec![[0.0; 4]; n]));
     skin.joints.extend(joints);
     skin.weights.extend(weights);
+    if let Some((joints, weights)) = set(1)?.filter(|_| had) {
+        skin.more.resize(before, ([0; 4], [0.0; 4]));
+        skin.more.extend(joints.into_iter().zip(weights));
+    } else if !skin.more.is_empty() {
+        skin.more.resize(before + n, ([0; 4], [0.0; 4]));
+    }
     Ok(had)
 }
 

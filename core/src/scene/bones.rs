@@ -24,10 +24,10 @@ pub fn split_by_bone(
         let mut sums: Vec<(u16, f32)> = Vec::with_capacity(12);
         for &v in tri {
             let v = v as usize;
-            for (j, w) in skin.joints[v].iter().zip(skin.weights[v]) {
-                match sums.iter_mut().find(|(have, _)| have == j) {
+            for (j, w) in skin.influences(v) {
+                match sums.iter_mut().find(|(have, _)| *have == j) {
                     Some(s) => s.1 += w,
-                    None => sums.push((*j, w)),
+                    None => sums.push((j, w)),
                 }
             }
         }
@@ -78,6 +78,7 @@ mod tests {
                 [1.0, 0.0, 0.0, 0.0],
                 [1.0, 0.0, 0.0, 0.0],
             ],
+            ..Skinning::default()
         };
         let (split, materials) = split_by_bone(&mesh, &skin, &[Some(3)]);
         // Triangle 0: joint 0 has 1.6, joint 1 1.4; triangle 1: joint 1 2.4.

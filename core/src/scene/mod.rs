@@ -1,7 +1,8 @@
 //! A scene's LOD chains (issue 49, DESIGN "Assets, not meshes"): each mesh
 //! the scene draws gets the recipe's chain, built once in the mesh's own
 //! space however many nodes draw it; the LODs go back into the scene in a
-//! [`Layout`], carrying skins and morph targets ([`transfer`]).
+//! [`Layout`], carrying skins and morph targets through each collapse
+//! ([`carry`]).
 //!
 //! Bounds in world space: a node draws its mesh through its world matrix
 //! M, which stretches no length by more than σ_max(M), its largest
@@ -11,6 +12,7 @@
 //! sphere grows by the same σ_max (`scene_writer::COVERAGE_NOTE`).
 
 pub mod bones;
+pub mod carry;
 pub mod drawing;
 pub mod pose;
 pub mod targets;
@@ -68,6 +70,12 @@ pub struct LodMeasures {
     /// Textured meshes: how far the LOD's UVs moved (`distance::uv`).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub uv_error: Option<crate::distance::UvError>,
+    /// Meshes with a skin, morph targets or tangents: how the LOD's vertices
+    /// got them, `carried` through each collapse of its build or
+    /// `transferred` from their closest points (a method that made a new
+    /// surface, [`transfer`]).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub vertex_data: Option<&'static str>,
     /// The LOD's surface area (what a scene's UV errors are weighted by).
     #[serde(skip)]
     pub area: f64,
@@ -116,10 +124,11 @@ pub fn build(
             Some(true) => source_only.clone(),
             _ => recipe.clone(),
         };
-        let (mesh, parts) = match &m.skin {
+        let (mut mesh, parts) = match &m.skin {
             Some(skin) => bones::split_by_bone(&m.mesh, skin, &m.materials),
             None => (m.mesh.clone(), m.materials.clone()),
         };
+        mesh.payload = carry::Columns::of(m).payload(m);
         let (mesh, _) = repair_mesh(mesh, repair);
         if mesh.triangles.is_empty() {
             return Err(ChainError::BadInput(format!(
@@ -292,7 +301,16 @@ impl SceneChains {
                                 }
                             })
                             .collect();
+                        let carries = m.skin.is_some() || m.tangents.is_some();
+                        let vertex_data =
+                            (carries || !m.targets.is_empty()).then(|| {
+                                match transfer.carried(lod) {
+                                    true => "carried",
+                                    false => "transferred",
+                                }
+                            });
                         LodMeasures {
+                            vertex_data,
                             pose_error,
                             target_errors,
                             uv_error: crate::distance::uv_error(&m.mesh, lod),

@@ -1,40 +1,56 @@
 //! What an original mesh's vertices carry besides the surface (skin joints
-//! and weights, morph target deltas), carried onto any LOD of it: each LOD
-//! vertex takes the values at its closest point on the original, blended
-//! by that point's barycentric coordinates in its triangle. Every method's
-//! LOD lies within its certified bound ε of the original, so that point is
-//! at most ε away; weights blend joint by joint and keep the four largest,
+//! and weights, morph target deltas, tangents), onto any LOD of it: the
+//! payload the build carried through each collapse ([`super::carry`]) where
+//! the method kept it, else transferred. A transferred LOD vertex takes the
+//! values at its closest point on the original, blended by that point's
+//! barycentric coordinates in its triangle: every method's LOD lies within
+//! its certified bound ε of the original, so that point is at most ε away
+//! (the voxel and AMG methods make new surfaces, whose vertices carried
+//! nothing). Weights blend joint by joint and keep the four largest,
 //! renormalised to sum to 1 (glTF 2.0 §3.7.3.3).
+
+use std::sync::OnceLock;
 
 use glam::Vec3;
 
+use super::carry::Columns;
 use crate::distance::MeshDistance;
 use crate::geom::TriMesh;
 use crate::io::scene::{MorphTarget, SceneMesh, Skinning, VertexExtras};
 
-/// Carries `source`'s vertex extras onto LODs of it.
+/// Brings `source`'s vertex extras onto LODs of it.
 pub struct Transfer<'a> {
     source: &'a SceneMesh,
-    /// `None` when there is nothing to carry.
-    distance: Option<MeshDistance<'a>>,
+    columns: Columns,
+    /// Built the first time a LOD carried no payload.
+    distance: OnceLock<MeshDistance<'a>>,
 }
 
 impl<'a> Transfer<'a> {
     pub fn new(source: &'a SceneMesh) -> Self {
-        let carries =
-            source.skin.is_some() || source.tangents.is_some() || !source.targets.is_empty();
         Transfer {
             source,
-            distance: carries.then(|| MeshDistance::new(&source.mesh)),
+            columns: Columns::of(source),
+            distance: OnceLock::new(),
         }
     }
 
-    /// The extras of `lod`'s vertices.
+    /// Whether `lod` brought its extras through its build (else they are
+    /// transferred by closest point).
+    pub fn carried(&self, lod: &TriMesh) -> bool {
+        self.columns.extras(lod).is_some()
+    }
+
+    /// The extras of `lod`'s vertices: carried, else transferred.
     pub fn extras(&self, lod: &TriMesh) -> VertexExtras {
-        let Some(distance) = &self.distance else {
+        if self.columns.is_empty() {
             return VertexExtras::default();
-        };
+        }
+        if let Some(carried) = self.columns.extras(lod) {
+            return carried;
+        }
         let src = &self.source;
+        let distance = self.distance.get_or_init(|| MeshDistance::new(&src.mesh));
         let corners: Vec<([usize; 3], [f32; 3])> = lod
             .positions
             .iter()
@@ -50,6 +66,7 @@ impl<'a> Transfer<'a> {
         let skin = src.skin.as_ref().map(|_| Skinning {
             joints: Vec::with_capacity(corners.len()),
             weights: Vec::with_capacity(corners.len()),
+            ..Skinning::default()
         });
         // Tangents blend like normals: renormalised, the handedness of the
         // corner that weighs most.
@@ -120,17 +137,24 @@ pub fn barycentric(p: Vec3, a: Vec3, b: Vec3, c: Vec3) -> [f32; 3] {
 fn blend_weights(skin: &Skinning, tri: &[usize; 3], bary: &[f32; 3]) -> ([u16; 4], [f32; 4]) {
     let mut sum: Vec<(u16, f32)> = Vec::with_capacity(12);
     for k in 0..3 {
-        for (j, w) in skin.joints[tri[k]].iter().zip(skin.weights[tri[k]]) {
+        for (j, w) in skin.influences(tri[k]) {
             let w = w * bary[k];
             if w <= 0.0 {
                 continue;
             }
-            match sum.iter_mut().find(|(have, _)| have == j) {
+            match sum.iter_mut().find(|(have, _)| *have == j) {
                 Some(slot) => slot.1 += w,
-                None => sum.push((*j, w)),
+                None => sum.push((j, w)),
             }
         }
     }
+    four_largest(&mut sum)
+}
+
+/// The four largest of `sum`'s joint weights, renormalised to sum to 1
+/// (none above 0: joint 0 at full weight).
+pub(super) fn four_largest(sum: &mut Vec<(u16, f32)>) -> ([u16; 4], [f32; 4]) {
+    sum.retain(|(_, w)| *w > 0.0);
     // Largest first; equal weights by joint, so the result is deterministic.
     sum.sort_by(|a, b| b.1.total_cmp(&a.1).then(a.0.cmp(&b.0)));
     sum.truncate(4);
@@ -171,6 +195,7 @@ mod tests {
                 [0.5, 0.5, 0.0, 0.0],
                 [1.0, 0.0, 0.0, 0.0],
             ],
+            ..Skinning::default()
         };
         let (j, w) = blend_weights(&skin, &[0, 1, 2], &[0.5, 0.25, 0.25]);
         // Joint 0: 0.2; 1: 0.15; 2: 0.1; 3: 0.05; 4: 0.125; 5: 0.125; 6: 0.25.
@@ -180,6 +205,7 @@ mod tests {
         let none = Skinning {
             joints: vec![[0; 4]; 3],
             weights: vec![[0.0; 4]; 3],
+            ..Skinning::default()
         };
         assert_eq!(
             blend_weights(&none, &[0, 1, 2], &[1.0, 0.0, 0.0]).1,
