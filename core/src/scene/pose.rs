@@ -154,7 +154,7 @@ pub fn skin_into(
         .collect();
     for (i, (&p, o)) in positions.iter().zip(out.iter_mut()).enumerate() {
         let mut m = Mat4::ZERO;
-        for (&j, w) in skin.joints[i].iter().zip(skin.weights[i]) {
+        for (j, w) in skin.influences(i) {
             if w != 0.0 {
                 m += joint.get(j as usize).copied().unwrap_or(Mat4::IDENTITY) * w;
             }
@@ -224,7 +224,9 @@ mod tests {
                     values: vec![Quat::IDENTITY.to_array(), quarter.to_array()],
                     step: false,
                 }],
+                morphs: Vec::new(),
             }],
+            ..Rig::default()
         };
         let poses = sample_poses(&rig, 3);
         assert_eq!(poses.len(), 3);
@@ -232,6 +234,7 @@ mod tests {
         let skin = Skinning {
             joints: vec![[0; 4]; 3],
             weights: vec![[1.0, 0.0, 0.0, 0.0]; 3],
+            ..Skinning::default()
         };
         let end = skinned(&mesh, &skin, &rig, 0, &poses[2]);
         assert!(
