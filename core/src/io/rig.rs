@@ -203,7 +203,8 @@ pub fn read(document: &gltf::Document, buffers: &[gltf::buffer::Data]) -> ParseR
                     };
                     let cubic = sampler.interpolation() == I::CubicSpline;
                     let per_key = values.len() / times.len().max(1) / if cubic { 3 } else { 1 };
-                    if times.is_empty() || per_key == 0 || !values.len().is_multiple_of(times.len()) {
+                    if times.is_empty() || per_key == 0 || !values.len().is_multiple_of(times.len())
+                    {
                         return Err(bad(format!(
                             "expected the same weights per keyframe, found {} keyframes \
                              and {} weights",
