@@ -130,6 +130,19 @@ impl<'a> Attribution<'a> {
         }
     }
 
+    /// The pieces of the `removed` triangles, copied: for a collapse that
+    /// may not happen (module `limit`); [`Attribution::give`] after
+    /// [`Attribution::take`] applies it if it does.
+    pub fn peek(&self, removed: &[u32]) -> Handover {
+        Handover {
+            region: removed
+                .iter()
+                .flat_map(|t| self.owned[*t as usize].iter().copied())
+                .collect(),
+            parts: Vec::new(),
+        }
+    }
+
     /// Decides who gets the pieces of `handover` among new triangles with
     /// corners `made`, cutting loose ones (module doc) no finer than the
     /// tolerance of the corners' exact distances (relative `rel_tol`,
@@ -213,6 +226,14 @@ impl<'a> Attribution<'a> {
 pub(crate) struct Handover {
     region: Vec<Piece>,
     parts: Vec<(usize, f32, Piece)>,
+}
+
+impl Handover {
+    /// The largest distance of a piece to the new triangle it goes to (0
+    /// before [`Attribution::hand_over`]).
+    pub fn forward(&self) -> f32 {
+        self.parts.iter().map(|p| p.1).fold(0.0, f32::max)
+    }
 }
 
 /// The wall between new triangles `p` and `q` if they share an edge: the

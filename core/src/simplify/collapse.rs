@@ -84,6 +84,14 @@ pub struct Candidate {
 /// does so when a point replacement takes precedence, §5).
 pub type StarCostFn = dyn Fn(&Candidate, &EdgeCollapser) -> f64 + Send + Sync;
 
+/// Asked before each collapse whether it may happen, and told of each one
+/// that did: an error limit (module `limit`) refuses a collapse whose
+/// certified bound would pass it, and the collapse goes on with the others.
+pub trait Veto {
+    fn allows(&mut self, cand: &Candidate, col: &EdgeCollapser) -> bool;
+    fn collapsed(&mut self, col: &EdgeCollapser, c: &Collapse);
+}
+
 /// One performed collapse.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Collapse {
@@ -148,6 +156,9 @@ pub struct EdgeCollapser {
     queue: CollapseQueue<Entry>,
     deferred: Vec<(u32, u32)>,
     collapsed_since_retry: bool,
+    /// Edges a [`Veto`] refused: out of the queue until
+    /// [`EdgeCollapser::readmit_vetoed`] (a raised limit).
+    vetoed: Vec<(u32, u32)>,
     /// Per-vertex stamps for neighbourhood tests without allocation.
     mark: std::cell::RefCell<(Vec<u32>, u32)>,
     alive_triangles: usize,
@@ -436,6 +447,7 @@ impl EdgeCollapser {
             queue: CollapseQueue::with_capacity(adj.edges.len()),
             deferred: Vec::new(),
             collapsed_since_retry: false,
+            vetoed: Vec::new(),
             mark: std::cell::RefCell::new((vec![0; nv], 0)),
             alive_triangles: nt,
             collapses: 0,
@@ -803,6 +815,12 @@ impl EdgeCollapser {
 
     /// Performs the next legal collapse in cost order; `None` when none is left.
     pub fn step(&mut self) -> Option<Collapse> {
+        self.step_vetted(None)
+    }
+
+    /// [`EdgeCollapser::step`] with only the collapses `veto` allows (and
+    /// tells of): a refused edge leaves the queue, the next one is tried.
+    pub fn step_vetted(&mut self, mut veto: Option<&mut (dyn Veto + '_)>) -> Option<Collapse> {
         loop {
             let alive = &self.v_alive;
             let Some(e) = self
@@ -845,7 +863,17 @@ impl EdgeCollapser {
                         self.queue.push(Entry { cost, ..e });
                         continue;
                     }
-                    return Some(self.collapse(&cand, cost));
+                    if let Some(v) = veto.as_deref_mut()
+                        && !v.allows(&cand, self)
+                    {
+                        self.vetoed.push((e.a, e.b));
+                        continue;
+                    }
+                    let c = self.collapse(&cand, cost);
+                    if let Some(v) = veto {
+                        v.collapsed(self, &c);
+                    }
+                    return Some(c);
                 }
                 None => self.deferred.push((e.a, e.b)),
             }
@@ -854,11 +882,33 @@ impl EdgeCollapser {
 
     /// Collapses until at most `target` triangles remain or nothing can collapse;
     /// `on_step` sees every collapse and may stop the run by returning false.
-    pub fn run(&mut self, target: usize, mut on_step: impl FnMut(&Self, &Collapse) -> bool) {
+    pub fn run(&mut self, target: usize, on_step: impl FnMut(&Self, &Collapse) -> bool) {
+        self.run_vetted(target, None, on_step);
+    }
+
+    /// [`EdgeCollapser::run`] with only the collapses `veto` allows.
+    pub fn run_vetted(
+        &mut self,
+        target: usize,
+        mut veto: Option<&mut (dyn Veto + '_)>,
+        mut on_step: impl FnMut(&Self, &Collapse) -> bool,
+    ) {
         while self.alive_triangles > target {
-            let Some(c) = self.step() else { break };
+            let Some(c) = self.step_vetted(veto.as_deref_mut()) else {
+                break;
+            };
             if !on_step(self, &c) {
                 break;
+            }
+        }
+    }
+
+    /// Queues the edges a veto refused again (their veto has changed: a
+    /// raised limit), each still alive.
+    pub fn readmit_vetoed(&mut self) {
+        for (a, b) in std::mem::take(&mut self.vetoed) {
+            if self.v_alive[a as usize] && self.v_alive[b as usize] {
+                self.push(a, b);
             }
         }
     }

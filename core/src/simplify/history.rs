@@ -2,7 +2,9 @@
 //! mesh after any number of its collapses is at hand, so an error search's
 //! probes and an LOD chain's rows (issue 26) go back and forth along it
 //! without cloning the collapser (the dragon's weighs 150 MB: its arrays
-//! hold every vertex and triangle ever made) or collapsing again.
+//! hold every vertex and triangle ever made) or collapsing again. Under an
+//! error limit (module `limit`), raised row by row, the run skips what is
+//! over the limit and its states are the phases' prefixes.
 //!
 //! Collapses never edit a triangle: they retire some and make new ones under
 //! new ids, and never touch a vertex's position or attributes (a collapse
@@ -11,12 +13,14 @@
 
 use rayon::prelude::*;
 
-use super::collapse::EdgeCollapser;
+use super::collapse::{EdgeCollapser, Veto};
+use super::limit::Limit;
 use crate::geom::TriMesh;
 use crate::progress::{Cancelled, Progress};
 
-pub(super) struct History {
+pub(super) struct History<'a> {
     collapser: EdgeCollapser,
+    limit: Option<Limit<'a>>,
     /// Per triangle id: the state it appears in (0 for the input's).
     born: Vec<u32>,
     /// Per triangle id: the state it is gone in (`u32::MAX` while alive).
@@ -25,9 +29,10 @@ pub(super) struct History {
     counts: Vec<usize>,
 }
 
-impl History {
-    /// `collapser` has made no collapse yet (state 0 is its start).
-    pub fn new(collapser: EdgeCollapser) -> Self {
+impl<'a> History<'a> {
+    /// `collapser` has made no collapse yet (state 0 is its start); it
+    /// collapses only within `limit`, where one is given ([`History::raise`]).
+    pub fn new(collapser: EdgeCollapser, limit: Option<Limit<'a>>) -> Self {
         debug_assert_eq!(collapser.collapses(), 0);
         let ever = collapser.arrays().triangles.len();
         // Triangles the collapser dropped before any collapse are dead from the start.
@@ -40,6 +45,23 @@ impl History {
             died,
             counts: vec![collapser.triangle_count()],
             collapser,
+            limit,
+        }
+    }
+
+    /// Raises the error limit to `max_error`: the collapses it refused
+    /// before are tried again as the run goes on.
+    pub fn raise(&mut self, max_error: f32) {
+        if let Some(limit) = &mut self.limit {
+            limit.raise(max_error);
+            self.collapser.readmit_vetoed();
+        }
+    }
+
+    /// Lifts the error limit: the run goes on as an unlimited one would.
+    pub fn lift(&mut self) {
+        if self.limit.take().is_some() {
+            self.collapser.readmit_vetoed();
         }
     }
 
@@ -58,7 +80,8 @@ impl History {
         let from = self.collapser.triangle_count();
         let (born, died, counts) = (&mut self.born, &mut self.died, &mut self.counts);
         let mut cancelled = false;
-        self.collapser.run(target, |s, c| {
+        let veto = self.limit.as_mut().map(|l| l as &mut dyn Veto);
+        self.collapser.run_vetted(target, veto, |s, c| {
             let k = s.collapses() as u32;
             for &t in &c.removed {
                 died[t as usize] = k;
@@ -114,7 +137,7 @@ mod tests {
     fn a_past_state_is_a_fresh_run_to_it() {
         let mesh = crate::builtins::torus(1.0, 0.3, 48, 24);
         let fresh = || EdgeCollapser::new(&mesh, CollapseOptions::default());
-        let mut history = History::new(fresh());
+        let mut history = History::new(fresh(), None);
         let p = Progress::new();
         let n = mesh.triangles.len();
         let deepest = history.reach(n / 16, &p).unwrap();
