@@ -138,15 +138,14 @@ pub fn simplify(
 }
 
 /// Simplifies `mesh` to every target of an LOD chain in one progressive
-/// collapse, run forward once with every state at hand (`history`):
-/// collapses are deterministic, so each count target equals a fresh run to
-/// its count, and the error targets (smallest first) each search on from the
-/// state the previous one reached, each probe certified from the nearest
-/// certified state's trace (`recertify`); one original's search structures
-/// certify them all. An error target's result meets its error and is as
-/// deterministic as the rest, but its count may differ by the search's 2 %
-/// from a lone `simplify` to that error (its probes start elsewhere).
-/// Results come in the order of `targets`.
+/// collapse, run forward once with every state at hand (`history`). The
+/// error targets, smallest first, are phases of it under a rising limit
+/// (module `limit`): each row is where nothing more collapses within its
+/// error, certified from the previous row's trace (`recertify`); a coarser
+/// row may keep fewer triangles than a lone `simplify` to its error (its
+/// phase starts where a finer row ended). A count target is the state where the run passes its count: with no error
+/// target, a fresh run to its count. One original's search structures
+/// certify them all. Results come in the order of `targets`.
 pub fn simplify_chain(
     mesh: &TriMesh,
     targets: &[Target],
