@@ -635,3 +635,18 @@ fn recipes_replay_mixed_chains_byte_for_byte() {
         "nothing lost"
     );
 }
+
+/// A ratio row the torus cannot reach (its handle stays) says so in the
+/// JSON, with why; a row that is met says nothing.
+#[test]
+fn an_unmet_budget_is_reported_with_why() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("far.glb");
+    let report = export_json("builtin:torus", "0.25,0.001", &out, &[]);
+    let lods = report["lods"].as_array().unwrap();
+    assert!(lods[0].get("unmet").is_none(), "{}", lods[0]);
+    let unmet = &lods[1]["unmet"];
+    assert_eq!(unmet["asked"], 4, "{}", lods[1]);
+    assert_eq!(unmet["reached"], lods[1]["triangles"]);
+    assert!(unmet["why"].as_str().unwrap().starts_with("topology kept"));
+}

@@ -319,7 +319,7 @@ fn report(
                 .iter()
                 .map(|&r| chain.recipe.rows[r].tolerance.to_string())
                 .collect();
-            serde_json::json!({
+            let mut j = serde_json::json!({
                 "tolerance": tolerances.join(","),
                 "rows": l.labels,
                 "method": l.method.tag(),
@@ -335,7 +335,12 @@ fn report(
                 "build_seconds": l.build_seconds,
                 // Geometric bounds say nothing of textures: how far the UVs moved.
                 "uv_error": input.and_then(|m| lodstudio_core::distance::uv_error(m, &l.set.mesh)),
-            })
+            });
+            // A budget the row could not reach, and why.
+            if let Some(unmet) = &l.set.unmet {
+                j["unmet"] = serde_json::json!(unmet);
+            }
+            j
         })
         .collect();
     let first = chain.recipe.rows[0].method;

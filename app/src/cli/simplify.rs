@@ -125,9 +125,7 @@ pub fn run(args: SimplifyArgs) -> Result<(), CliError> {
     let diag = mesh.bounds().diagonal();
     let bound = result.error_bound();
     if args.report.json {
-        println!(
-            "{}",
-            serde_json::json!({
+        let mut report = serde_json::json!({
                 "input_triangles": mesh.triangles.len(),
                 "output_triangles": result.mesh.triangles.len(),
                 "error_bound": bound,
@@ -138,8 +136,12 @@ pub fn run(args: SimplifyArgs) -> Result<(), CliError> {
                 "collapses": result.collapses,
                 "bbox_diagonal": diag,
                 "output": args.output.display().to_string(),
-            })
-        );
+        });
+        // A count the collapse could not reach, and why.
+        if let Some(unmet) = &result.unmet {
+            report["unmet"] = serde_json::json!(unmet);
+        }
+        println!("{report}");
     } else {
         println!(
             "{} -> {}: {} -> {} triangles, certified two-sided Hausdorff bound {:.6} ({:.4}% of the diagonal), {:.2} s",
@@ -151,6 +153,12 @@ pub fn run(args: SimplifyArgs) -> Result<(), CliError> {
             100.0 * bound / diag,
             seconds
         );
+        if let Some(u) = &result.unmet {
+            eprintln!(
+                "note: asked for {} triangles, reached {}: {}",
+                u.asked, u.reached, u.why
+            );
+        }
     }
     Ok(())
 }

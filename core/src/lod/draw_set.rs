@@ -107,6 +107,9 @@ pub struct DrawSet {
     /// The cut's error bound in object space (max over its primitives).
     pub error_bound: f32,
     pub error_bound_kind: BoundKind,
+    /// A triangle budget the method could not reach, and why.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub unmet: Option<crate::simplify::Unmet>,
 }
 
 impl DrawSet {

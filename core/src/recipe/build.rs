@@ -393,6 +393,7 @@ fn simplify_rows(
         .map(|r| DrawSet {
             error_bound: r.error_bound(),
             mesh: r.mesh,
+            unmet: r.unmet,
             ..Default::default()
         })
         .collect())

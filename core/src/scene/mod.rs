@@ -370,6 +370,9 @@ impl SceneChains {
                         if !target_bounds.is_empty() {
                             j["target_bounds"] = json!(target_bounds);
                         }
+                        if let Some(unmet) = &l.set.unmet {
+                            j["unmet"] = json!(unmet);
+                        }
                         if let (Value::Object(o), Ok(Value::Object(more))) =
                             (&mut j, serde_json::to_value(measured))
                         {

@@ -84,6 +84,48 @@ pub struct Candidate {
 /// does so when a point replacement takes precedence, §5).
 pub type StarCostFn = dyn Fn(&Candidate, &EdgeCollapser) -> f64 + Send + Sync;
 
+/// The rule that keeps an edge from collapsing: what would have to give for
+/// a budget the collapse cannot reach (issue 48, item 5).
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, serde::Serialize, serde::Deserialize,
+)]
+#[serde(rename_all = "snake_case")]
+pub enum Blocker {
+    /// Borders and part, UV or colour seams keep their place (every border
+    /// with `lock_borders`).
+    Seams,
+    /// The link condition: the collapse would pinch the surface, close a
+    /// handle or make a piece vanish.
+    Topology,
+    /// No joint moves both ends (a skin's bone boundary).
+    Bones,
+    /// Every placement folds a triangle past the fold guard or makes a
+    /// sliver below the sliver guard.
+    Guards,
+}
+
+impl Blocker {
+    /// What keeps the edges, and what would reach further.
+    pub fn why(self) -> &'static str {
+        match self {
+            Blocker::Seams => {
+                "borders and seams stay: the edges left lie on a border or a part, UV or colour \
+                 seam (all borders with --lock-borders); voxel or amg, which make a new surface, \
+                 reach any count"
+            }
+            Blocker::Topology => {
+                "topology kept: every edge left would pinch the surface, close a handle or make \
+                 a piece vanish; voxel, which changes the topology, reaches fewer"
+            }
+            Blocker::Bones => "bone boundaries kept: the vertices left share no joint",
+            Blocker::Guards => {
+                "fold and sliver guards: every placement left turns a triangle past \
+                 min_normal_cos or makes a sliver below min_quality"
+            }
+        }
+    }
+}
+
 /// Asked before each collapse whether it may happen, and told of each one
 /// that did: an error limit (module `limit`) refuses a collapse whose
 /// certified bound would pass it, and the collapse goes on with the others.
@@ -549,7 +591,7 @@ impl EdgeCollapser {
     }
 
     fn push(&mut self, a: u32, b: u32) {
-        if let Some((cand, _)) = self.best_candidate(a, b, false) {
+        if let Ok((cand, _)) = self.best_candidate(a, b, false) {
             let cost = match self.lower_bound {
                 Some(lower) => lower(&cand),
                 None => (self.cost)(&cand, self),
@@ -647,8 +689,9 @@ impl EdgeCollapser {
     }
 
     /// Placements allowed by the border rules, best quadric error first; with
-    /// `check`, only legal ones. Returns the best and how many triangles it removes.
-    fn best_candidate(&self, a: u32, b: u32, check: bool) -> Option<(Candidate, usize)> {
+    /// `check`, only legal ones. Returns the best and how many triangles it
+    /// removes, or the rule that forbids every placement.
+    fn best_candidate(&self, a: u32, b: u32, check: bool) -> Result<(Candidate, usize), Blocker> {
         let (ca, cb) = (self.constrained[a as usize], self.constrained[b as usize]);
         let (pa, pb) = (self.pos[a as usize], self.pos[b as usize]);
         let q = Quadric::sum(&self.quadric[a as usize], &self.quadric[b as usize]);
@@ -666,20 +709,20 @@ impl EdgeCollapser {
                         && self.border[b as usize]
                         && self.shared(a, b).count() == 2 =>
             {
-                return None;
+                return Err(Blocker::Seams);
             }
             (true, false) => add(pa),
             (false, true) => add(pb),
-            _ if self.opts.lock_borders && (ca || cb) => return None,
+            _ if self.opts.lock_borders && (ca || cb) => return Err(Blocker::Seams),
             // Seam vertices whose wedges cannot follow the edge stay put.
             (true, true)
                 if self.wedges.as_ref().is_some_and(|w| {
                     !self.wedges_follow(w, a, b) || !self.wedges_follow(w, b, a)
                 }) =>
             {
-                let w = self.wedges.as_ref()?;
+                let w = self.wedges.as_ref().ok_or(Blocker::Seams)?;
                 match (self.wedges_follow(w, a, b), self.wedges_follow(w, b, a)) {
-                    (false, false) => return None,
+                    (false, false) => return Err(Blocker::Seams),
                     (false, true) => add(pa),
                     _ => add(pb),
                 }
@@ -701,13 +744,14 @@ impl EdgeCollapser {
         let places = &mut places[..n];
         places.sort_by(|x, y| x.0.total_cmp(&y.0));
         let removed = self.shared(a, b).count();
-        if check && !self.topology_allows(a, b, removed) {
-            return None;
+        if check {
+            self.topology_allows(a, b, removed)?;
         }
         let &(err, p) = places
             .iter()
-            .find(|(_, p)| !check || self.geometry_allows(a, b, *p))?;
-        Some((
+            .find(|(_, p)| !check || self.geometry_allows(a, b, *p))
+            .ok_or(Blocker::Guards)?;
+        Ok((
             Candidate {
                 edge: [a, b],
                 position: p,
@@ -719,18 +763,20 @@ impl EdgeCollapser {
         ))
     }
 
-    fn topology_allows(&self, a: u32, b: u32, shared: usize) -> bool {
+    fn topology_allows(&self, a: u32, b: u32, shared: usize) -> Result<(), Blocker> {
         // Bone boundaries: vertices no joint moves together stay apart.
         if self
             .payload
             .as_ref()
             .is_some_and(|p| !p.share_joint(a as usize, b as usize))
         {
-            return false;
+            return Err(Blocker::Bones);
         }
         let mut guard = self.mark.borrow_mut();
         let (mark, stamp) = &mut *guard;
         link_condition(&self.vtris, &self.tris, mark, stamp, [a, b], shared)
+            .then_some(())
+            .ok_or(Blocker::Topology)
     }
 
     /// No triangle flips or folds past the fold guard, and the sliver guard holds.
@@ -844,7 +890,7 @@ impl EdgeCollapser {
                 continue;
             }
             match self.best_candidate(e.a, e.b, true) {
-                Some((cand, _)) => {
+                Ok((cand, _)) => {
                     // The queued cost was for the best placement, legal or not,
                     // or a lower bound: if the real cost is above what is queued
                     // next, the edge waits its real turn.
@@ -875,7 +921,7 @@ impl EdgeCollapser {
                     }
                     return Some(c);
                 }
-                None => self.deferred.push((e.a, e.b)),
+                Err(_) => self.deferred.push((e.a, e.b)),
             }
         }
     }
@@ -901,6 +947,27 @@ impl EdgeCollapser {
                 break;
             }
         }
+    }
+
+    /// Every edge left and the rule that keeps it, counted (an edge that
+    /// only a veto or an infinite cost keeps is not counted): what stops a
+    /// run short of its count, most common first.
+    pub fn blockers(&self) -> Vec<(Blocker, usize)> {
+        let mut counts: Vec<(Blocker, usize)> = Vec::new();
+        let mut nbrs = Vec::new();
+        for a in (0..self.pos.len() as u32).filter(|v| self.v_alive[*v as usize]) {
+            self.neighbours(a, &mut nbrs);
+            for &b in nbrs.iter().filter(|b| **b > a) {
+                if let Err(blocker) = self.best_candidate(a, b, true) {
+                    match counts.iter_mut().find(|c| c.0 == blocker) {
+                        Some(c) => c.1 += 1,
+                        None => counts.push((blocker, 1)),
+                    }
+                }
+            }
+        }
+        counts.sort_by(|x, y| y.1.cmp(&x.1).then(x.0.cmp(&y.0)));
+        counts
     }
 
     /// Queues the edges a veto refused again (their veto has changed: a

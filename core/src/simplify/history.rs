@@ -65,6 +65,11 @@ impl<'a> History<'a> {
         }
     }
 
+    /// The collapser, at the last state reached.
+    pub fn collapser(&self) -> &EdgeCollapser {
+        &self.collapser
+    }
+
     /// Triangles alive in state `k`.
     pub fn count(&self, k: usize) -> usize {
         self.counts[k]

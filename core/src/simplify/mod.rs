@@ -37,7 +37,8 @@ pub use bound::{
     certify_with_progress,
 };
 pub use collapse::{
-    Candidate, Collapse, CollapseOptions, EdgeCollapser, StarCostFn, quadric_cost, quadric_mean,
+    Blocker, Candidate, Collapse, CollapseOptions, EdgeCollapser, StarCostFn, quadric_cost,
+    quadric_mean,
 };
 pub use recertify::Trace;
 pub use relay::Relay;
@@ -75,6 +76,40 @@ pub struct Simplified {
     pub mesh: TriMesh,
     pub certificate: Certificate,
     pub collapses: usize,
+    /// A triangle count the collapse could not reach, and why.
+    pub unmet: Option<Unmet>,
+}
+
+/// A triangle budget not met: asked, reached, and the rules that kept the
+/// edges left (issue 48, item 5), most common first.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct Unmet {
+    pub asked: usize,
+    pub reached: usize,
+    /// The most common rule's explanation.
+    pub why: String,
+    /// Edges left per rule.
+    pub blockers: Vec<(Blocker, usize)>,
+}
+
+impl Unmet {
+    /// `Some` when `reached` is over `asked`, from `col`'s edges left.
+    fn of(asked: usize, reached: usize, col: &EdgeCollapser) -> Option<Unmet> {
+        if reached <= asked {
+            return None;
+        }
+        let blockers = col.blockers();
+        let why = blockers.first().map_or(
+            "nothing more collapses: every edge left costs more than any placement allows",
+            |b| b.0.why(),
+        );
+        Some(Unmet {
+            asked,
+            reached,
+            why: why.to_string(),
+            blockers,
+        })
+    }
 }
 
 impl Simplified {
@@ -223,6 +258,7 @@ pub fn simplify_chain(
                         mesh: out,
                         certificate,
                         collapses: k,
+                        unmet: None,
                     };
                     Verdict::Certified((r, *trace))
                 }
@@ -269,7 +305,11 @@ pub fn simplify_chain(
         history.lift();
         for (j, count) in counts {
             let k = history.reach(count, progress)?;
-            results[j] = Some(certify(&history, k, None, Ask::Tight)?.certified().0);
+            let mut r = certify(&history, k, None, Ask::Tight)?.certified().0;
+            // Short of its count, the run has gone as far as it goes: its
+            // collapser's edges left are this state's.
+            r.unmet = Unmet::of(count, r.mesh.triangles.len(), history.collapser());
+            results[j] = Some(r);
         }
         Ok::<(), SimplifyError>(())
     })?;
@@ -545,6 +585,56 @@ mod tests {
             "{measured} > {}",
             skipping.error_bound()
         );
+    }
+
+    /// A count the collapse cannot reach says so, with the rule that keeps
+    /// the edges left: a torus stops where every collapse would close its
+    /// handle or pinch it, an open grid with locked borders at its border;
+    /// a count that is reached says nothing.
+    #[test]
+    fn an_unreachable_count_says_why() {
+        let run = |mesh: &TriMesh, count, lock_borders| {
+            let opts = SimplifyOptions {
+                per_triangle_bounds: false,
+                target: Target::Triangles(count),
+                collapse: CollapseOptions {
+                    lock_borders,
+                    ..CollapseOptions::default()
+                },
+            };
+            simplify(mesh, &opts, &Progress::new()).unwrap()
+        };
+        let n = 16u32;
+        let mut grid = TriMesh::default();
+        for j in 0..=n {
+            for i in 0..=n {
+                let (x, y) = (i as f32 / n as f32, j as f32 / n as f32);
+                grid.positions
+                    .push(glam::Vec3::new(x, y, 0.05 * (6.0 * x).sin()));
+            }
+        }
+        for j in 0..n {
+            for i in 0..n {
+                let v = j * (n + 1) + i;
+                grid.triangles.push([v, v + 1, v + n + 2]);
+                grid.triangles.push([v, v + n + 2, v + n + 1]);
+            }
+        }
+        for (mesh, lock, rule) in [
+            (torus(1.0, 0.3, 32, 16), false, Blocker::Topology),
+            (grid, true, Blocker::Seams),
+        ] {
+            let r = run(&mesh, 1, lock);
+            let u = r.unmet.expect("more than one triangle is left");
+            assert_eq!((u.asked, u.reached), (1, r.mesh.triangles.len()));
+            eprintln!("{:?}", u.blockers);
+            assert_eq!(u.blockers[0].0, rule, "{:?}", u.blockers);
+            assert_eq!(u.why, rule.why());
+            // Each edge left is counted once at most.
+            let counted: usize = u.blockers.iter().map(|b| b.1).sum();
+            assert!(counted > 0 && counted <= 3 * u.reached, "{counted}");
+            assert!(run(&mesh, u.reached, lock).unmet.is_none());
+        }
     }
 
     #[test]
