@@ -428,4 +428,22 @@ fn the_truck_chain_is_drawn_textured_row_by_row() {
         "the texture travels"
     );
     assert!(doc["materials"].as_array().is_some_and(|m| m.len() >= 2));
+    // 5 % of the truck is past its seams' floor: the row's triangle cell is
+    // flagged (its hover says why) and the log line counts it.
+    let recipe = Recipe::new(parse_lods("simplify:0.5%,simplify:0.05", None).unwrap());
+    harness.state_mut().set_chain_recipe(recipe);
+    built_chain(&mut harness);
+    harness.run();
+    let far = harness.state().built_chain().unwrap().chain.lods[1]
+        .set
+        .clone();
+    let unmet = far.unmet.expect("the seams stop the collapse");
+    assert!(unmet.why.starts_with("borders and seams stay"), "{unmet:?}");
+    let flagged = format!("!{}", far.mesh.triangles.len());
+    assert!(harness.query_by_label(&flagged).is_some(), "{flagged}");
+    assert!(
+        harness
+            .query_by_label_contains("1 short of the triangle budget")
+            .is_some()
+    );
 }

@@ -27,6 +27,8 @@ pub struct RowFigures {
     pub cells: [String; 7],
     /// The bound is AMG's plane error, not a certified bound.
     pub estimate: bool,
+    /// The triangle budget it fell short of, and why.
+    pub unmet: Option<String>,
 }
 
 /// The table's column heads after the editable ones.
@@ -121,7 +123,9 @@ impl ChainSettings {
                         Some(f) => {
                             for (c, cell) in f.cells.iter().enumerate() {
                                 // Figures in monospace: columns keep their width.
-                                if c == 3 && f.estimate {
+                                if let (0, Some(why)) = (c, &f.unmet) {
+                                    ui.monospace(format!("!{cell}")).on_hover_text(why);
+                                } else if c == 3 && f.estimate {
                                     ui.monospace(format!("~{cell}")).on_hover_text(
                                         "AMG's plane error: an estimate, not a certified bound",
                                     );

@@ -138,11 +138,20 @@ fn figures(chain: &Chain) -> Vec<RowFigures> {
             },
         ];
         let estimate = set.error_bound_kind == lodstudio_core::lod::BoundKind::Estimate;
+        // Rows met by one LOD may ask for different counts: the reason is the
+        // LOD's (its collapse went as far as it goes).
+        let unmet = set.unmet.as_ref().map(|u| {
+            format!(
+                "Short of the triangle budget: the collapse stops at {} triangles. {}",
+                u.reached, u.why
+            )
+        });
         for &r in &lod.rows {
             out[r] = Some(RowFigures {
                 lod: k,
                 cells: cells.clone(),
                 estimate,
+                unmet: unmet.clone(),
             });
         }
     }

@@ -14,6 +14,8 @@ pub enum ChainEvent {
         lods: usize,
         /// LODs taken from the kept work (nothing built for them).
         kept: usize,
+        /// LODs short of their triangle budget (the table says why).
+        short: usize,
         seconds: f64,
         /// The last session's chain, reopened without a build.
         reopened: bool,
@@ -58,6 +60,7 @@ impl fmt::Display for ChainEvent {
                 seconds,
                 reopened,
                 not_saved,
+                short,
             } => {
                 match (reopened, kept) {
                     (true, _) => write!(f, "Reopened the last session's chain of {lods} LODs")?,
@@ -66,6 +69,12 @@ impl fmt::Display for ChainEvent {
                         f,
                         "Built a chain of {lods} LODs in {seconds:.2} s ({k} kept from the last build)"
                     )?,
+                }
+                if *short > 0 {
+                    write!(
+                        f,
+                        "; {short} short of the triangle budget (the table marks them with !, its hover says why)"
+                    )?;
                 }
                 match not_saved {
                     Some(why) => write!(f, "; not kept for the next session: {why}"),

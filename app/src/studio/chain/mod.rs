@@ -276,6 +276,12 @@ impl ChainState {
                 let event = ChainEvent::Built {
                     lods: built.chain.lods.len(),
                     kept: built.chain.lods.iter().filter(|l| l.reused).count(),
+                    short: built
+                        .chain
+                        .lods
+                        .iter()
+                        .filter(|l| l.set.unmet.is_some())
+                        .count(),
                     seconds,
                     reopened: self.reopening,
                     not_saved: built.kept_error.clone(),

@@ -96,6 +96,28 @@ fn a_build_polled_to_its_end_is_the_chain_of_its_rows() {
     assert!(state.fresh().is_some() && state.note.is_none());
 }
 
+/// A row whose triangle budget the collapse cannot reach (the torus keeps
+/// its handle) is flagged in its table cell with why, and the log line
+/// counts it; met rows are not flagged.
+#[test]
+fn a_row_short_of_its_budget_says_why() {
+    let mut state = ChainState::default();
+    let events = build(&mut state, "simplify:0.25,simplify:0.001", torus());
+    assert!(
+        matches!(events[..], [ChainEvent::Built { short: 1, .. }]),
+        "{events:?}"
+    );
+    assert!(
+        events[0]
+            .to_string()
+            .contains("1 short of the triangle budget")
+    );
+    let figures = &state.built().unwrap().figures;
+    assert!(figures[0].unmet.is_none());
+    let why = figures[1].unmet.as_deref().expect("the far row is flagged");
+    assert!(why.contains("topology kept"), "{why}");
+}
+
 #[test]
 fn a_build_without_a_model_notes_why_and_starts_nothing() {
     let mut state = ChainState::default();
