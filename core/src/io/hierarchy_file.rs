@@ -17,7 +17,7 @@ use serde::de::DeserializeOwned;
 
 const MAGIC: &[u8; 8] = b"LODSTHRY";
 /// Bumped whenever a saved structure changes shape.
-pub const VERSION: u32 = 7;
+pub const VERSION: u32 = 8;
 
 /// The body codec: fixed-width little-endian integers, no trailing bytes, and
 /// never reading (or allocating for) more than `limit` bytes.

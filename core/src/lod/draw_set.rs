@@ -108,8 +108,7 @@ pub struct DrawSet {
     pub error_bound: f32,
     pub error_bound_kind: BoundKind,
     /// A triangle budget the method could not reach, and why.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub unmet: Option<crate::simplify::Unmet>,
+    pub unmet: Option<super::Unmet>,
 }
 
 impl DrawSet {

@@ -2,6 +2,7 @@
 //! tests share (DESIGN.md): given a view and a tolerance, which primitives
 //! to draw.
 //!
+//! - `budget`: a triangle budget met or explained ([`Unmet`]);
 //! - `hierarchy`: the [`Hierarchy`] trait every method's built structure
 //!   implements, and cutting any of them to a triangle count;
 //! - `draw_set`: what a cut draws ([`DrawSet`]: triangles, points, splats,
@@ -14,6 +15,7 @@
 //! - `build`: building any method's hierarchy from typed [`Params`], the one
 //!   build path (above the methods, which know only the modules before it).
 
+mod budget;
 pub mod build;
 pub mod chain;
 mod draw_set;
@@ -23,6 +25,7 @@ mod method;
 mod params;
 mod pick;
 
+pub use budget::{Blocker, Unmet};
 pub use build::{BuildError, Input, Params, accepts, build, input_primitives};
 pub use draw_set::{BoundKind, CutPoint, DrawSet, Layer, Splat, Texture};
 pub use hierarchy::{Hierarchy, select_triangles};

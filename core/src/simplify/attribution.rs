@@ -130,6 +130,15 @@ impl<'a> Attribution<'a> {
         }
     }
 
+    /// Moves triangle `from`'s pieces to triangle `to`, whose bound of them
+    /// is `forward` (at least theirs to `from` plus how far `from`'s points
+    /// move onto `to`: module `limit`).
+    pub fn carry(&mut self, from: u32, to: u32, forward: f32) {
+        let pieces = std::mem::take(&mut self.owned[from as usize]);
+        self.owned[to as usize].extend(pieces);
+        self.forward[to as usize] = self.forward[to as usize].max(forward);
+    }
+
     /// The pieces of the `removed` triangles, copied: for a collapse that
     /// may not happen (module `limit`); [`Attribution::give`] after
     /// [`Attribution::take`] applies it if it does.

@@ -25,6 +25,7 @@ use super::quadric::Quadric;
 use super::queue::CollapseQueue;
 use crate::distance::closest_point_on_triangle;
 use crate::geom::{Adjacency, Materials, MeshArrays, Payload, TriMesh, Wedges};
+use crate::lod::Blocker;
 
 /// The sliver and fold guards' range (a quality, a cosine; 0 turns either off).
 pub const GUARD_RANGE: std::ops::RangeInclusive<f32> = 0.0..=1.0;
@@ -83,48 +84,6 @@ pub struct Candidate {
 /// a non-finite cost takes the candidate out of the queue (the hybrid method
 /// does so when a point replacement takes precedence, §5).
 pub type StarCostFn = dyn Fn(&Candidate, &EdgeCollapser) -> f64 + Send + Sync;
-
-/// The rule that keeps an edge from collapsing: what would have to give for
-/// a budget the collapse cannot reach (issue 48, item 5).
-#[derive(
-    Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, serde::Serialize, serde::Deserialize,
-)]
-#[serde(rename_all = "snake_case")]
-pub enum Blocker {
-    /// Borders and part, UV or colour seams keep their place (every border
-    /// with `lock_borders`).
-    Seams,
-    /// The link condition: the collapse would pinch the surface, close a
-    /// handle or make a piece vanish.
-    Topology,
-    /// No joint moves both ends (a skin's bone boundary).
-    Bones,
-    /// Every placement folds a triangle past the fold guard or makes a
-    /// sliver below the sliver guard.
-    Guards,
-}
-
-impl Blocker {
-    /// What keeps the edges, and what would reach further.
-    pub fn why(self) -> &'static str {
-        match self {
-            Blocker::Seams => {
-                "borders and seams stay: the edges left lie on a border or a part, UV or colour \
-                 seam (all borders with --lock-borders); voxel or amg, which make a new surface, \
-                 reach any count"
-            }
-            Blocker::Topology => {
-                "topology kept: every edge left would pinch the surface, close a handle or make \
-                 a piece vanish; voxel, which changes the topology, reaches fewer"
-            }
-            Blocker::Bones => "bone boundaries kept: the vertices left share no joint",
-            Blocker::Guards => {
-                "fold and sliver guards: every placement left turns a triangle past \
-                 min_normal_cos or makes a sliver below min_quality"
-            }
-        }
-    }
-}
 
 /// Asked before each collapse whether it may happen, and told of each one
 /// that did: an error limit (module `limit`) refuses a collapse whose

@@ -7,6 +7,15 @@
 //! CGAL's bounded-distance placement do, instead of an error target ending
 //! at the first prefix that one early, expensive collapse puts over it.
 //!
+//! Far under the limit the triangle inequality is enough and nothing is
+//! measured: a collapse moves each point of a star triangle at most δ (its
+//! moved end's distance to the new vertex) onto the triangle's image, so
+//! the image is within its source's bound plus δ of O, and the source's
+//! pieces of O within their bound plus δ of the image (a removed
+//! triangle's fold onto the edge to its third vertex, in a new triangle).
+//! Only where that passes the limit is the collapse measured, which also
+//! tightens its triangles' bounds for the collapses after it.
+//!
 //! Every triangle alive is then within the limit (O's own are exact), so
 //! every state of the run is: the two-sided Hausdorff distance of a state to
 //! O is at most the largest bound of its triangles (module `attribution`).
@@ -33,15 +42,36 @@ pub(super) struct Limit<'a> {
     opts: BoundOptions,
     max_error: f32,
     attribution: Attribution<'a>,
+    /// Per triangle id: a bound of its distance to O (new triangle → O; 0
+    /// for O's own).
+    reverse: Vec<f32>,
     /// Nearest original distance (and triangle) of every collapser vertex.
     nearest: Vec<(f32, u32)>,
     /// The collapse `allows` let through last: its edge, its new vertex's
-    /// nearest original point and the pieces' new owners.
-    allowed: Option<([u32; 2], (f32, u32), Handover)>,
-    /// Scratch: the star, its new triangles and their corners' nearest.
+    /// nearest original point, and how its triangles got their bounds.
+    allowed: Option<([u32; 2], (f32, u32), Allowed)>,
+    /// Scratch: the star, its new triangles, their corners' nearest, the
+    /// star triangle each comes from and how far that one's points move.
     star: Vec<u32>,
     made: Vec<[Vec3; 3]>,
     corners: Vec<[(f32, u32); 3]>,
+    from: Vec<(u32, f32)>,
+    /// Scratch: per new triangle, its bounds by the triangle inequality.
+    carried: Vec<(f32, f32)>,
+}
+
+/// How an allowed collapse's new triangles are bounded.
+enum Allowed {
+    /// By the triangle inequality: every point of a star triangle moves at
+    /// most δ (the moved end's distance to the new vertex) to its image,
+    /// so an image's bounds are its source's plus δ, and the source's
+    /// pieces go to it whole; a removed triangle's go to a new triangle on
+    /// the edge it folds onto. Per new triangle: (reverse, forward), and
+    /// (removed, new triangle index) for the removed ones.
+    Carried(Vec<(f32, f32)>, Vec<(u32, usize)>),
+    /// Measured: each new triangle's reverse bound, and the pieces handed
+    /// over afresh (module `attribution`).
+    Measured(Vec<f32>, Handover),
 }
 
 impl<'a> Limit<'a> {
@@ -70,11 +100,14 @@ impl<'a> Limit<'a> {
             },
             max_error: 0.0,
             attribution,
+            reverse: vec![0.0; col.triangle_total()],
             nearest,
             allowed: None,
             star: Vec::new(),
             made: Vec::new(),
             corners: Vec::new(),
+            from: Vec::new(),
+            carried: Vec::new(),
         }
     }
 
@@ -83,6 +116,47 @@ impl<'a> Limit<'a> {
     pub fn raise(&mut self, max_error: f32) {
         debug_assert!(max_error >= self.max_error);
         self.max_error = self.max_error.max(max_error);
+    }
+
+    /// The new triangles' bounds by the triangle inequality, and where the
+    /// removed triangles' pieces go; `None` unless all are within the limit.
+    fn carry(&mut self, col: &EdgeCollapser, cand: &Candidate) -> Option<Vec<(u32, usize)>> {
+        let [a, b] = cand.edge;
+        let max_error = self.max_error;
+        self.carried.clear();
+        for (k, &(t, delta)) in self.from.iter().enumerate() {
+            let slack = round_off(&self.made[k]);
+            let reverse = self.reverse[t as usize] + delta + slack;
+            let forward = self.attribution.forward(t) + delta + slack;
+            if reverse > max_error || forward > max_error {
+                return None;
+            }
+            self.carried.push((reverse, forward));
+        }
+        let delta = [a, b]
+            .map(|v| col.position(v).distance(cand.position))
+            .into_iter()
+            .fold(0.0, f32::max);
+        let mut folded = Vec::new();
+        for &t in &self.star {
+            let tri = col.triangle(t);
+            if !(tri.contains(&a) && tri.contains(&b)) {
+                continue;
+            }
+            // Its points fold onto the edge from the new vertex to `o`.
+            let o = tri.iter().copied().find(|w| *w != a && *w != b)?;
+            let k = self
+                .from
+                .iter()
+                .position(|&(s, _)| col.triangle(s).contains(&o))?;
+            let forward = self.attribution.forward(t) + delta + round_off(&self.made[k]);
+            if forward > max_error {
+                return None;
+            }
+            self.carried[k].1 = self.carried[k].1.max(forward);
+            folded.push((t, k));
+        }
+        Some(folded)
     }
 }
 
@@ -101,7 +175,9 @@ impl Veto for Limit<'_> {
         self.star.sort_unstable();
         self.made.clear();
         self.corners.clear();
+        self.from.clear();
         let at_new = self.original.distance().nearest(cand.position);
+        let moves = [a, b].map(|v| col.position(v).distance(cand.position));
         for &t in &self.star {
             let tri = col.triangle(t);
             if tri.contains(&a) && tri.contains(&b) {
@@ -122,33 +198,64 @@ impl Veto for Limit<'_> {
                     self.nearest[w as usize]
                 }
             }));
+            self.from.push((t, moves[usize::from(tri.contains(&b))]));
         }
-        // New triangle → O first: no piece is cut for a collapse refused here.
+        // Far under the limit, the triangle inequality is enough.
+        if let Some(folded) = self.carry(col, cand) {
+            let carried = std::mem::take(&mut self.carried);
+            self.allowed = Some((cand.edge, at_new, Allowed::Carried(carried, folded)));
+            return true;
+        }
+        // Measured, each bound refined towards half the limit where it can
+        // be: headroom for the carried bounds of the collapses after it
+        // (the dragon at 0.5 %: 3,164 triangles against 3,706 refined only
+        // to the limit, 10 % slower). New triangle → O first: no piece is
+        // cut for a collapse refused here.
+        let aim = 0.5 * max_error;
         let to = (self.original.distance(), Some(self.original.projection()));
+        let mut reverse = Vec::with_capacity(self.made.len());
         for (p, at) in self.made.iter().zip(&self.corners) {
-            let (upper, _, _) = max_distance_bound(*p, *at, to, &self.opts, max_error, max_error);
-            if upper + round_off(p) > max_error {
+            let (upper, _, _) = max_distance_bound(*p, *at, to, &self.opts, aim, aim);
+            let upper = upper + round_off(p);
+            if upper > max_error {
                 return false;
             }
+            reverse.push(upper);
         }
         let mut handover = self.attribution.peek(&self.star);
-        let tolerance = (self.opts.rel_tol, self.opts.abs_tol, max_error);
+        let tolerance = (self.opts.rel_tol, self.opts.abs_tol, aim);
         self.attribution
             .hand_over(&mut handover, &self.made, tolerance);
         let slack = self.made.iter().map(round_off).fold(0.0, f32::max);
         if handover.forward() + slack > max_error {
             return false;
         }
-        self.allowed = Some((cand.edge, at_new, handover));
+        self.allowed = Some((cand.edge, at_new, Allowed::Measured(reverse, handover)));
         true
     }
 
     fn collapsed(&mut self, col: &EdgeCollapser, c: &Collapse) {
-        let (edge, at_new, handover) = self.allowed.take().expect("allowed before collapsing");
+        let (edge, at_new, allowed) = self.allowed.take().expect("allowed before collapsing");
         debug_assert_eq!(edge, c.edge);
-        self.attribution.take(&c.removed);
         self.attribution.grow(col.triangle_total());
-        self.attribution.give(handover, &c.added);
+        match allowed {
+            Allowed::Carried(bounds, folded) => {
+                for (k, &(t, _)) in self.from.iter().enumerate() {
+                    self.attribution.carry(t, c.added[k], bounds[k].1);
+                }
+                for (t, k) in folded {
+                    self.attribution.carry(t, c.added[k], bounds[k].1);
+                }
+                self.reverse.extend(bounds.iter().map(|b| b.0));
+                self.carried = bounds;
+            }
+            Allowed::Measured(reverse, handover) => {
+                self.attribution.take(&c.removed);
+                self.attribution.give(handover, &c.added);
+                self.reverse.extend(reverse);
+            }
+        }
+        debug_assert_eq!(self.reverse.len(), col.triangle_total());
         self.nearest.push(at_new);
         debug_assert_eq!(self.nearest.len(), col.vertex_count());
     }

@@ -37,13 +37,13 @@ pub use bound::{
     certify_with_progress,
 };
 pub use collapse::{
-    Blocker, Candidate, Collapse, CollapseOptions, EdgeCollapser, StarCostFn, quadric_cost,
-    quadric_mean,
+    Candidate, Collapse, CollapseOptions, EdgeCollapser, StarCostFn, quadric_cost, quadric_mean,
 };
 pub use recertify::Trace;
 pub use relay::Relay;
 
 use crate::geom::TriMesh;
+use crate::lod::Unmet;
 use crate::progress::{Cancelled, Progress};
 use history::History;
 
@@ -80,42 +80,29 @@ pub struct Simplified {
     pub unmet: Option<Unmet>,
 }
 
-/// A triangle budget not met: asked, reached, and the rules that kept the
-/// edges left (issue 48, item 5), most common first.
-#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
-pub struct Unmet {
-    pub asked: usize,
-    pub reached: usize,
-    /// The most common rule's explanation.
-    pub why: String,
-    /// Edges left per rule.
-    pub blockers: Vec<(Blocker, usize)>,
-}
-
-impl Unmet {
-    /// `Some` when `reached` is over `asked`, from `col`'s edges left.
-    fn of(asked: usize, reached: usize, col: &EdgeCollapser) -> Option<Unmet> {
-        if reached <= asked {
-            return None;
-        }
-        let blockers = col.blockers();
-        let why = blockers.first().map_or(
-            "nothing more collapses: every edge left costs more than any placement allows",
-            |b| b.0.why(),
-        );
-        Some(Unmet {
-            asked,
-            reached,
-            why: why.to_string(),
-            blockers,
-        })
-    }
-}
-
 impl Simplified {
     pub fn error_bound(&self) -> f32 {
         self.certificate.error_bound()
     }
+}
+
+/// The [`Unmet`] of a count asked of `col`'s run, `None` when it was reached;
+/// `col` has gone as far as it goes, and its edges left say why.
+fn unmet(asked: usize, reached: usize, col: &EdgeCollapser) -> Option<Unmet> {
+    if reached <= asked {
+        return None;
+    }
+    let blockers = col.blockers();
+    let why = blockers.first().map_or(
+        "nothing more collapses: every edge left costs more than any placement allows",
+        |b| b.0.why(),
+    );
+    Some(Unmet {
+        asked,
+        reached,
+        why: why.to_string(),
+        blockers,
+    })
 }
 
 /// A result with the trace that certifies other states of its collapse.
@@ -308,7 +295,7 @@ pub fn simplify_chain(
             let mut r = certify(&history, k, None, Ask::Tight)?.certified().0;
             // Short of its count, the run has gone as far as it goes: its
             // collapser's edges left are this state's.
-            r.unmet = Unmet::of(count, r.mesh.triangles.len(), history.collapser());
+            r.unmet = unmet(count, r.mesh.triangles.len(), history.collapser());
             results[j] = Some(r);
         }
         Ok::<(), SimplifyError>(())
@@ -536,9 +523,9 @@ mod tests {
     /// On a scan-like surface (a sphere with a needle and 0.4 % radial
     /// noise), the prefix rule stops where the first collapse passes the
     /// error, far from where most of the surface could go; the limited run
-    /// skips what is over and goes on (774 against 936 triangles when this
-    /// was written; 660 without the needle), its bound holding against a
-    /// dense measurement.
+    /// skips what is over and goes on (1,046 against 1,420 triangles at
+    /// 0.2 % when this was written; the gap narrows at coarser errors, 782
+    /// against 792 at 0.3 %), its bound holding against a dense measurement.
     #[test]
     fn a_collapse_over_the_error_is_skipped_not_a_stop() {
         let mut mesh = crate::builtins::icosphere(glam::Vec3::ZERO, 1.0, 5);
@@ -548,7 +535,7 @@ mod tests {
         }
         mesh.positions[0] *= 1.3;
         let diag = mesh.bounds().diagonal();
-        let e = 0.0025;
+        let e = 0.002;
         let opts = CollapseOptions::default();
         let target = [Target::RelativeError(e)];
         let skipping = simplify_chain(&mesh, &target, opts, false, &Progress::new()).unwrap();
@@ -593,6 +580,7 @@ mod tests {
     /// a count that is reached says nothing.
     #[test]
     fn an_unreachable_count_says_why() {
+        use crate::lod::Blocker;
         let run = |mesh: &TriMesh, count, lock_borders| {
             let opts = SimplifyOptions {
                 per_triangle_bounds: false,
