@@ -1123,7 +1123,7 @@ impl EdgeCollapser {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use crate::builtins::{icosphere, torus};
     use crate::geom::Topology;
@@ -1206,21 +1206,7 @@ mod tests {
 
         // An open grid: with locked borders the border vertices keep their positions.
         let n = 12u32;
-        let mut grid = TriMesh::default();
-        for j in 0..=n {
-            for i in 0..=n {
-                let (x, y) = (i as f32 / n as f32, j as f32 / n as f32);
-                grid.positions
-                    .push(Vec3::new(x, y, 0.05 * (6.0 * x).sin() * (5.0 * y).cos()));
-            }
-        }
-        for j in 0..n {
-            for i in 0..n {
-                let v = j * (n + 1) + i;
-                grid.triangles.push([v, v + 1, v + n + 2]);
-                grid.triangles.push([v, v + n + 2, v + n + 1]);
-            }
-        }
+        let grid = wavy_grid(n);
         let opts = CollapseOptions {
             lock_borders: true,
             ..Default::default()
@@ -1264,6 +1250,27 @@ mod tests {
             // A floor above the deviation is what comes back.
             assert_eq!(s.deviation_squared(&cand, 1.0), 1.0);
         }
+    }
+
+    /// An open (n+1)² grid over the unit square, gently waved: every border
+    /// vertex on the mesh's own border.
+    pub(crate) fn wavy_grid(n: u32) -> TriMesh {
+        let mut grid = TriMesh::default();
+        for j in 0..=n {
+            for i in 0..=n {
+                let (x, y) = (i as f32 / n as f32, j as f32 / n as f32);
+                grid.positions
+                    .push(Vec3::new(x, y, 0.05 * (6.0 * x).sin() * (5.0 * y).cos()));
+            }
+        }
+        for j in 0..n {
+            for i in 0..n {
+                let v = j * (n + 1) + i;
+                grid.triangles.push([v, v + 1, v + n + 2]);
+                grid.triangles.push([v, v + n + 2, v + n + 1]);
+            }
+        }
+        grid
     }
 
     /// A torus read as a textured file stores it: a grid of (n+1) × (m+1)

@@ -592,22 +592,7 @@ mod tests {
             };
             simplify(mesh, &opts, &Progress::new()).unwrap()
         };
-        let n = 16u32;
-        let mut grid = TriMesh::default();
-        for j in 0..=n {
-            for i in 0..=n {
-                let (x, y) = (i as f32 / n as f32, j as f32 / n as f32);
-                grid.positions
-                    .push(glam::Vec3::new(x, y, 0.05 * (6.0 * x).sin()));
-            }
-        }
-        for j in 0..n {
-            for i in 0..n {
-                let v = j * (n + 1) + i;
-                grid.triangles.push([v, v + 1, v + n + 2]);
-                grid.triangles.push([v, v + n + 2, v + n + 1]);
-            }
-        }
+        let grid = super::collapse::tests::wavy_grid(16);
         for (mesh, lock, rule) in [
             (torus(1.0, 0.3, 32, 16), false, Blocker::Topology),
             (grid, true, Blocker::Seams),
