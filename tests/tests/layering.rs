@@ -52,9 +52,12 @@ fn code(path: &Path) -> String {
     while let Some(line) = lines.next() {
         let trimmed = line.trim_start();
         if trimmed.starts_with("#[cfg(test)]")
-            && lines
-                .peek()
-                .is_some_and(|l| l.trim_start().starts_with("mod "))
+            && lines.peek().is_some_and(|l| {
+                let l = l.trim_start();
+                ["mod ", "pub mod ", "pub(crate) mod "]
+                    .iter()
+                    .any(|m| l.starts_with(m))
+            })
         {
             break;
         }
@@ -152,7 +155,7 @@ fn the_scanner_reads_paths_groups_and_skips_comments() {
     let f = dir.path().join("m.rs");
     std::fs::write(
         &f,
-        format!("{snippet}\n#[cfg(test)]\nmod tests {{ use crate::hybrid; }}\n"),
+        format!("{snippet}\n#[cfg(test)]\npub(crate) mod tests {{ use crate::hybrid; }}\n"),
     )
     .unwrap();
     let got: Vec<String> = after(&code(&f), "crate::").into_iter().collect();
