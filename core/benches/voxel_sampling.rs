@@ -4,11 +4,16 @@
 //! marching cubes, and meshoptimizer's `remesh` (its own voxelizer and
 //! extraction) at the same resolution in the same run.
 //!
-//! The bunny is open (its holes are capped for the rows). Run with
-//! `cargo bench -p lodstudio-core --bench voxel_sampling` (about
-//! six minutes here: the point sampler at 256 is the slow part); names after
-//! `--` keep only the models whose file name contains one (`-- bunny`).
-//! Prints a Markdown table; both samplers' volumes are compared voxel by voxel.
+//! The bunny is open (its holes are capped for the rows); the engine is a
+//! CAD assembly (non-manifold, T-junctions, a thousand loops by index).
+//! For an open mesh the rows also sample its closed version (the mesh with
+//! its caps, closed: no caps to evaluate) on the same grid: issue 48 item 3
+//! asks for the open mesh within 2× of that. Run with
+//! `cargo bench -p lodstudio-core --bench voxel_sampling` (about ten
+//! minutes here: the point sampler is the slow part, and is run on the
+//! engine at 64 only); names after `--` keep only the models whose file
+//! name contains one (`-- bunny`). Prints a Markdown table; both samplers'
+//! volumes are compared voxel by voxel.
 
 mod common;
 
@@ -17,6 +22,7 @@ use std::time::Instant;
 
 use lodstudio_core::Progress;
 use lodstudio_core::implicit::{Implicit, MeshSolid};
+use lodstudio_core::voxel::caps::close;
 use lodstudio_core::voxel::sampling::sample_implicit;
 use lodstudio_core::voxel::scanline::sample_by_rows;
 use lodstudio_core::voxel::{Filter, filter, marching_cubes};
@@ -34,14 +40,19 @@ fn seconds<T>(f: impl FnOnce() -> T) -> (T, f64) {
 fn main() {
     let p = Progress::new();
     println!(
-        "| input | n | grid | points s | rows s | speed-up | voxels differing | filter s | marching cubes s | rows + filter + MC s | meshopt remesh s | ratio to remesh |"
+        "| input | n | grid | points s | rows s | speed-up | closed rows s | open / closed | voxels differing | filter s | marching cubes s | rows + filter + MC s | meshopt remesh s | ratio to remesh |"
     );
-    println!("|---|---|---|---|---|---|---|---|---|---|---|---|");
+    println!("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|");
     let only: Vec<String> = std::env::args()
         .skip(1)
         .filter(|a| !a.starts_with('-'))
         .collect();
-    for name in ["dragon_vrip.ply.gz", "horse.ply", "stanford-bunny.obj"] {
+    for name in [
+        "dragon_vrip.ply.gz",
+        "horse.ply",
+        "stanford-bunny.obj",
+        "2CylinderEngine.gltf",
+    ] {
         if !only.is_empty() && !only.iter().any(|o| name.contains(o.as_str())) {
             continue;
         }
@@ -51,6 +62,8 @@ fn main() {
                 .join(name),
         );
         let solid = MeshSolid::new(&m);
+        let closed = close(&m).expect("a mesh").0.into_owned();
+        let closed_solid = MeshSolid::new(&closed);
         let bytes: Vec<u8> = m
             .positions
             .iter()
@@ -63,14 +76,25 @@ fn main() {
             let h = solid.bounds().extent().max_element() / n as f32;
             let (rows, t_rows) =
                 seconds(|| sample_by_rows(&solid, &m, n, RADIUS * h, K, &p).unwrap());
-            let (points, t_points) =
-                seconds(|| sample_implicit(&solid, n, RADIUS * h, K, &p).unwrap());
-            let differing = rows
-                .data
-                .iter()
-                .zip(&points.data)
-                .filter(|(a, b)| a != b)
-                .count();
+            let (_, t_closed) =
+                seconds(|| sample_by_rows(&closed_solid, &closed, n, RADIUS * h, K, &p).unwrap());
+            // The point sampler on the engine takes minutes past 64.
+            let points = (n == 64 || !name.ends_with("gltf"))
+                .then(|| seconds(|| sample_implicit(&solid, n, RADIUS * h, K, &p).unwrap()));
+            let differing = points.as_ref().map_or("—".to_string(), |(points, _)| {
+                let count = rows
+                    .data
+                    .iter()
+                    .zip(&points.data)
+                    .filter(|(a, b)| a != b)
+                    .count();
+                format!("{count} of {}", rows.data.len())
+            });
+            let (t_points, speed_up) = points
+                .as_ref()
+                .map_or(("—".to_string(), "—".to_string()), |(_, t)| {
+                    (format!("{t:.2}"), format!("{:.0}×", t / t_rows))
+                });
             let (f, t_filter) =
                 seconds(|| filter::apply(Filter::Gaussian, &rows, RADIUS * h, &p).unwrap());
             let (_, t_mc) = seconds(|| marching_cubes(&f, 0.5, &p).unwrap());
@@ -79,13 +103,12 @@ fn main() {
             });
             let ours = t_rows + t_filter + t_mc;
             println!(
-                "| {name} ({} triangles) | {n} | {}×{}×{} | {t_points:.2} | {t_rows:.3} | {:.0}× | {differing} of {} | {t_filter:.3} | {t_mc:.3} | {ours:.3} | {t_remesh:.3} | {:.2} |",
+                "| {name} ({} triangles) | {n} | {}×{}×{} | {t_points} | {t_rows:.3} | {speed_up} | {t_closed:.3} | {:.2} | {differing} | {t_filter:.3} | {t_mc:.3} | {ours:.3} | {t_remesh:.3} | {:.2} |",
                 m.triangles.len(),
                 rows.dims[0],
                 rows.dims[1],
                 rows.dims[2],
-                t_points / t_rows,
-                rows.data.len(),
+                t_rows / t_closed,
                 ours / t_remesh,
             );
         }

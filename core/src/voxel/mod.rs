@@ -11,6 +11,7 @@
 //! and with them small holes, tunnels and cavities: the genus falls with the radius
 //! (Tables 1–3 pair coarser grids with wider filters).
 
+pub mod caps;
 pub mod filter;
 pub mod layers;
 pub mod marching_cubes;

@@ -4,183 +4,29 @@
 //! each signed by its triangle's orientation). The winding number of a
 //! sub-sample is the signed count of the crossings beyond it, which for a
 //! closed mesh is exactly the generalised winding number the general sampler
-//! evaluates point by point, so S is the same. An open mesh is closed first,
-//! each boundary loop capped by a fan to its centroid: its generalised
-//! winding number is the capped mesh's integer one minus the caps' solid
-//! angle over 4π, which matters (can move a sub-sample across ½) only near a
-//! cap, where it is computed exactly at a few sub-samples per row and carried
-//! along it between them by a bound on its gradient (Biot–Savart over the
-//! loop). A row passing within round-off of an edge or a vertex of the
+//! evaluates point by point, so S is the same. Any other mesh (open,
+//! non-manifold, faces that disagree) is closed first by [`super::caps`]:
+//! its generalised winding number is the capped mesh's integer one minus
+//! the caps' solid angle over 4π, which matters (can move a sub-sample
+//! across ½) only on rows near a cap, where it is computed at a few
+//! sub-samples per row (within a stated error) and carried along it between
+//! them by a bound on its gradient (Biot–Savart over the loops). A row passing within round-off of an edge or a vertex of the
 //! projected surface would count a crossing twice or not at all: its
 //! sub-samples are classified point by point instead, by the solid itself.
-
-use std::borrow::Cow;
-use std::collections::HashMap;
 
 use glam::{DVec3, Vec3};
 use rayon::prelude::*;
 
+use super::caps::{Eval, close};
 use super::sampling::{Grid, sub_offset};
 use crate::geom::{TriMesh, Volume};
 use crate::implicit::Implicit;
 use crate::progress::{Cancelled, Progress};
 
-/// Whether rows can sample `mesh`'s solid: a manifold, consistently
-/// oriented surface whose boundary edges (if any) form simple loops to cap.
+/// Whether rows can sample `mesh`'s solid: any mesh with a triangle, since
+/// its boundary is capped whatever its connectivity (see [`super::caps`]).
 pub fn applies(mesh: &TriMesh) -> bool {
-    capped(mesh).is_some()
-}
-
-/// One boundary loop's cap, a fan from the loop's centroid, and the ball
-/// outside which the cap's solid angle stays below 2π (so the capped mesh's
-/// winding number classifies a sub-sample as the open mesh's does).
-struct Cap {
-    /// The boundary loop, closed (last point = first), in the surface's direction.
-    ring: Vec<DVec3>,
-    center: DVec3,
-    reach: f64,
-}
-
-/// The signed solid angle of a triangle over 4π (Van Oosterom and Strackee),
-/// its corners given from the viewpoint with their lengths.
-fn solid_angle([(a, la), (b, lb), (c, lc)]: [(DVec3, f64); 3]) -> f64 {
-    let num = a.dot(b.cross(c));
-    let den = la * lb * lc + a.dot(b) * lc + a.dot(c) * lb + b.dot(c) * la;
-    num.atan2(den) / (2.0 * std::f64::consts::PI)
-}
-
-impl Cap {
-    /// The cap's signed solid angle at `p` over 4π, the open mesh's winding
-    /// number short of the capped one's: its fan runs against the loop.
-    fn winding(&self, p: DVec3) -> f64 {
-        let from = |v: DVec3| {
-            let d = v - p;
-            (d, d.length())
-        };
-        let c = from(self.center);
-        let mut prev = from(self.ring[0]);
-        let mut sum = 0.0;
-        for &v in &self.ring[1..] {
-            let next = from(v);
-            sum += solid_angle([next, prev, c]);
-            prev = next;
-        }
-        sum
-    }
-
-    /// At `p`: a bound on the gradient of [`Cap::winding`] off the cap, and
-    /// the distance to the loop. The gradient of a solid angle is the
-    /// Biot–Savart integral over the boundary, |∇Ω| ≤ ∮ |dr| / |r − p|², at
-    /// most Σ over the loop's edges of length / distance².
-    fn gradient_bound(&self, p: DVec3) -> (f64, f64) {
-        let (mut sum, mut nearest) = (0.0, f64::INFINITY);
-        for e in self.ring.windows(2) {
-            let (a, ab) = (e[0], e[1] - e[0]);
-            let len2 = ab.length_squared();
-            let t = ((p - a).dot(ab) / len2.max(f64::MIN_POSITIVE)).clamp(0.0, 1.0);
-            let d2 = (a + t * ab).distance_squared(p);
-            sum += len2.sqrt() / d2;
-            nearest = nearest.min(d2);
-        }
-        (sum / (4.0 * std::f64::consts::PI), nearest.sqrt())
-    }
-}
-
-/// `mesh` with each boundary loop capped by a fan to the loop's centroid,
-/// oriented with the surface, and the caps; `None` when the surface is not
-/// manifold and consistently oriented or its boundary is not simple loops.
-fn capped(mesh: &TriMesh) -> Option<(Cow<'_, TriMesh>, Vec<Cap>)> {
-    if mesh.triangles.is_empty()
-        || mesh
-            .triangles
-            .iter()
-            .any(|t| t[0] == t[1] || t[1] == t[2] || t[2] == t[0])
-    {
-        return None;
-    }
-    // Edges sorted by their two ends, then direction (packed in 64 bits,
-    // so indices below 2³¹: any mesh that fits in memory): a directed edge
-    // used twice is an edge of three or more triangles or of two that
-    // disagree on orientation (then the signed crossings are no winding
-    // number); an edge used once is border. One sort of 3n keys.
-    if mesh.positions.len() > (u32::MAX >> 1) as usize {
-        return None;
-    }
-    let key = |a: u32, b: u32| (a.min(b) as u64) << 32 | (a.max(b) as u64) << 1 | u64::from(a > b);
-    let mut edges: Vec<u64> = mesh
-        .triangles
-        .par_iter()
-        .flat_map_iter(|t| [key(t[0], t[1]), key(t[1], t[2]), key(t[2], t[0])])
-        .collect();
-    edges.par_sort_unstable();
-    if edges.windows(2).any(|w| w[0] == w[1]) {
-        return None;
-    }
-    let border: Vec<(u32, u32)> = edges
-        .chunk_by(|x, y| x >> 1 == y >> 1)
-        .filter(|same| same.len() == 1)
-        .map(|e| {
-            let (lo, hi) = ((e[0] >> 32) as u32, (e[0] as u32) >> 1);
-            if e[0] & 1 == 1 { (hi, lo) } else { (lo, hi) }
-        })
-        .collect();
-    if border.is_empty() {
-        return Some((Cow::Borrowed(mesh), Vec::new()));
-    }
-    let mut next: HashMap<u32, u32> = HashMap::new();
-    for &(a, b) in &border {
-        if next.insert(a, b).is_some() {
-            return None;
-        }
-    }
-    let mut closed = TriMesh::new(mesh.positions.clone(), mesh.triangles.clone());
-    let mut starts: Vec<u32> = next.keys().copied().collect();
-    starts.sort_unstable();
-    let mut seen = std::collections::HashSet::new();
-    let mut caps = Vec::new();
-    for start in starts {
-        if seen.contains(&start) {
-            continue;
-        }
-        let mut ring = vec![start];
-        seen.insert(start);
-        let mut v = *next.get(&start)?;
-        while v != start {
-            if !seen.insert(v) {
-                return None;
-            }
-            ring.push(v);
-            v = *next.get(&v)?;
-        }
-        let pos = |v: u32| mesh.positions[v as usize].as_dvec3();
-        let center = ring.iter().map(|&v| pos(v)).sum::<DVec3>() / ring.len() as f64;
-        let c = closed.positions.len() as u32;
-        closed.positions.push(center.as_vec3());
-        for (i, &a) in ring.iter().enumerate() {
-            let b = ring[(i + 1) % ring.len()];
-            // The surface runs a → b; its cap runs b → a.
-            closed.triangles.push([b, a, c]);
-        }
-        let mut loop_points: Vec<DVec3> = ring.iter().map(|&v| pos(v)).collect();
-        loop_points.push(pos(ring[0]));
-        let radius = loop_points
-            .iter()
-            .map(|v| v.distance(center))
-            .fold(0.0, f64::max);
-        let area: f64 = loop_points
-            .windows(2)
-            .map(|e| 0.5 * (e[0] - center).cross(e[1] - center).length())
-            .sum();
-        // A triangle's |solid angle| is at most its area over the square of
-        // its distance, so beyond `reach` the caps' sum stays under 2π.
-        let reach = 1.01 * (radius + (area / (2.0 * std::f64::consts::PI)).sqrt()) + 1e-9;
-        caps.push(Cap {
-            ring: loop_points,
-            center,
-            reach,
-        });
-    }
-    Some((Cow::Owned(closed), caps))
+    close(mesh).is_some()
 }
 
 /// Samples the solid of `mesh` (which `solid` is, for rows that need a
@@ -196,12 +42,12 @@ pub fn sample_by_rows(
     progress: &Progress,
 ) -> Result<Volume, Cancelled> {
     progress.stage("sampling");
-    let Some((mesh, caps)) = capped(mesh) else {
+    let Some((mesh, caps)) = close(mesh) else {
         return super::sampling::sample_implicit(solid, resolution, margin, supersample, progress);
     };
     let mesh = &mesh;
     // The caps' fans close the mesh after its own triangles.
-    let first_cap = mesh.triangles.len() - caps.iter().map(|c| c.ring.len() - 1).sum::<usize>();
+    let first_cap = mesh.triangles.len() - caps.triangles();
     let grid = Grid::around(solid.bounds(), resolution, margin);
     let Grid { dims, origin, h } = grid;
     let k = supersample.max(1);
@@ -274,16 +120,11 @@ pub fn sample_by_rows(
                         continue;
                     }
                     row.sort_by(|a, b| a.0.total_cmp(&b.0));
-                    // The caps near enough this row to matter.
                     let (y, z) = (ys[iy] as f64, sz);
-                    let near: Vec<&Cap> = caps
-                        .iter()
-                        .filter(|c| (c.center.y - y).hypot(c.center.z - z) < c.reach)
-                        .collect();
                     // Winding beyond the sample = total − crossings up to it.
                     let total: i32 = row.iter().map(|c| c.1).sum();
                     let (mut next, mut before) = (0, 0);
-                    if near.is_empty() {
+                    if caps.far_from_row(y, z) {
                         // Between two crossings the winding is constant: the
                         // sub-samples from the first at or past one crossing
                         // to the first at or past the next fill their voxels.
@@ -311,8 +152,8 @@ pub fn sample_by_rows(
                     let surface_total: i32 = row.iter().filter(|c| !c.2).map(|c| c.1).sum();
                     let mut surface_before = 0;
                     // Anchor: x, g there, the surface's winding there, and
-                    // the caps' gradient bound and least distance there.
-                    let mut anchor: Option<(f64, f64, i32, f64, f64)> = None;
+                    // the caps there (g's error, gradient bound, distance).
+                    let mut anchor: Option<(f64, f64, i32, Eval)> = None;
                     for (ix, &sx) in xs.iter().enumerate() {
                         let x = sx as f64;
                         while next < row.len() && row[next].0 <= x {
@@ -324,26 +165,23 @@ pub fn sample_by_rows(
                         }
                         let (w, surface) = (total - before, surface_total - surface_before);
                         // Within dx of the anchor the caps' winding moves by at
-                        // most S·dx / (1 − dx/d) (S the gradient bound, d the
-                        // least distance to a loop there): the side of ½ is
-                        // kept while that stays under the anchor's margin m,
-                        // for dx < m / (S + m/d).
-                        let known = anchor.and_then(|(ax, ag, asurf, slope, d)| {
+                        // most its drift (`Eval::drift`): the side of ½ is
+                        // kept while that stays under the anchor's margin
+                        // (less the far field's error).
+                        let known = anchor.and_then(|(ax, ag, asurf, e)| {
                             let margin = (ag + (surface - asurf) as f64).abs() - 0.5;
-                            let m = margin.abs() - 1e-9;
-                            (m > 0.0 && x - ax < m / (slope + m / d)).then_some(margin > 0.0)
+                            let m = margin.abs() - 1e-9 - e.error;
+                            (m > 0.0 && e.drift(x - ax) < m).then_some(margin > 0.0)
                         });
                         let inside = known.unwrap_or_else(|| {
                             let q = DVec3::new(x, y, z);
-                            let (mut open, mut slope, mut d) = (0.0, 0.0, f64::INFINITY);
-                            for c in &near {
-                                open += c.winding(q);
-                                let (s, dc) = c.gradient_bound(q);
-                                slope += s;
-                                d = d.min(dc);
+                            let mut e = caps.eval(q, false);
+                            if ((w as f64 - e.value).abs() - 0.5).abs() <= e.error {
+                                // The far field could tip it: every cap exactly.
+                                e = caps.eval(q, true);
                             }
-                            let g = w as f64 - open;
-                            anchor = Some((x, g, surface, slope, d));
+                            let g = w as f64 - e.value;
+                            anchor = Some((x, g, surface, e));
                             g.abs() >= 0.5
                         });
                         line[ix / k] += u16::from(inside);
@@ -413,6 +251,7 @@ fn crossing(p: &[Vec3; 3], y: f64, z: f64, h: f64) -> Crossing {
 mod tests {
     use super::*;
     use crate::implicit::MeshSolid;
+    use crate::voxel::caps::solid_angle;
     use crate::voxel::sampling::sample_implicit;
 
     /// The rows give the very occupancy the winding number gives, sample for
@@ -428,6 +267,9 @@ mod tests {
         // Open: a band of the torus's faces taken away leaves two loops.
         let mut open = torus.clone();
         open.triangles.drain(0..80);
+        // Open, and a face that disagrees with its neighbours: its edges
+        // are a boundary loop of multiplicity two, capped like a hole.
+        open.triangles[300].swap(1, 2);
         for mesh in [&torus, &inward, &open] {
             assert!(applies(mesh));
             let solid = MeshSolid::new(mesh);
@@ -500,9 +342,5 @@ mod tests {
             }
             assert!(rows.data.iter().any(|&v| v > 0.0 && v < 1.0));
         }
-        // A mesh with a flipped face is left to the winding number.
-        let mut flipped = torus.clone();
-        flipped.triangles[0].swap(1, 2);
-        assert!(!applies(&flipped));
     }
 }
