@@ -505,8 +505,20 @@ fn split_at_junctions(
         let tol = JUNCTION * len2.sqrt();
         let (lo, hi) = (at(pa.min(pb) - tol), at(pa.max(pb) + tol));
         on.clear();
+        // Splitting is optional (the chain is exact either way): an edge
+        // that would look at too many cells or vertices (a hostile file's
+        // crowd in one cell) stays whole, so this stays linear.
         let cells = (0..3).map(|i| (hi[i] - lo[i] + 1) as u64).product::<u64>();
-        if cells <= 4096 {
+        let crowd = |x, y, z| grid.get(&[x, y, z]).map_or(0, Vec::len);
+        let looked = (cells <= 4096).then(|| {
+            (lo[0]..=hi[0])
+                .flat_map(|x| {
+                    (lo[1]..=hi[1]).flat_map(move |y| (lo[2]..=hi[2]).map(move |z| (x, y, z)))
+                })
+                .map(|(x, y, z)| crowd(x, y, z))
+                .sum::<usize>()
+        });
+        if looked.is_some_and(|n| n <= 4096) {
             for x in lo[0]..=hi[0] {
                 for y in lo[1]..=hi[1] {
                     for z in lo[2]..=hi[2] {
