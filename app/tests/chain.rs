@@ -238,7 +238,7 @@ fn a_mixed_chain_builds_previews_and_exports_as_the_cli_does() {
 }
 
 /// Rows are added, duplicated and removed from the panel; Auto chain fills
-/// it by its rule; a bad recipe file is refused naming the row and the field.
+/// it by its rule and builds it; a bad recipe file is refused naming the row and the field.
 #[test]
 fn the_panel_edits_rows_and_refuses_bad_recipes() {
     let tmp = tempfile::tempdir().unwrap();
@@ -260,8 +260,11 @@ fn the_panel_edits_rows_and_refuses_bad_recipes() {
     click(&mut harness, "Remove");
     harness.run();
     assert_eq!(rows(&harness), before + 1);
+    // Auto chain replaces the rows and builds them.
     click(&mut harness, "Auto chain");
-    harness.run();
+    harness.step();
+    assert!(harness.state().is_building_chain());
+    wait_while(&mut harness, "auto chain", StudioApp::is_building_chain);
     let labels: Vec<String> = harness
         .state()
         .chain_settings()
@@ -275,7 +278,6 @@ fn the_panel_edits_rows_and_refuses_bad_recipes() {
         ["source", "simplify:0.5", "simplify:0.25", "simplify:0.125"],
         "LOD0 is the source (issue 46)"
     );
-    built_chain(&mut harness);
     let chain = &harness.state().built_chain().unwrap().chain;
     let triangles: Vec<usize> = chain
         .lods
@@ -446,4 +448,39 @@ fn the_truck_chain_is_drawn_textured_row_by_row() {
             .query_by_label_contains("1 short of the triangle budget")
             .is_some()
     );
+}
+
+/// Rows that do not earn their place are flagged in the table's flags
+/// column (its hover says why) and counted in the log; "Auto chain"
+/// replaces the rows by its rule's and builds them, none flagged.
+#[test]
+fn flagged_rows_show_in_the_table_and_auto_chain_builds_none() {
+    let mut harness = studio(Some(PathBuf::from("builtin:torus")));
+    wait_while(&mut harness, "loading", StudioApp::is_loading);
+    let rows = "source,simplify:0.05%,simplify:0.08%,simplify:0.25,simplify:0.002,simplify:0.001";
+    let recipe = Recipe::new(parse_lods(rows, None).unwrap());
+    harness.state_mut().set_chain_recipe(recipe);
+    built_chain(&mut harness);
+    harness.run();
+    for word in ["never shown", "same LOD"] {
+        assert_eq!(harness.get_all_by_label(word).count(), 1, "{word}");
+    }
+    assert!(harness.query_by_label_contains("2 rows flagged").is_some());
+
+    click(&mut harness, "Auto chain");
+    harness.step();
+    wait_while(&mut harness, "auto chain", StudioApp::is_building_chain);
+    harness.run();
+    let settings = harness.state().chain_settings();
+    assert_eq!(
+        settings.recipe.rows,
+        settings.auto.make(),
+        "the rule's rows"
+    );
+    let built = harness.state().built_chain().expect("built");
+    assert_eq!(built.recipe(), &settings.recipe);
+    assert!(built.chain.flags().iter().all(Vec::is_empty));
+    for word in ["never shown", "same LOD", "costlier"] {
+        assert!(harness.query_by_label(word).is_none(), "{word}");
+    }
 }

@@ -636,6 +636,64 @@ fn recipes_replay_mixed_chains_byte_for_byte() {
     );
 }
 
+/// Rows that do not earn their place are flagged in the JSON: a row whose
+/// budget gives the LOD of the row before (the torus' topology floor), and
+/// an LOD that hands over where it takes over (two rows within a pixel
+/// where the torus fills the viewport), checked against the coverages the
+/// file writes: a flagged LOD's range is a sliver, every other one's is not.
+#[test]
+fn rows_that_do_not_earn_their_place_are_flagged() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("flagged.glb");
+    let rows = "source,0.05%,0.08%,0.25,0.002,0.001";
+    let report = export_json("builtin:torus", rows, &out, &[]);
+    let lods = check_chain(&out, &report);
+    let flags = |l: &Value| -> Vec<String> {
+        l["flags"].as_array().map_or(Vec::new(), |f| {
+            f.iter()
+                .map(|f| f["flag"].as_str().unwrap().to_string())
+                .collect()
+        })
+    };
+    let all: Vec<Vec<String>> = lods.iter().map(flags).collect();
+    assert_eq!(
+        all,
+        [
+            vec![],
+            vec!["never_shown".to_string()],
+            vec![],
+            vec![],
+            vec!["duplicate".into()]
+        ],
+        "{report}"
+    );
+    let dup = &lods[4]["flags"][0];
+    assert_eq!(dup["rows"], serde_json::json!(["simplify:0.001"]));
+    assert_eq!(dup["of"], "simplify:0.002");
+    assert!(dup["why"].as_str().unwrap().contains("gave the same LOD"));
+    assert_eq!(
+        lods[4]["rows"],
+        serde_json::json!(["simplify:0.002", "simplify:0.001"])
+    );
+    for (k, l) in lods.iter().enumerate().skip(1) {
+        let (c_in, c_out) = (
+            lods[k - 1]["screen_coverage"].as_f64().unwrap(),
+            l["screen_coverage"].as_f64().unwrap(),
+        );
+        let sliver = c_in / c_out < 1.001;
+        assert_eq!(
+            sliver,
+            all[k].contains(&"never_shown".to_string()),
+            "LOD{k}: {c_in} {c_out}"
+        );
+        // Points as POINTS: one each; a splat is a quad.
+        let drawn = l["triangles"].as_u64().unwrap()
+            + l["points"].as_u64().unwrap()
+            + 2 * l["splats"].as_u64().unwrap();
+        assert_eq!(l["drawn_primitives"], drawn, "{l}");
+    }
+}
+
 /// A ratio row the torus cannot reach (its handle stays) says so in the
 /// JSON, with why; a row that is met says nothing.
 #[test]

@@ -7,7 +7,7 @@ use std::path::Path;
 use super::*;
 use lodstudio_core::io::gltf_writer::PointsAs;
 use lodstudio_core::lod::Method;
-use lodstudio_core::recipe::{Chain, ChainError, Recipe, build_chain, parse_lods};
+use lodstudio_core::recipe::{Chain, ChainError, Flag, Recipe, build_chain, parse_lods};
 
 mod batch;
 mod scene;
@@ -309,11 +309,14 @@ fn report(
     input: Option<&lodstudio_core::TriMesh>,
 ) -> serde_json::Value {
     let diag = chain.diagonal;
+    let flags = chain.flags();
     let per_lod: Vec<serde_json::Value> = chain
         .lods
         .iter()
         .zip(&chain.coverages)
-        .map(|(l, c)| {
+        .zip(&flags)
+        .enumerate()
+        .map(|(k, ((l, c), flags))| {
             let tolerances: Vec<String> = l
                 .rows
                 .iter()
@@ -327,6 +330,8 @@ fn report(
                 "points": l.set.points.len(),
                 "splats": l.set.splats.len(),
                 "layers": l.set.layers.len(),
+                // What a client draws (points as --points-as writes them).
+                "drawn_primitives": chain.drawn(k),
                 "vertices": l.set.mesh.positions.len(),
                 "error_bound": l.bound(),
                 "error_bound_relative": l.bound() / diag,
@@ -339,6 +344,10 @@ fn report(
             // A budget the row could not reach, and why.
             if let Some(unmet) = &l.set.unmet {
                 j["unmet"] = serde_json::json!(unmet);
+            }
+            // Rows that do not earn their place, and why.
+            if !flags.is_empty() {
+                j["flags"] = flags.iter().map(Flag::json).collect();
             }
             j
         })
@@ -406,5 +415,11 @@ fn print_summary(j: &serde_json::Value) {
             100.0 * l["error_bound_relative"].as_f64().unwrap_or_default(),
             l["screen_coverage"].as_f64().unwrap_or_default(),
         );
+        let notes = [&l["unmet"]]
+            .into_iter()
+            .chain(l["flags"].as_array().into_iter().flatten());
+        for why in notes.filter_map(|n| n["why"].as_str()) {
+            println!("        ! {why}");
+        }
     }
 }

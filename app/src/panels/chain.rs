@@ -29,7 +29,16 @@ pub struct RowFigures {
     pub estimate: bool,
     /// The triangle budget it fell short of, and why.
     pub unmet: Option<String>,
+    /// Why the row does not earn its place (`recipe::Flag`): the words the
+    /// table shows, and the hover's sentences.
+    pub flags: Option<(String, String)>,
 }
+
+/// The flags column's head and hover.
+const FLAGS_HEAD: (&str, &str) = (
+    "flags",
+    "Rows that do not earn their place: the same LOD as a row before, never shown (it hands      over where it takes over), or costlier to draw than the finer LOD before it. Auto chain      leaves them out.",
+);
 
 /// The table's column heads after the editable ones.
 pub const FIGURE_HEADS: [(&str, &str); 7] = [
@@ -76,13 +85,13 @@ impl ChainSettings {
         let before = self.recipe.rows.clone();
         let mut action: Option<(usize, RowAction)> = None;
         egui::Grid::new("chain rows")
-            .num_columns(5 + FIGURE_HEADS.len())
+            .num_columns(6 + FIGURE_HEADS.len())
             .striped(true)
             .show(ui, |ui| {
                 for head in ["row", "method", "tolerance", "parameters", ""] {
                     ui.strong(head);
                 }
-                for (head, hint) in FIGURE_HEADS {
+                for (head, hint) in FIGURE_HEADS.into_iter().chain([FLAGS_HEAD]) {
                     ui.strong(head).on_hover_text(hint);
                 }
                 ui.end_row();
@@ -133,9 +142,18 @@ impl ChainSettings {
                                     ui.monospace(cell);
                                 }
                             }
+                            match &f.flags {
+                                Some((words, why)) => {
+                                    let warn = ui.visuals().warn_fg_color;
+                                    ui.colored_label(warn, words).on_hover_text(why);
+                                }
+                                None => {
+                                    ui.label("");
+                                }
+                            }
                         }
                         None => {
-                            for _ in FIGURE_HEADS {
+                            for _ in 0..=FIGURE_HEADS.len() {
                                 ui.weak("–");
                             }
                         }
@@ -173,8 +191,9 @@ impl ChainSettings {
         add.clicked()
     }
 
-    /// "Auto chain": its rule and the button that replaces the rows; true
-    /// when the rows were replaced.
+    /// "Auto chain": its rule and its button; true when clicked (the
+    /// studio replaces the rows by the rule's and builds them, leaving out
+    /// the rows the chain flags).
     pub fn auto_ui(&mut self, ui: &mut egui::Ui) -> bool {
         let a = &mut self.auto;
         ui.horizontal_wrapped(|ui| {
@@ -209,14 +228,9 @@ impl ChainSettings {
                 .on_hover_text("Close the chain with an AMG splat impostor (15% of the diagonal).");
         });
         *a = a.sanitized();
-        let clicked = ui
-            .button("Auto chain")
-            .on_hover_text("Replace the rows by the rule: halve the triangles, or double the pixel error, row after row.")
-            .clicked();
-        if clicked {
-            self.recipe.rows = self.auto.make();
-        }
-        clicked
+        ui.button("Auto chain")
+            .on_hover_text("Replace the rows by the rule (halve the triangles, or double the pixel error, row after row) and build them; rows that give the same LOD as a row before, are never shown or cost more to draw than the finer LOD are left out.")
+            .clicked()
     }
 }
 

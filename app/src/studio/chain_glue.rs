@@ -30,6 +30,14 @@ impl StudioApp {
         }
     }
 
+    /// Replaces the rows by the Auto chain rule's and builds them on the
+    /// model on screen, leaving out the rows the chain flags.
+    pub fn auto_chain(&mut self, ctx: &egui::Context) {
+        if let Some(event) = self.chain.start_auto(self.chain_source(), ctx) {
+            self.report_chain(event);
+        }
+    }
+
     /// Reopens the chain the last session built on the model on screen with
     /// the rows on the panel, when its work was kept.
     pub(super) fn reopen_chain(&mut self, ctx: &egui::Context) {
@@ -138,6 +146,7 @@ impl StudioApp {
     fn run_chain_request(&mut self, request: ChainRequest, ctx: &egui::Context) {
         match request {
             ChainRequest::Build => self.build_chain(ctx),
+            ChainRequest::Auto => self.auto_chain(ctx),
             ChainRequest::MeasureDifference => self.measure_difference(ctx),
             ChainRequest::Save(save) => self.spawn_save(ctx, save),
             ChainRequest::Report(event) => self.report_chain(event),

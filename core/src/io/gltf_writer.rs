@@ -45,6 +45,18 @@ pub enum PointsAs {
     Discs,
 }
 
+impl PointsAs {
+    /// What a client draws per point: the polygon's triangles, or one
+    /// point primitive (counted as one).
+    pub fn primitives_per_point(self) -> usize {
+        match self {
+            PointsAs::Points => 1,
+            PointsAs::Quads => 4,
+            PointsAs::Discs => 8,
+        }
+    }
+}
+
 impl std::str::FromStr for PointsAs {
     type Err = String;
     fn from_str(s: &str) -> Result<Self, String> {
@@ -468,10 +480,7 @@ impl GltfWriter {
     /// disc (a square, or an octagon whose inscribed circle is the disc),
     /// wearing its colour; double-sided, as a point has no back.
     fn point_meshes(&mut self, set: &DrawSet) -> Option<Value> {
-        let sides: usize = match self.points_as {
-            PointsAs::Discs => 8,
-            _ => 4,
-        };
+        let sides = self.points_as.primitives_per_point();
         // The polygon's corners lie at r / cos(π / sides) so its edges touch the disc.
         let reach = 1.0 / (std::f32::consts::PI / sides as f32).cos();
         let mut mesh = TriMesh::default();

@@ -86,19 +86,11 @@ pub fn lod_screen_coverages(
     pixels: f32,
     viewport_height: f32,
 ) -> Vec<f32> {
-    let (r, p, h) = (radius as f64, pixels as f64, viewport_height as f64);
-    let coverage = |e: f64| {
-        let c = 2.0 * r * p / (e * h);
-        if c.is_nan() { 1.0 } else { c }
-    };
     let n = error_bounds.len();
     let mut out: Vec<f32> = Vec::with_capacity(n);
     for i in 0..n {
-        let raw = match error_bounds.get(i + 1) {
-            Some(&e) => coverage(e as f64),
-            None => p / h,
-        };
-        let mut c = raw.clamp(0.0, 1.0) as f32;
+        let raw = switch_out(error_bounds, i, radius, pixels, viewport_height);
+        let mut c = raw as f32;
         if let Some(&prev) = out.last() {
             c = c.min(prev * (1.0 - 1e-4));
         }
@@ -109,6 +101,45 @@ pub fn lod_screen_coverages(
         out.push(c);
     }
     out
+}
+
+/// `c(e) = 2 r p / (e H)` ([`lod_screen_coverages`]), clamped to [0, 1]:
+/// a loader's thresholds end at the object filling the viewport.
+fn coverage(e: f32, radius: f32, pixels: f32, viewport_height: f32) -> f64 {
+    let c = 2.0 * radius as f64 * pixels as f64 / (e as f64 * viewport_height as f64);
+    if c.is_nan() { 1.0 } else { c.clamp(0.0, 1.0) }
+}
+
+/// Where LOD `i` would switch out before the thresholds are made strictly
+/// decreasing: `c(e[i+1])`, or `p / H` for the last.
+fn switch_out(error_bounds: &[f32], i: usize, radius: f32, pixels: f32, height: f32) -> f64 {
+    match error_bounds.get(i + 1) {
+        Some(&e) => coverage(e, radius, pixels, height),
+        None => (pixels as f64 / height as f64).clamp(0.0, 1.0),
+    }
+}
+
+/// Which LODs of a chain no loader ever shows ([`lod_screen_coverages`]'s
+/// arguments): LOD i > 0 takes over at `c(e[i])` and hands over at
+/// `c(e[i+1])`, so it is never drawn when these are equal: the next LOD's
+/// bound is no larger (the same within the clamp to a full viewport), or,
+/// for the last, its bound spans the whole object (`e >= 2r`: leaving the
+/// object out is as good). The strict thresholds still give such an LOD a
+/// sliver of coverage (1e-4 of it), not a place a viewer can see.
+pub fn never_shown(
+    error_bounds: &[f32],
+    radius: f32,
+    pixels: f32,
+    viewport_height: f32,
+) -> Vec<bool> {
+    (0..error_bounds.len())
+        .map(|i| {
+            i > 0 && {
+                let switch_in = coverage(error_bounds[i], radius, pixels, viewport_height);
+                switch_in <= switch_out(error_bounds, i, radius, pixels, viewport_height)
+            }
+        })
+        .collect()
 }
 
 #[cfg(test)]
@@ -151,6 +182,23 @@ mod tests {
         let c = lod_screen_coverages(&[0.0, 0.0, 0.5, 0.5, 1e9], 1.0, 1.0, 1080.0);
         assert!(c.iter().all(|v| *v > 0.0 && *v <= 1.0), "{c:?}");
         assert!(c.windows(2).all(|w| w[1] < w[0]), "{c:?}");
+        // LODs 1 and 3 hand over where they take over (3: its bound spans the object).
+        let never = never_shown(&[0.0, 0.5, 0.5, 3.0], 1.0, 1.0, 1080.0);
+        assert_eq!(never, [false, true, false, true]);
+        // Both within the clamp to a full viewport (c(e) = 2/(e·1080) > 1).
+        assert_eq!(
+            never_shown(&[0.0, 1e-4, 1e-3], 1.0, 1.0, 1080.0),
+            [false, true, false]
+        );
+        // Each LOD that is shown keeps a coverage interval a viewer can reach.
+        let bounds = [0.0, 0.01, 0.02, 0.5];
+        let c = lod_screen_coverages(&bounds, 1.0, 1.0, 1080.0);
+        for (k, never) in never_shown(&bounds, 1.0, 1.0, 1080.0)
+            .into_iter()
+            .enumerate()
+        {
+            assert!(never || k == 0 || c[k - 1] / c[k] > 1.01, "{k}: {c:?}");
+        }
         let c = lod_screen_coverages(&[0.1, 0.2], 0.0, 1.0, 1080.0);
         assert!(
             c.iter().all(|v| *v > 0.0 && *v <= 1.0) && c[1] < c[0],

@@ -243,9 +243,14 @@ fn build(
             .then(b.set.primitive_count().cmp(&a.set.primitive_count()))
             .then(a.rows[0].cmp(&b.rows[0]))
     });
-    // Rows met by the same cut share it (one node, both labels).
+    // Rows met by the same cut share it (one node, both labels), even when
+    // they asked for different budgets below it (the first one's is kept).
     lods.dedup_by(|later, kept| {
-        let same = later.method == kept.method && later.set == kept.set;
+        let (a, b) = (later.set.unmet.take(), kept.set.unmet.take());
+        let reached = |u: &Option<lod::Unmet>| u.as_ref().map(|u| (u.reached, u.blockers.clone()));
+        let same =
+            later.method == kept.method && later.set == kept.set && reached(&a) == reached(&b);
+        (later.set.unmet, kept.set.unmet) = (a, b);
         if same {
             kept.rows.append(&mut later.rows);
             kept.labels.append(&mut later.labels);

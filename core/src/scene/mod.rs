@@ -26,7 +26,7 @@ use crate::io::scene::Scene;
 pub use crate::io::scene_writer::Layout;
 use crate::io::scene_writer::{self, MeshLods};
 use crate::progress::Progress;
-use crate::recipe::{Chain, ChainError, Recipe, build_chain};
+use crate::recipe::{Chain, ChainError, Flag, Recipe, build_chain};
 use crate::{Model, TriMesh};
 
 /// The vertical field of view the reported switch distances assume.
@@ -341,13 +341,15 @@ impl SceneChains {
             .zip(&self.target_bounds)
             .zip(&self.skipped)
             .map(|((((m, chain), measures), target_bounds), skipped)| {
+                let flags = chain.flags();
                 let lods: Vec<Value> = chain
                     .lods
                     .iter()
                     .zip(&chain.coverages)
                     .zip(measures)
                     .zip(target_bounds)
-                    .map(|(((l, c), measured), target_bounds)| {
+                    .zip(&flags)
+                    .map(|((((l, c), measured), target_bounds), flags)| {
                         let world: Vec<f32> =
                             m.instances.iter().map(|i| i.scale() * l.bound()).collect();
                         // Where the coverage falls to `c` (LOD k is left for
@@ -372,6 +374,9 @@ impl SceneChains {
                         }
                         if let Some(unmet) = &l.set.unmet {
                             j["unmet"] = json!(unmet);
+                        }
+                        if !flags.is_empty() {
+                            j["flags"] = flags.iter().map(Flag::json).collect();
                         }
                         if let (Value::Object(o), Ok(Value::Object(more))) =
                             (&mut j, serde_json::to_value(measured))

@@ -6,10 +6,12 @@ use std::sync::{Arc, Mutex};
 
 use lodstudio_core::Progress;
 use lodstudio_core::io::{LoadOptions, Loaded};
-use lodstudio_core::recipe::{Chain, Recipe, build_chain_cached, fingerprint};
+use lodstudio_core::recipe::{
+    Chain, Flag, Recipe, build_chain_cached, build_unflagged, fingerprint,
+};
 
-use super::ChainError;
 use super::kept::Kept;
+use super::{ChainError, Mode};
 use crate::live_cut::{CutStyle, styled_scene};
 use crate::panels::chain::RowFigures;
 use crate::render::camera::distance_at_coverage;
@@ -64,16 +66,18 @@ impl BuiltChain {
     /// recipe (`loaded`, or the file at `path` reopened when the recipe welds
     /// otherwise than the studio loaded it), from the work `kept` holds, and
     /// keeps what it made. An empty cache first takes the work saved for
-    /// this model; with `reopen`, only that work answers: `None` unless it
-    /// holds this recipe's chain (nothing is built).
+    /// this model; to [`Mode::Reopen`], only that work answers: `None`
+    /// unless it holds this recipe's chain (nothing is built); to
+    /// [`Mode::Unflagged`], the recipe less the rows its chain flags.
     pub(super) fn build(
         loaded: &Loaded,
         path: &Path,
         recipe: &Recipe,
         progress: &Progress,
         kept: &Kept,
-        reopen: bool,
+        mode: Mode,
     ) -> Result<Option<BuiltChain>, ChainError> {
+        let reopen = mode == Mode::Reopen;
         let reloaded;
         let model = if recipe.weld() == LoadOptions::default().repair.weld {
             &loaded.model
@@ -96,8 +100,11 @@ impl BuiltChain {
                 return Ok(None);
             }
         }
-        let chain = build_chain_cached(model, recipe, progress, &mut cache)?;
-        let kept_error = kept.save(&cache, recipe).err();
+        let chain = match mode {
+            Mode::Unflagged => build_unflagged(model, recipe, progress, &mut cache)?,
+            _ => build_chain_cached(model, recipe, progress, &mut cache)?,
+        };
+        let kept_error = kept.save(&cache, &chain.recipe).err();
         Ok(Some(BuiltChain::new(chain, kept_error)))
     }
 
@@ -121,7 +128,7 @@ impl BuiltChain {
 /// The table's cells of every recipe row (rows met by one cut share its LOD).
 fn figures(chain: &Chain) -> Vec<RowFigures> {
     let mut out: Vec<Option<RowFigures>> = vec![None; chain.recipe.rows.len()];
-    for (k, lod) in chain.lods.iter().enumerate() {
+    for ((k, lod), flags) in chain.lods.iter().enumerate().zip(chain.flags()) {
         let c_out = chain.coverages[k];
         let c_in = chain.coverage_in(k);
         let set = &lod.set;
@@ -146,12 +153,27 @@ fn figures(chain: &Chain) -> Vec<RowFigures> {
                 u.reached, u.why
             )
         });
-        for &r in &lod.rows {
+        for (i, &r) in lod.rows.iter().enumerate() {
+            // The LOD's first row is its own; each other row repeats it.
+            let row_flags: Vec<Flag> = flags
+                .iter()
+                .map(|f| match f {
+                    Flag::Duplicate { of, .. } => Flag::Duplicate {
+                        rows: vec![lod.labels[i].clone()],
+                        of: format!("row {} ({of})", lod.rows[0]),
+                    },
+                    f => f.clone(),
+                })
+                .filter(|f| i > 0 || !matches!(f, Flag::Duplicate { .. }))
+                .collect();
+            let words: Vec<&str> = row_flags.iter().map(Flag::name).collect();
+            let why: Vec<String> = row_flags.iter().map(Flag::why).collect();
             out[r] = Some(RowFigures {
                 lod: k,
                 cells: cells.clone(),
                 estimate,
                 unmet: unmet.clone(),
+                flags: (!words.is_empty()).then(|| (words.join(", "), why.join("\n"))),
             });
         }
     }

@@ -16,6 +16,11 @@ pub enum ChainEvent {
         kept: usize,
         /// LODs short of their triangle budget (the table says why).
         short: usize,
+        /// Rows flagged: the same LOD as a row before, never shown, or
+        /// costlier than the finer LOD (the table says why).
+        flagged: usize,
+        /// Rows Auto chain left out for one of those reasons.
+        left_out: usize,
         seconds: f64,
         /// The last session's chain, reopened without a build.
         reopened: bool,
@@ -61,6 +66,8 @@ impl fmt::Display for ChainEvent {
                 reopened,
                 not_saved,
                 short,
+                flagged,
+                left_out,
             } => {
                 match (reopened, kept) {
                     (true, _) => write!(f, "Reopened the last session's chain of {lods} LODs")?,
@@ -74,6 +81,20 @@ impl fmt::Display for ChainEvent {
                     write!(
                         f,
                         "; {short} short of the triangle budget (the table marks them with !, its hover says why)"
+                    )?;
+                }
+                if *flagged > 0 {
+                    write!(
+                        f,
+                        "; {flagged} rows flagged: the same LOD as a row before, never shown or \
+                         costlier to draw (the table's flags column says which and why)"
+                    )?;
+                }
+                if *left_out > 0 {
+                    write!(
+                        f,
+                        "; Auto chain left out {left_out} rows: the same LOD as a row before, \
+                         never shown or costlier to draw"
                     )?;
                 }
                 match not_saved {
@@ -100,6 +121,8 @@ pub type SaveWork = Box<dyn FnOnce() -> Saved + Send>;
 pub enum ChainRequest {
     /// Build the chain of the model on screen.
     Build,
+    /// Replace the rows by Auto chain's and build them, less flagged rows.
+    Auto,
     /// Measure the visual difference with the viewport's renderer.
     MeasureDifference,
     Save(SaveWork),

@@ -58,6 +58,19 @@ struct SwitchPreview {
     dolly_from: Option<f64>,
 }
 
+/// What a chain build does with the rows.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+enum Mode {
+    /// Builds them.
+    #[default]
+    Build,
+    /// Only reopens the last session's chain of them.
+    Reopen,
+    /// Builds them less the rows the chain flags (`recipe::build_unflagged`),
+    /// which then replace them: Auto chain.
+    Unflagged,
+}
+
 /// The chain: its rows, their build, the switch preview, the visual
 /// difference and the recipe files.
 #[derive(Default)]
@@ -69,8 +82,10 @@ pub struct ChainState {
     /// session.
     kept: Kept,
     job: Option<Job<Result<Option<BuiltChain>, ChainError>>>,
-    /// The running build only reopens the last session's chain.
-    reopening: bool,
+    /// What the running build does with its rows.
+    mode: Mode,
+    /// The rows it started from.
+    started_from: Option<Recipe>,
     built: Option<BuiltChain>,
     /// The recipe row whose LOD is shown.
     selected: Option<usize>,
@@ -105,14 +120,30 @@ impl ChainState {
         source: Option<Source>,
         ctx: &egui::Context,
     ) -> Option<ChainEvent> {
-        self.start(source, ctx, false)
+        self.start(source, ctx, Mode::Build)
+    }
+
+    /// Replaces the rows by the Auto chain rule's and builds them on
+    /// `source`, leaving out each row the chain flags (the same LOD as a
+    /// row before, never shown, costlier than the finer LOD); the rows kept
+    /// replace the rule's when the build ends.
+    pub fn start_auto(
+        &mut self,
+        source: Option<Source>,
+        ctx: &egui::Context,
+    ) -> Option<ChainEvent> {
+        self.set_recipe(Recipe {
+            rows: self.settings.auto.make(),
+            ..self.settings.recipe.clone()
+        });
+        self.start(source, ctx, Mode::Unflagged)
     }
 
     /// Reopens the chain the last session built on `source` with these rows,
     /// on a worker, without building anything; nothing when none was saved.
     pub fn reopen(&mut self, source: Source, ctx: &egui::Context) -> Option<ChainEvent> {
         match self.kept.has_saved() {
-            true => self.start(Some(source), ctx, true),
+            true => self.start(Some(source), ctx, Mode::Reopen),
             false => None,
         }
     }
@@ -121,7 +152,7 @@ impl ChainState {
         &mut self,
         source: Option<Source>,
         ctx: &egui::Context,
-        reopen: bool,
+        mode: Mode,
     ) -> Option<ChainEvent> {
         self.note = None;
         // A measurement of the chain being replaced would land on the new one.
@@ -133,14 +164,15 @@ impl ChainState {
         let recipe = self.settings.recipe.clone();
         let kept = self.kept.clone();
         let work = move |progress: &Progress| {
-            BuiltChain::build(&loaded, &path, &recipe, progress, &kept, reopen)
+            BuiltChain::build(&loaded, &path, &recipe, progress, &kept, mode)
         };
         match spawn("chain", "Chain", "the chain build", ctx, work) {
             Ok(job) => {
                 // What the rows' builds have made so far, for the viewport.
                 job.progress().watch();
                 self.job = Some(job);
-                self.reopening = reopen;
+                self.mode = mode;
+                self.started_from = Some(self.settings.recipe.clone());
                 None
             }
             Err(e) => Some(ChainEvent::Failed(e)),
@@ -273,6 +305,13 @@ impl ChainState {
             Ok(Some(built)) => {
                 self.measuring = None;
                 self.close_differences();
+                // Auto chain's rows, less those left out, unless edited meanwhile.
+                let from = self.started_from.take();
+                let rows = from.as_ref().map_or(0, |r| r.rows.len());
+                let left_out = rows.saturating_sub(built.recipe().rows.len());
+                if self.mode == Mode::Unflagged && from.as_ref() == Some(&self.settings.recipe) {
+                    self.set_recipe(built.recipe().clone());
+                }
                 let event = ChainEvent::Built {
                     lods: built.chain.lods.len(),
                     kept: built.chain.lods.iter().filter(|l| l.reused).count(),
@@ -282,8 +321,10 @@ impl ChainState {
                         .iter()
                         .filter(|l| l.set.unmet.is_some())
                         .count(),
+                    flagged: built.figures.iter().filter(|f| f.flags.is_some()).count(),
+                    left_out,
                     seconds,
-                    reopened: self.reopening,
+                    reopened: self.mode == Mode::Reopen,
                     not_saved: built.kept_error.clone(),
                 };
                 self.built = Some(built);

@@ -118,6 +118,90 @@ fn a_row_short_of_its_budget_says_why() {
     assert!(why.contains("topology kept"), "{why}");
 }
 
+/// Rows that do not earn their place on the torus: 0.05 % never shown
+/// (0.08 % is within a pixel too where the torus fills the viewport) and
+/// 0.001 past the topology floor, where 0.002 already stopped.
+const FLAGGED: &str =
+    "source,simplify:0.05%,simplify:0.08%,simplify:0.25,simplify:0.002,simplify:0.001";
+
+/// Flagged rows are named in the table with why and counted in the log
+/// line; Auto chain builds its rule's rows less the rows the chain flags,
+/// and the rows kept replace the rule's.
+#[test]
+fn flagged_rows_are_named_and_auto_chain_leaves_them_out() {
+    let mut state = ChainState::default();
+    let events = build(&mut state, FLAGGED, torus());
+    assert!(
+        matches!(
+            events[..],
+            [ChainEvent::Built {
+                flagged: 2,
+                left_out: 0,
+                ..
+            }]
+        ),
+        "{events:?}"
+    );
+    assert!(
+        events[0].to_string().contains("2 rows flagged"),
+        "{}",
+        events[0]
+    );
+    let figures = &state.built().unwrap().figures;
+    let words: Vec<Option<&str>> = figures
+        .iter()
+        .map(|f| f.flags.as_ref().map(|(w, _)| w.as_str()))
+        .collect();
+    assert_eq!(
+        words,
+        [
+            None,
+            Some("never shown"),
+            None,
+            None,
+            None,
+            Some("same LOD")
+        ]
+    );
+    let (_, why) = figures[5].flags.as_ref().unwrap();
+    assert!(why.contains("as row 4 (simplify:0.002)"), "{why}");
+
+    // Halving from 1 % of the torus' 4,096 triangles: 41, 20, 10, 5; the
+    // collapse stops at its floor past 41.
+    state.settings.auto = crate::settings::chain::AutoChain {
+        first: 0.01,
+        rows: 5,
+        ..Default::default()
+    };
+    assert!(
+        state
+            .start_auto(Some(torus()), &egui::Context::default())
+            .is_none()
+    );
+    let events = finish(&mut state);
+    let [
+        ChainEvent::Built {
+            flagged: 0,
+            left_out,
+            ..
+        },
+    ] = events[..]
+    else {
+        panic!("{events:?}")
+    };
+    assert!(left_out >= 2, "{events:?}");
+    assert!(events[0].to_string().contains("Auto chain left out"));
+    let built = state.built().unwrap();
+    assert_eq!(
+        built.recipe(),
+        &state.settings.recipe,
+        "the rows kept replace the rule's"
+    );
+    assert_eq!(state.settings.recipe.rows.len(), 5 - left_out);
+    assert!(state.fresh().is_some());
+    assert!(built.figures.iter().all(|f| f.flags.is_none()));
+}
+
 #[test]
 fn a_build_without_a_model_notes_why_and_starts_nothing() {
     let mut state = ChainState::default();

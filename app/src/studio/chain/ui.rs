@@ -124,7 +124,7 @@ pub fn panel_ui(
         .show(ui, |ui| {
             ui.horizontal(|ui| {
                 if state.settings.auto_ui(ui) {
-                    state.selected = None;
+                    requests.push(ChainRequest::Auto);
                 }
             });
             switch_preview_ui(state, ui, camera, view);
