@@ -1,6 +1,9 @@
 //! A budget met or explained (issue 48, item 5): a count the collapse could
 //! not reach is reported with the rule that kept the edges left and what
-//! would reach further, never written silently.
+//! would reach further, never written silently; so is a budget below a
+//! hierarchy's coarsest cut, with what would reach it.
+
+use super::Method;
 
 /// The rule that keeps an edge from collapsing: what would have to give for
 /// a budget the collapse cannot reach.
@@ -54,4 +57,24 @@ pub struct Unmet {
     pub why: String,
     /// Edges left per rule.
     pub blockers: Vec<(Blocker, usize)>,
+}
+
+impl Unmet {
+    /// A budget of `asked` primitives below the coarsest cut of `method`'s
+    /// hierarchy (`reached` primitives): no cut of it reaches fewer.
+    pub fn past_coarsest(method: Method, asked: usize, reached: usize) -> Unmet {
+        let further = match method {
+            Method::Voxel => "a lower resolution (or the next pyramid level) reaches fewer",
+            _ => "simplify (edge collapse) or voxel at a low resolution reaches fewer",
+        };
+        Unmet {
+            asked,
+            reached,
+            why: format!(
+                "the coarsest {} cut has {reached} primitives: {further}",
+                method.tag()
+            ),
+            blockers: Vec::new(),
+        }
+    }
 }

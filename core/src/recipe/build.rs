@@ -13,7 +13,7 @@ use super::{Recipe, RowTolerance};
 use crate::geom::{Model, TriMesh};
 use crate::io::gltf_writer::write_lod_chain;
 use crate::lod::chain::{ChainItem, choose, lod_screen_coverages};
-use crate::lod::{self, BuildError, DrawSet, Hierarchy, Method, Params};
+use crate::lod::{self, BuildError, DrawSet, Hierarchy, Method, Params, Unmet};
 use crate::progress::{Cancelled, Progress};
 use crate::simplify::{self, CollapseOptions, SimplifyError, Target};
 use crate::view::View;
@@ -430,7 +430,14 @@ fn hierarchy_rows(
                 // Never grouped (`source_lod`); as a budget, the whole input.
                 RowTolerance::Source => ChainItem::Primitives(input),
             };
-            let set = choose(hierarchy, &view, wanted);
+            let mut set = choose(hierarchy, &view, wanted);
+            // A budget below the coarsest cut is said, not met silently.
+            if let ChainItem::Primitives(n) = wanted
+                && set.primitive_count() > n
+                && set.unmet.is_none()
+            {
+                set.unmet = Some(Unmet::past_coarsest(row.method, n, set.primitive_count()));
+            }
             if let ChainItem::Error(f) = wanted
                 && set.error_bound > f * diag * (1.0 + 1e-6)
             {
@@ -572,6 +579,35 @@ mod tests {
                 &Progress::new()
             )
             .is_err()
+        );
+    }
+
+    /// A budget below a hierarchy's coarsest cut is reported with what
+    /// reaches further; one its cuts meet says nothing.
+    #[test]
+    fn a_budget_past_the_coarsest_cut_is_unmet_with_why() {
+        let mut rows = parse_lods("voxel:0.5,voxel:0.0001", None).unwrap();
+        for row in &mut rows {
+            row.resolution = Some(16);
+        }
+        let chain = build_chain(&torus(), &Recipe::new(rows), &Progress::new()).unwrap();
+        let input = 48 * 24 * 2;
+        let [met, far] = &chain.lods[..] else {
+            panic!("two LODs: {:?}", chain.lods.len())
+        };
+        assert!(met.set.primitive_count() <= input / 2 && met.set.unmet.is_none());
+        let unmet = far
+            .set
+            .unmet
+            .as_ref()
+            .expect("0.0001 of the torus is no voxel cut");
+        assert_eq!(unmet.asked, 1);
+        assert_eq!(unmet.reached, far.set.primitive_count());
+        assert!(unmet.reached > 1);
+        assert!(
+            unmet.why.starts_with("the coarsest voxel cut"),
+            "{}",
+            unmet.why
         );
     }
 

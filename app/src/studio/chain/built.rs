@@ -149,8 +149,8 @@ fn figures(chain: &Chain) -> Vec<RowFigures> {
         // LOD's (its collapse went as far as it goes).
         let unmet = set.unmet.as_ref().map(|u| {
             format!(
-                "Short of the triangle budget: the collapse stops at {} triangles. {}",
-                u.reached, u.why
+                "Short of the budget of {} primitives: {} reached. {}",
+                u.asked, u.reached, u.why
             )
         });
         for (i, &r) in lod.rows.iter().enumerate() {
