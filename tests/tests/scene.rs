@@ -292,6 +292,11 @@ fn an_instanced_mesh_is_simplified_once_and_bounded_per_instance() {
                 "LOD {k} instance {i}: a loose bound {bound} for {measured}"
             );
         }
+        // Clients draw each instance: three times the triangles written.
+        let level = &j["lods"][k];
+        let written = level["triangles"].as_u64().unwrap();
+        assert_eq!(level["drawn_triangles"], 3 * written, "{level}");
+        assert_eq!(level["drawn_primitives"], 3 * written, "{level}");
         // The stretched instance's bound is σ_max = 3 times the mesh's.
         let e = mesh["lods"][k]["error_bound"].as_f64().unwrap();
         let stretched = bounds[1].as_f64().unwrap();

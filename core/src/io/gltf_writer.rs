@@ -11,8 +11,9 @@
 //!   attribute `_RADIUS` (object space; said in the primitive's `extras`),
 //!   or, for clients that draw POINTS as one-pixel dots ([`PointsAs`]), a
 //!   small mesh per point facing its normal and covering its disc;
-//! - splats (AMG paper §3): textured quads, one alpha-blended unlit material
-//!   per texture, the texture embedded as PNG (colour, Ψ in alpha);
+//! - splats (AMG paper §3): textured quads, their textures packed into
+//!   atlases (`io::atlas`), one primitive with one alpha-blended unlit
+//!   material per atlas, the atlas embedded as PNG (colour, Ψ in alpha);
 //! - layers (voxel paper §3): one primitive per layer with a material whose
 //!   base-colour alpha is the layer's opacity, blended unless opaque.
 
@@ -519,36 +520,55 @@ impl GltfWriter {
         self.triangles(&mesh, Some(m), None)
     }
 
-    /// The splats of a cut: textured quads, one material per texture.
+    /// The splats of a cut: textured quads, their textures packed into
+    /// atlases (`io::atlas`), one primitive and one material per atlas.
     fn splats(&mut self, set: &DrawSet) -> Vec<Value> {
-        let mut material_of = vec![None; set.textures.len()];
+        let mut used: Vec<usize> = set
+            .splats
+            .iter()
+            .map(|s| s.texture)
+            .filter(|&t| t < set.textures.len())
+            .collect();
+        used.sort_unstable();
+        used.dedup();
+        let textures: Vec<&Texture> = used.iter().map(|&t| &set.textures[t]).collect();
         let mut out = Vec::new();
-        for s in &set.splats {
-            let Some(tex) = set.textures.get(s.texture) else {
-                continue;
-            };
-            let material = match material_of[s.texture] {
-                Some(m) => m,
-                None => {
-                    let image = self.texture(tex);
-                    let m = self.material(json!({
-                        "name": format!("domain{}", s.domain),
-                        "pbrMetallicRoughness": {"baseColorTexture": {"index": image}, "metallicFactor": 0.0, "roughnessFactor": 1.0},
-                        "alphaMode": "BLEND",
-                        "doubleSided": true,
-                        "extensions": {"KHR_materials_unlit": {}}
-                    }));
-                    self.extensions.insert("KHR_materials_unlit");
-                    material_of[s.texture] = Some(m);
-                    m
-                }
-            };
-            let corners = s.corners();
-            let pos = self.floats(&flat3(&corners), "VEC3", Some(Aabb::from_points(&corners)));
-            let n = s.normal.try_normalize().unwrap_or(Vec3::Z);
-            let nrm = self.floats(&flat3(&[n; 4]), "VEC3", None);
-            let uv = self.floats(&[0.0, 0.0, 1.0, 0.0, 1.0, 1.0, 0.0, 1.0], "VEC2", None);
-            let indices = self.indices(&[0, 1, 2, 0, 2, 3]);
+        for atlas in super::atlas::pack(&textures) {
+            // The UV rectangle of each texture of this atlas, by texture index.
+            let mut rect = vec![None; set.textures.len()];
+            for &(k, r) in &atlas.members {
+                rect[used[k]] = Some(r);
+            }
+            let (mut positions, mut normals, mut uvs, mut indices) =
+                (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+            for s in &set.splats {
+                let Some([u0, v0, u1, v1]) = rect.get(s.texture).copied().flatten() else {
+                    continue;
+                };
+                let base = positions.len() as u32;
+                positions.extend(s.corners());
+                let n = s.normal.try_normalize().unwrap_or(Vec3::Z);
+                normals.extend([n; 4]);
+                uvs.extend([u0, v0, u1, v0, u1, v1, u0, v1]);
+                indices.extend([0, 1, 2, 0, 2, 3].map(|i| base + i));
+            }
+            let image = self.texture(&atlas.texture);
+            let material = self.material(json!({
+                "name": "splats",
+                "pbrMetallicRoughness": {"baseColorTexture": {"index": image}, "metallicFactor": 0.0, "roughnessFactor": 1.0},
+                "alphaMode": "BLEND",
+                "doubleSided": true,
+                "extensions": {"KHR_materials_unlit": {}}
+            }));
+            self.extensions.insert("KHR_materials_unlit");
+            let pos = self.floats(
+                &flat3(&positions),
+                "VEC3",
+                Some(Aabb::from_points(&positions)),
+            );
+            let nrm = self.floats(&flat3(&normals), "VEC3", None);
+            let uv = self.floats(&uvs, "VEC2", None);
+            let indices = self.indices(&indices);
             out.push(json!({"attributes": {"POSITION": pos, "NORMAL": nrm, "TEXCOORD_0": uv}, "indices": indices, "mode": 4, "material": material}));
         }
         out
@@ -556,7 +576,7 @@ impl GltfWriter {
 
     /// Embeds `tex` as a PNG image and returns its texture index.
     fn texture(&mut self, tex: &Texture) -> usize {
-        // Splat textures end at their domain's border: clamp, never repeat.
+        // Atlases ring each texture with its own edge: clamp, never repeat.
         let sampler = self
             .sampler(json!({"magFilter": 9729, "minFilter": 9729, "wrapS": 33071, "wrapT": 33071}));
         self.image(&super::image::encode_png(tex), "image/png", sampler)
@@ -894,7 +914,7 @@ mod tests {
         let glb = write_draw_set_glb(&set);
         let (doc, buffers, images) = gltf::import_slice(&glb).expect("valid glTF");
         let prims: Vec<_> = doc.meshes().flat_map(|m| m.primitives()).collect();
-        assert_eq!(prims.len(), 2 + 3, "two layers, three quads");
+        assert_eq!(prims.len(), 2 + 1, "two layers, one primitive of quads");
         let alpha: Vec<_> = prims[..2]
             .iter()
             .map(|p| p.material().alpha_mode())
@@ -913,26 +933,43 @@ mod tests {
                 .base_color_factor()[3],
             0.4
         );
-        for (k, p) in prims[2..].iter().enumerate() {
-            let reader = p.reader(|b| Some(&buffers[b.index()]));
-            let pos: Vec<[f32; 3]> = reader.read_positions().unwrap().collect();
-            assert_eq!(pos[2], [2.0 * k as f32 + 0.5, 0.25, 0.0]);
-            assert_eq!(p.material().alpha_mode(), gltf::material::AlphaMode::Blend);
-            let t = p
-                .material()
-                .pbr_metallic_roughness()
-                .base_color_texture()
-                .unwrap();
-            let img = &images[t.texture().source().index()];
-            let want = &set.textures[set.splats[k].texture];
-            assert_eq!((img.width, img.height), (want.width, want.height));
-            assert_eq!(&img.pixels[..8], want.rgba[..2].concat().as_slice());
-        }
+        let quads = &prims[2];
         assert_eq!(
-            images.len(),
-            2,
-            "one image per texture, shared by its splats"
+            quads.material().alpha_mode(),
+            gltf::material::AlphaMode::Blend
         );
+        let reader = quads.reader(|b| Some(&buffers[b.index()]));
+        let pos: Vec<[f32; 3]> = reader.read_positions().unwrap().collect();
+        let uv: Vec<[f32; 2]> = reader.read_tex_coords(0).unwrap().into_f32().collect();
+        let indices: Vec<u32> = reader.read_indices().unwrap().into_u32().collect();
+        assert_eq!((pos.len(), indices.len()), (12, 18));
+        let t = quads
+            .material()
+            .pbr_metallic_roughness()
+            .base_color_texture()
+            .unwrap();
+        let atlas = &images[t.texture().source().index()];
+        assert_eq!(images.len(), 1, "one atlas for every splat");
+        for (k, s) in set.splats.iter().enumerate() {
+            assert_eq!(pos[4 * k + 2], [2.0 * k as f32 + 0.5, 0.25, 0.0]);
+            // The quad's UVs span its texture's texels in the atlas.
+            let want = &set.textures[s.texture];
+            let [u0, v0] = uv[4 * k];
+            let [u1, v1] = uv[4 * k + 2];
+            let (w, h) = (atlas.width as f32, atlas.height as f32);
+            assert_eq!(
+                ((u1 - u0) * w, (v1 - v0) * h),
+                (want.width as f32, want.height as f32)
+            );
+            let (x0, y0) = ((u0 * w) as usize, (v0 * h) as usize);
+            for y in 0..want.height as usize {
+                for x in 0..want.width as usize {
+                    let at = 4 * ((y0 + y) * atlas.width as usize + x0 + x);
+                    let texel = want.rgba[y * want.width as usize + x];
+                    assert_eq!(atlas.pixels[at..at + 4], texel, "splat {k} texel {x},{y}");
+                }
+            }
+        }
     }
 }
 

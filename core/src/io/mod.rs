@@ -5,6 +5,7 @@
 //! against the bytes that remain before anything is allocated from it.
 
 pub mod asset;
+pub mod atlas;
 mod compact;
 pub mod confine;
 pub mod cut_writer;

@@ -405,22 +405,37 @@ impl SceneChains {
         Value::Array(meshes)
     }
 
-    /// Per level, over the scene: triangles written (each mesh once) and
-    /// drawn (each instance), and the largest world-space bound of any
-    /// instance (a chain shorter than the level stays at its coarsest).
-    pub fn level_totals(&self, scene: &Scene, k: usize) -> (usize, usize, f32) {
-        let (mut written, mut drawn, mut bound) = (0, 0, 0.0f32);
+    /// Per level, over the scene (a chain shorter than the level stays at
+    /// its coarsest).
+    pub fn level_totals(&self, scene: &Scene, k: usize) -> LevelTotals {
+        let mut totals = LevelTotals::default();
         for (m, chain) in scene.meshes.iter().zip(&self.chains) {
-            let Some(l) = chain.lods.get(k.min(chain.lods.len().saturating_sub(1))) else {
+            let at = k.min(chain.lods.len().saturating_sub(1));
+            let Some(l) = chain.lods.get(at) else {
                 continue;
             };
             let t = l.set.mesh.triangles.len();
-            written += t;
-            drawn += t * m.instances.len();
+            totals.written += t;
+            totals.drawn_triangles += t * m.instances.len();
+            totals.drawn_primitives += chain.drawn(at) * m.instances.len();
             for i in &m.instances {
-                bound = bound.max(i.scale() * l.bound());
+                totals.bound = totals.bound.max(i.scale() * l.bound());
             }
         }
-        (written, drawn, bound)
+        totals
     }
+}
+
+/// One level of a scene's chains, over its meshes.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct LevelTotals {
+    /// Triangles written (each mesh once).
+    pub written: usize,
+    /// Triangles drawn (each instance).
+    pub drawn_triangles: usize,
+    /// All a client draws, each instance: triangles, points as the recipe
+    /// writes them, splat quads (`Chain::drawn`).
+    pub drawn_primitives: usize,
+    /// The largest world-space bound of any instance.
+    pub bound: f32,
 }

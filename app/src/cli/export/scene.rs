@@ -104,7 +104,8 @@ fn report(
     let world_diagonal = scene_diagonal(scene);
     let lods: Vec<serde_json::Value> = (0..chains.levels())
         .map(|k| {
-            let (written, drawn, bound) = chains.level_totals(scene, k);
+            let totals = chains.level_totals(scene, k);
+            let bound = totals.bound;
             let coverage = chains
                 .chains
                 .iter()
@@ -151,8 +152,9 @@ fn report(
                 "splats": sum(&|s| s.splats.len()),
                 "layers": sum(&|s| s.layers.len()),
                 "vertices": sum(&|s| s.mesh.positions.len()),
-                "triangles": written,
-                "drawn_triangles": drawn,
+                "triangles": totals.written,
+                "drawn_triangles": totals.drawn_triangles,
+                "drawn_primitives": totals.drawn_primitives,
                 "error_bound": bound,
                 "error_bound_relative": bound / world_diagonal.max(f32::MIN_POSITIVE),
                 "error_bound_kind": "world space, largest over instances (σ_max · mesh bound)",
