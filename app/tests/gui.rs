@@ -1310,7 +1310,8 @@ fn amg_splats_are_drawn_and_the_level_moves_live() {
         coarse.splats, 8,
         "one domain per face at the coarsest level"
     );
-    // Export writes the splats: a GLB with their textures, blended ...
+    // Export writes the splats: a GLB with their textures in one atlas,
+    // blended, one primitive ...
     let tmp = tempfile::tempdir().unwrap();
     let dir = tmp.path();
     let ctx = harness.ctx.clone();
@@ -1318,8 +1319,9 @@ fn amg_splats_are_drawn_and_the_level_moves_live() {
     wait_while(&mut harness, "exporting", StudioApp::is_exporting);
     let glb = std::fs::read(dir.join("gui-amg.glb")).expect("exported");
     let text = String::from_utf8_lossy(&glb);
-    assert_eq!(text.matches("\"image/png\"").count(), 8);
-    assert_eq!(text.matches("\"BLEND\"").count(), 8);
+    assert_eq!(text.matches("\"image/png\"").count(), 1);
+    assert_eq!(text.matches("\"BLEND\"").count(), 1);
+    assert_eq!(text.matches("\"indices\"").count(), 1);
     // ... and a format that cannot hold them says so instead of dropping them.
     harness.state_mut().export_to(dir.join("gui-amg.obj"), &ctx);
     wait_while(&mut harness, "exporting", StudioApp::is_exporting);

@@ -223,12 +223,13 @@ pub fn point_set(model: &Model) -> Option<PointSet> {
 }
 
 /// A mesh's vertices as the points AMG decomposes (their radii follow
-/// from their neighbours).
+/// from their neighbours), each wearing the colour its surface shows
+/// there: texture × factor × vertex colour (`io::base_color`).
 pub fn mesh_points(mesh: &crate::geom::TriMesh) -> PointSet {
     PointSet {
         positions: mesh.positions.clone(),
         normals: mesh.normals.clone(),
-        colors: mesh.colors.clone(),
+        colors: crate::io::base_color::vertex_colors(mesh).or_else(|| mesh.colors.clone()),
         radii: None,
     }
 }

@@ -10,6 +10,7 @@ use spade::{DelaunayTriangulation, HasPosition, Point2, PositionInTriangulation,
 use super::Multiscale;
 use super::basis::domain_neighbours;
 use super::classifier::symmetric_eigen;
+use crate::io::image::encode_srgb;
 use crate::lod::{DrawSet, Splat, Texture};
 use crate::progress::{Cancelled, Progress};
 
@@ -77,27 +78,6 @@ impl HasPosition for Sample {
     type Scalar = f64;
     fn position(&self) -> Point2<f64> {
         self.at
-    }
-}
-
-/// Linear to sRGB-encoded 8 bits (glTF base-colour textures are sRGB).
-pub fn encode_srgb(c: f32) -> u8 {
-    let c = c.clamp(0.0, 1.0);
-    let s = if c <= 0.003_130_8 {
-        12.92 * c
-    } else {
-        1.055 * c.powf(1.0 / 2.4) - 0.055
-    };
-    (s * 255.0).round() as u8
-}
-
-/// sRGB-encoded 8 bits to linear.
-pub fn decode_srgb(v: u8) -> f32 {
-    let s = v as f32 / 255.0;
-    if s <= 0.040_45 {
-        s / 12.92
-    } else {
-        ((s + 0.055) / 1.055).powf(2.4)
     }
 }
 

@@ -6,7 +6,7 @@
 
 use glam::Vec3;
 
-use super::primitive::decode_srgb;
+use crate::io::image::decode_srgb;
 use crate::lod::DrawSet;
 use crate::view::View;
 

@@ -18,6 +18,27 @@ pub struct Rgba {
     pub texels: Vec<[u8; 4]>,
 }
 
+/// Linear to sRGB-encoded 8 bits (glTF base-colour textures are sRGB).
+pub fn encode_srgb(c: f32) -> u8 {
+    let c = c.clamp(0.0, 1.0);
+    let s = if c <= 0.003_130_8 {
+        12.92 * c
+    } else {
+        1.055 * c.powf(1.0 / 2.4) - 0.055
+    };
+    (s * 255.0).round() as u8
+}
+
+/// sRGB-encoded 8 bits to linear.
+pub fn decode_srgb(v: u8) -> f32 {
+    let s = v as f32 / 255.0;
+    if s <= 0.040_45 {
+        s / 12.92
+    } else {
+        ((s + 0.055) / 1.055).powf(2.4)
+    }
+}
+
 /// An RGBA8 texture as PNG.
 pub fn encode_png(tex: &Texture) -> Vec<u8> {
     let (w, h) = (tex.width.max(1), tex.height.max(1));

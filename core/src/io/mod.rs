@@ -6,6 +6,7 @@
 
 pub mod asset;
 pub mod atlas;
+pub mod base_color;
 mod compact;
 pub mod confine;
 pub mod cut_writer;
