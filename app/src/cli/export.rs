@@ -401,7 +401,7 @@ fn print_summary(j: &serde_json::Value) {
     );
     for (i, l) in lods.iter().enumerate() {
         println!(
-            "  lod{i} {:>14}: {:>8} triangles, {:>7} points, {:>5} splats, bound {:.6} ({:.4}% of the diagonal), shown from coverage {:.4}",
+            "  lod{i} {:>14}: {:>8} triangles, {:>7} points, {:>5} splats ({} drawn), bound {:.6} ({:.4}% of the diagonal), shown from coverage {:.4}",
             l["rows"].as_array().map_or(String::new(), |r| {
                 r.iter()
                     .filter_map(|v| v.as_str())
@@ -411,6 +411,7 @@ fn print_summary(j: &serde_json::Value) {
             l["triangles"],
             l["points"],
             l["splats"],
+            l["drawn_primitives"],
             l["error_bound"].as_f64().unwrap_or_default(),
             100.0 * l["error_bound_relative"].as_f64().unwrap_or_default(),
             l["screen_coverage"].as_f64().unwrap_or_default(),
