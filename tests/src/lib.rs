@@ -111,6 +111,14 @@ pub fn build_hierarchy(method: Method, mesh: &TriMesh) -> (Box<dyn Hierarchy>, s
     (built, serde_json::json!({}))
 }
 
+/// The JSON chunk of a GLB.
+pub fn glb_json(glb: &[u8]) -> serde_json::Value {
+    assert_eq!(&glb[0..4], b"glTF");
+    let len = u32::from_le_bytes(glb[12..16].try_into().unwrap()) as usize;
+    assert_eq!(&glb[16..20], b"JSON");
+    serde_json::from_slice(&glb[20..20 + len]).expect("glTF JSON chunk")
+}
+
 /// The meshes a client shows at LOD `l` of an exported chain: walking the
 /// scene, each node's mesh at level 0, or for a node with `MSFT_lod` the
 /// mesh of its `l`-th LOD node (its coarsest where the chain is shorter);

@@ -6,17 +6,10 @@
 use std::path::Path;
 
 use lodstudio_core::io::gltf;
-use lodstudio_tests::{lodstudio, lodstudio_json, shared_model};
+use lodstudio_tests::{glb_json, lodstudio, lodstudio_json, shared_model};
 use serde_json::Value;
 
 /// The JSON chunk of a GLB.
-fn glb_json(glb: &[u8]) -> Value {
-    assert_eq!(&glb[0..4], b"glTF");
-    let len = u32::from_le_bytes(glb[12..16].try_into().unwrap()) as usize;
-    assert_eq!(&glb[16..20], b"JSON");
-    serde_json::from_slice(&glb[20..20 + len]).expect("glTF JSON chunk")
-}
-
 fn f64s(v: &Value) -> Vec<f64> {
     v.as_array()
         .expect("an array")

@@ -195,11 +195,29 @@ fn export_amg_writes_splat_lods() {
     let glb = std::fs::read(&out).unwrap();
     let text = String::from_utf8_lossy(&glb);
     assert!(text.contains("MSFT_lod"));
-    // A textured quad primitive per splat; splats may share a texture.
+    // One textured primitive per LOD (its splats' quads, their textures
+    // in one atlas), holding a quad per splat.
     assert_eq!(
-        text.matches("\"TEXCOORD_0\"").count() as u64,
-        splats.iter().sum::<u64>(),
+        text.matches("\"TEXCOORD_0\"").count(),
+        2,
+        "a primitive per LOD"
+    );
+    assert_eq!(text.matches("\"image/png\"").count(), 2, "an atlas per LOD");
+    let doc = lodstudio_tests::glb_json(&glb);
+    let indices: Vec<u64> = doc["meshes"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .flat_map(|m| m["primitives"].as_array().unwrap())
+        .map(|p| {
+            doc["accessors"][p["indices"].as_u64().unwrap() as usize]["count"]
+                .as_u64()
+                .unwrap()
+        })
+        .collect();
+    assert_eq!(
+        indices.iter().sum::<u64>(),
+        6 * splats.iter().sum::<u64>(),
         "a quad per splat"
     );
-    assert!(text.contains("\"image/png\""));
 }
