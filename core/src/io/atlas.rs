@@ -3,8 +3,9 @@
 //! atlas, a handful of draw calls where there were two per splat.
 //!
 //! Rectangles are placed by `guillotiere` (WebRender's atlas allocator),
-//! largest first, in an atlas of the least power-of-two size that holds
-//! them, up to [`MAX_ATLAS`] a side; what does not fit starts another. Each
+//! tallest first, in the smallest power-of-two atlas (square, or twice as
+//! wide as high) that holds them, up to [`MAX_ATLAS`] a side; what does not
+//! fit starts another. Each
 //! texture is surrounded by [`MARGIN`] texels repeating its edge, so a
 //! bilinear sample at its border reads what clamp-to-edge read before, and
 //! its quad maps onto its texels exactly.
@@ -38,11 +39,14 @@ pub fn pack(textures: &[&Texture]) -> Vec<Atlas> {
     });
     let mut atlases = Vec::new();
     while !left.is_empty() {
-        let largest = left.iter().map(|&i| {
-            let (w, h) = padded(textures[i]);
-            w.max(h)
-        });
-        let limit = MAX_ATLAS.max(largest.max().unwrap_or(1).next_power_of_two());
+        let largest_pow2 = |left: &[usize]| {
+            let sides = left.iter().map(|&i| {
+                let (w, h) = padded(textures[i]);
+                w.max(h)
+            });
+            sides.max().unwrap_or(1).next_power_of_two()
+        };
+        let limit = MAX_ATLAS.max(largest_pow2(&left));
         let area: u64 = left
             .iter()
             .map(|&i| {
@@ -50,30 +54,33 @@ pub fn pack(textures: &[&Texture]) -> Vec<Atlas> {
                 w as u64 * h as u64
             })
             .sum();
-        let mut side = ((area as f64).sqrt().ceil() as u32)
-            .next_power_of_two()
-            .min(limit);
+        // From the power-of-two square under the area, doubling the width
+        // then the height: the first size that holds them all.
+        let root = ((area as f64).sqrt() as u32).max(1);
+        let start = (1u32 << (31 - root.leading_zeros())).max(largest_pow2(&left));
+        let mut size = [start.min(limit); 2];
         let (placed, rest) = loop {
-            let (placed, rest) = place(textures, &left, side);
-            if rest.is_empty() || side >= limit {
+            let (placed, rest) = place(textures, &left, size);
+            if rest.is_empty() || size == [limit; 2] {
                 break (placed, rest);
             }
-            side *= 2;
+            let grow = usize::from(size[0] > size[1] || size[0] >= limit);
+            size[grow] = (2 * size[grow]).min(limit);
         };
-        atlases.push(blit(textures, &placed, side));
+        atlases.push(blit(textures, &placed, size));
         left = rest;
     }
     atlases
 }
 
-/// Places `order` in a `side`² atlas: each placed one with its padded
-/// rectangle's corner, and those that did not fit.
+/// Places `order` in an atlas of `size` (width, height): each placed one
+/// with its padded rectangle's corner, and those that did not fit.
 fn place(
     textures: &[&Texture],
     order: &[usize],
-    side: u32,
+    size: [u32; 2],
 ) -> (Vec<(usize, [u32; 2])>, Vec<usize>) {
-    let mut allocator = AtlasAllocator::new(size2(side as i32, side as i32));
+    let mut allocator = AtlasAllocator::new(size2(size[0] as i32, size[1] as i32));
     let (mut placed, mut rest) = (Vec::new(), Vec::new());
     for &i in order {
         let t = textures[i];
@@ -91,9 +98,9 @@ fn place(
 
 /// The atlas of `placed`: each texture's texels, ringed by its repeated
 /// edge; the rest transparent.
-fn blit(textures: &[&Texture], placed: &[(usize, [u32; 2])], side: u32) -> Atlas {
-    let s = side as usize;
-    let mut rgba = vec![[0u8; 4]; s * s];
+fn blit(textures: &[&Texture], placed: &[(usize, [u32; 2])], size: [u32; 2]) -> Atlas {
+    let s = size[0] as usize;
+    let mut rgba = vec![[0u8; 4]; s * size[1] as usize];
     let mut members = Vec::with_capacity(placed.len());
     for &(i, [x0, y0]) in placed {
         let t = textures[i];
@@ -116,22 +123,22 @@ fn blit(textures: &[&Texture], placed: &[(usize, [u32; 2])], side: u32) -> Atlas
             }
         }
         let (u0, v0) = (x0 + MARGIN, y0 + MARGIN);
-        let side = side as f32;
+        let [w, h] = size.map(|s| s as f32);
         members.push((
             i,
             [
-                u0 as f32 / side,
-                v0 as f32 / side,
-                (u0 + t.width) as f32 / side,
-                (v0 + t.height) as f32 / side,
+                u0 as f32 / w,
+                v0 as f32 / h,
+                (u0 + t.width) as f32 / w,
+                (v0 + t.height) as f32 / h,
             ],
         ));
     }
     members.sort_by_key(|m| m.0);
     Atlas {
         texture: Texture {
-            width: side,
-            height: side,
+            width: size[0],
+            height: size[1],
             rgba,
         },
         members,
@@ -167,15 +174,22 @@ mod tests {
         let atlases = pack(&refs);
         assert_eq!(atlases.len(), 1, "300 small textures share one atlas");
         let a = &atlases[0];
-        assert!(a.texture.width <= 1024, "{}", a.texture.width);
+        let (w, h) = (a.texture.width, a.texture.height);
+        assert!(w <= 1024 && (w == h || w == 2 * h), "{w}×{h}");
+        // The padded textures fill over a quarter of it.
+        let padded: u32 = textures
+            .iter()
+            .map(|t| (t.width + 2 * MARGIN) * (t.height + 2 * MARGIN))
+            .sum();
+        assert!(4 * padded > w * h, "{padded} texels in {w}×{h}");
         assert_eq!(a.members.len(), 300);
-        let side = a.texture.width as f32;
+        let (w, h) = (w as f32, h as f32);
         let mut cover = vec![false; a.texture.rgba.len()];
         for &(i, [u0, v0, u1, v1]) in &a.members {
             let t = &textures[i];
-            let (x0, y0) = ((u0 * side) as usize, (v0 * side) as usize);
+            let (x0, y0) = ((u0 * w) as usize, (v0 * h) as usize);
             assert_eq!(
-                ((u1 * side) as usize - x0, (v1 * side) as usize - y0),
+                ((u1 * w) as usize - x0, (v1 * h) as usize - y0),
                 (t.width as usize, t.height as usize)
             );
             for y in 0..t.height as usize {
