@@ -31,7 +31,7 @@ pub struct ExportArgs {
     /// rows, their methods and parameters, the switch tolerance.
     #[arg(long, value_name = "R.json", conflicts_with_all = [
         "method", "lods", "pixels", "viewport_height", "coverage", "lock_borders", "keep_seams",
-        "kappa", "tau", "resolution", "points_as", "no_simplify", "post_error", "post_triangles",
+        "uv_tolerance", "kappa", "tau", "resolution", "points_as", "no_simplify", "post_error", "post_triangles",
         "weld_tolerance", "no_weld",
     ])]
     recipe: Option<PathBuf>,
@@ -97,6 +97,10 @@ pub struct ExportArgs {
     /// welded across attribute seams, and seam and border vertices never move.
     #[arg(long, conflicts_with_all = ["weld_tolerance", "no_weld"])]
     keep_seams: bool,
+    /// Edge collapse rows: texels a seam crossing may move a texture
+    /// coordinate off its UV seam (default 1; 0 keeps every seam).
+    #[arg(long, value_name = "TEXELS")]
+    uv_tolerance: Option<f32>,
     /// Hybrid: points per triangle's rendering time (κ).
     #[arg(long)]
     kappa: Option<f32>,
@@ -220,6 +224,7 @@ fn recipe_of(args: &ExportArgs) -> Result<Recipe, CliError> {
         || args.post.post_triangles.is_some();
     for row in &mut rows {
         match row.method {
+            Method::EdgeCollapse => row.uv_tolerance = args.uv_tolerance,
             Method::Hybrid => {
                 row.kappa = args.kappa.or(row.kappa);
                 row.tau = args.tau.or(row.tau);
@@ -258,6 +263,7 @@ fn recipe_of(args: &ExportArgs) -> Result<Recipe, CliError> {
             "pixels" => "--pixels",
             "viewport_height" => "--viewport-height",
             "coverage" => "--coverage",
+            "uv_tolerance" => "--uv-tolerance",
             _ => "--lods",
         };
         CliError::BadInput(format!("{option}: {}", e.message))
@@ -338,8 +344,9 @@ fn report(
                 "error_bound_kind": l.set.error_bound_kind.name(),
                 "screen_coverage": c,
                 "build_seconds": l.build_seconds,
-                // Geometric bounds say nothing of textures: how far the UVs moved.
-                "uv_error": input.and_then(|m| lodstudio_core::distance::uv_error(m, &l.set.mesh)),
+                // Geometric bounds say nothing of textures: how far the UVs
+                // moved beyond what the bound carries them.
+                "uv_error": input.and_then(|m| lodstudio_core::distance::uv_error(m, &l.set.mesh, l.bound())),
             });
             // A budget the row could not reach, and why.
             if let Some(unmet) = &l.set.unmet {

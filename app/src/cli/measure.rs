@@ -37,7 +37,8 @@ pub fn run(args: MeasureArgs) -> Result<(), CliError> {
     };
     let r = hausdorff_mesh_mesh(&a, &b, &opts);
     let diag = a.bounds().diagonal();
-    let uv = lodstudio_core::distance::uv_error(&a, &b);
+    // UVs count as carried where the measured distance allows.
+    let uv = lodstudio_core::distance::uv_error(&a, &b, r.two_sided());
     let against = normals_against_winding(&args.b, &args.input)?;
     if args.json {
         println!(

@@ -30,6 +30,10 @@ pub struct SimplifyArgs {
     /// Sliver guard: minimum triangle quality 4√3·area/Σl² (merge-tree paper eq. 3); 0 disables.
     #[arg(long, value_name = "Q", default_value_t = CollapseOptions::default().min_quality)]
     min_quality: f32,
+    /// Seam crossing: texels a collapse may move a texture coordinate off
+    /// its UV seam (texture deviation); 0 keeps every seam.
+    #[arg(long, value_name = "TEXELS", default_value_t = CollapseOptions::default().uv_tolerance)]
+    uv_tolerance: f32,
     #[command(flatten)]
     report: ReportArgs,
     /// Also save the progressive collapse, from the input down to this run's
@@ -83,6 +87,7 @@ pub fn run(args: SimplifyArgs) -> Result<(), CliError> {
     let collapse = CollapseOptions {
         lock_borders: args.lock_borders || args.keep_seams,
         min_quality: args.min_quality,
+        uv_tolerance: args.uv_tolerance,
         ..Default::default()
     };
     collapse.validate()?;

@@ -4,7 +4,7 @@
 //! papers' terms.
 
 use crate::settings::simplify::{
-    EdgeCollapseSettings, GUARD_RANGE, MAX_TRIANGLES, RATIO_RANGE, TargetMode,
+    EdgeCollapseSettings, GUARD_RANGE, MAX_TRIANGLES, RATIO_RANGE, TargetMode, UV_TOLERANCE_RANGE,
 };
 
 pub const TARGET_HINT: &str = "Where to stop collapsing edges. Edges collapse in order of \
@@ -30,6 +30,11 @@ const FOLD_HINT: &str = "Fold guard: reject a collapse that turns any triangle's
     by more than the angle whose cosine this is, so the surface does not fold over \
     itself. 0 rejects only turns beyond 90°; higher is stricter.";
 
+const UV_TOLERANCE_HINT: &str = "Seam crossing: a vertex on a UV seam may leave its seam \
+    (or two seams may meet) when no texture coordinate the collapse moves lands more than \
+    this many texels from where its chart shows it (texture deviation, Cohen et al. 1998). \
+    Textured props then go below their seam floor. 0 keeps every seam.";
+
 impl EdgeCollapseSettings {
     /// The build's controls; true when any value changed.
     pub fn ui(&mut self, ui: &mut egui::Ui) -> bool {
@@ -40,6 +45,12 @@ impl EdgeCollapseSettings {
             .on_hover_text(QUALITY_HINT);
         ui.add(egui::Slider::new(&mut self.min_normal_cos, GUARD_RANGE).text("fold guard"))
             .on_hover_text(FOLD_HINT);
+        ui.add(
+            egui::Slider::new(&mut self.uv_tolerance, UV_TOLERANCE_RANGE)
+                .logarithmic(true)
+                .text("UV tolerance (texels)"),
+        )
+        .on_hover_text(UV_TOLERANCE_HINT);
         let degrees = self.min_normal_cos.clamp(-1.0, 1.0).acos().to_degrees();
         ui.weak(format!("normals may turn up to {degrees:.0}°"));
         *self != before

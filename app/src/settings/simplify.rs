@@ -6,7 +6,7 @@ use std::ops::RangeInclusive;
 
 use lodstudio_core::lod::PrefixTarget;
 use lodstudio_core::simplify::CollapseOptions;
-pub use lodstudio_core::simplify::collapse::GUARD_RANGE;
+pub use lodstudio_core::simplify::collapse::{GUARD_RANGE, UV_TOLERANCE_RANGE};
 use lodstudio_core::simplify::progressive::{FLOOR_RATIO, ProgressiveOptions};
 use serde::{Deserialize, Serialize};
 
@@ -44,6 +44,8 @@ pub struct EdgeCollapseSettings {
     pub min_quality: f32,
     /// Smallest cosine between a triangle's normals before and after a collapse.
     pub min_normal_cos: f32,
+    /// Texels a seam crossing may move a texture coordinate (0 keeps seams).
+    pub uv_tolerance: f32,
 }
 
 impl Default for EdgeCollapseSettings {
@@ -56,6 +58,7 @@ impl Default for EdgeCollapseSettings {
             lock_borders: collapse.lock_borders,
             min_quality: collapse.min_quality,
             min_normal_cos: collapse.min_normal_cos,
+            uv_tolerance: collapse.uv_tolerance,
         }
     }
 }
@@ -71,6 +74,7 @@ impl EdgeCollapseSettings {
             lock_borders: self.lock_borders,
             min_quality: clamp_or(self.min_quality, GUARD_RANGE, d.min_quality),
             min_normal_cos: clamp_or(self.min_normal_cos, GUARD_RANGE, d.min_normal_cos),
+            uv_tolerance: clamp_or(self.uv_tolerance, UV_TOLERANCE_RANGE, d.uv_tolerance),
         }
     }
 
@@ -81,6 +85,7 @@ impl EdgeCollapseSettings {
             lock_borders: s.lock_borders,
             min_quality: s.min_quality,
             min_normal_cos: s.min_normal_cos,
+            uv_tolerance: s.uv_tolerance,
         }
     }
 

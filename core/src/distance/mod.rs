@@ -15,6 +15,6 @@ pub use bvh::{Bvh, MeshDistance, SphereSetDistance};
 pub use hausdorff::{
     HausdorffReport, SamplingOptions, hausdorff_mesh_mesh, hausdorff_mesh_spheres, sample_surface,
 };
-pub use triangle::closest_point_on_triangle;
+pub use triangle::{barycentric, closest_point_on_segment, closest_point_on_triangle};
 pub use uv::{UV_ERROR_THRESHOLD, UvError, uv_error};
 pub use winding::WindingNumber;

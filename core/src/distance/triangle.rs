@@ -44,7 +44,7 @@ pub fn closest_point_on_triangle(p: Vec3, a: Vec3, b: Vec3, c: Vec3) -> Vec3 {
         // Degenerate triangle: closest of its three edges.
         return [(a, b), (b, c), (c, a)]
             .iter()
-            .map(|(s, e)| closest_on_segment(p, *s, *e))
+            .map(|(s, e)| closest_point_on_segment(p, *s, *e))
             .min_by(|x, y| x.distance_squared(p).total_cmp(&y.distance_squared(p)))
             .unwrap_or(a);
     }
@@ -53,7 +53,8 @@ pub fn closest_point_on_triangle(p: Vec3, a: Vec3, b: Vec3, c: Vec3) -> Vec3 {
     a + ab * v + ac * w
 }
 
-fn closest_on_segment(p: Vec3, a: Vec3, b: Vec3) -> Vec3 {
+/// The point of segment a–b closest to `p`.
+pub fn closest_point_on_segment(p: Vec3, a: Vec3, b: Vec3) -> Vec3 {
     let d = b - a;
     let len2 = d.length_squared();
     if len2 == 0.0 {
@@ -62,10 +63,34 @@ fn closest_on_segment(p: Vec3, a: Vec3, b: Vec3) -> Vec3 {
     a + d * ((p - a).dot(d) / len2).clamp(0.0, 1.0)
 }
 
+/// The barycentric coordinates of `p` (a point of triangle abc), each in
+/// [0, 1] and summing to 1; a degenerate triangle answers its first corner.
+pub fn barycentric(p: Vec3, a: Vec3, b: Vec3, c: Vec3) -> [f32; 3] {
+    let (v0, v1, v2) = (b - a, c - a, p - a);
+    let (d00, d01, d11) = (v0.dot(v0), v0.dot(v1), v1.dot(v1));
+    let (d20, d21) = (v2.dot(v0), v2.dot(v1));
+    let denom = d00 * d11 - d01 * d01;
+    if denom.abs() <= f32::EPSILON * d00 * d11 || !denom.is_finite() {
+        return [1.0, 0.0, 0.0];
+    }
+    let v = ((d11 * d20 - d01 * d21) / denom).clamp(0.0, 1.0);
+    let w = ((d00 * d21 - d01 * d20) / denom).clamp(0.0, 1.0 - v);
+    [1.0 - v - w, v, w]
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::rng::Rng;
+
+    #[test]
+    fn barycentric_coordinates_rebuild_the_point() {
+        let (a, b, c) = (Vec3::ZERO, Vec3::X, Vec3::Y);
+        let p = Vec3::new(0.25, 0.5, 0.0);
+        let [u, v, w] = barycentric(p, a, b, c);
+        assert!(((u * a + v * b + w * c) - p).length() < 1e-6);
+        assert_eq!(barycentric(Vec3::ONE, a, a, a), [1.0, 0.0, 0.0]);
+    }
 
     /// The closest point is on the triangle and no dense barycentric sample is closer.
     #[test]

@@ -5,18 +5,22 @@
 //!
 //! At four points of every LOD triangle (its centroid and the midpoints
 //! towards its corners, a quarter of its area each) the LOD's UV is compared
-//! with the original's UV at the nearest point of the same part (of the same
-//! material, when both carry materials: a file read back numbers its parts
-//! by material). On a seam
-//! both sides are nearest; the point counts as on the side that agrees best
-//! among the original triangles within `SEAM_BAND` of the diagonal beyond the
-//! nearest distance.
+//! with the UVs the original shows near that point on the same part (of the
+//! same material, when both carry materials: a file read back numbers its
+//! parts by material): the error is the distance to the nearest of those
+//! UVs, in UV units and in texels of the LOD face's texture. "Near" is
+//! within `reach` (a LOD's certified bound: every LOD point stands for
+//! original surface that close, so a texture carried along with the
+//! geometry is no error; Cohen, Olano and Manocha's texture deviation
+//! within the geometric one), and at least `SEAM_BAND` of the diagonal
+//! beyond the nearest distance, so that on a seam, where both sides are
+//! nearest, the point counts as on the side that agrees best.
 
-use glam::{Vec2, Vec3};
+use glam::Vec2;
 
 use super::bvh::Bvh;
-use super::triangle::closest_point_on_triangle;
-use crate::geom::{Aabb, TriMesh};
+use super::triangle::{barycentric, closest_point_on_triangle};
+use crate::geom::{Aabb, TriMesh, UNTEXTURED_TEXELS};
 
 /// A UV difference above this (a twentieth of the texture) is visibly wrong.
 pub const UV_ERROR_THRESHOLD: f32 = 0.05;
@@ -30,6 +34,10 @@ pub struct UvError {
     /// Area-weighted mean difference (UV units).
     pub mean: f64,
     pub max: f32,
+    /// The same in texels of each face's texture (`Materials::texels_per_uv`):
+    /// what a UV tolerance is stated in.
+    pub mean_texels: f64,
+    pub max_texels: f32,
     /// Fraction of the LOD's area off by more than [`UV_ERROR_THRESHOLD`].
     pub area_over_threshold: f64,
 }
@@ -41,20 +49,6 @@ const SAMPLES: [[f32; 3]; 4] = [
     [1.0 / 6.0, 2.0 / 3.0, 1.0 / 6.0],
     [1.0 / 6.0, 1.0 / 6.0, 2.0 / 3.0],
 ];
-
-/// Barycentric coordinates of `p` (on or near the triangle) in `[a, b, c]`.
-fn barycentric(p: Vec3, [a, b, c]: [Vec3; 3]) -> [f32; 3] {
-    let (v0, v1, v2) = (b - a, c - a, p - a);
-    let (d00, d01, d11) = (v0.dot(v0), v0.dot(v1), v1.dot(v1));
-    let (d20, d21) = (v2.dot(v0), v2.dot(v1));
-    let den = d00 * d11 - d01 * d01;
-    if den.abs() <= f32::MIN_POSITIVE {
-        return [1.0, 0.0, 0.0];
-    }
-    let v = (d11 * d20 - d01 * d21) / den;
-    let w = (d00 * d21 - d01 * d20) / den;
-    [1.0 - v - w, v, w]
-}
 
 fn uv_at(uvs: &[Vec2], tri: [u32; 3], w: [f32; 3]) -> Vec2 {
     uvs[tri[0] as usize] * w[0] + uvs[tri[1] as usize] * w[1] + uvs[tri[2] as usize] * w[2]
@@ -94,8 +88,9 @@ fn surface_keys<'a>(
     (of_original, of_lod)
 }
 
-/// The UV error of `lod` against `original`; `None` unless both have UVs.
-pub fn uv_error(original: &TriMesh, lod: &TriMesh) -> Option<UvError> {
+/// The UV error of `lod` against `original` within `reach` (module doc);
+/// `None` unless both have UVs.
+pub fn uv_error(original: &TriMesh, lod: &TriMesh, reach: f32) -> Option<UvError> {
     let (original, lod) = (original.unwelded(), lod.unwelded());
     let (Some(ouv), Some(luv)) = (&original.uvs, &lod.uvs) else {
         return None;
@@ -107,11 +102,17 @@ pub fn uv_error(original: &TriMesh, lod: &TriMesh) -> Option<UvError> {
     let band = SEAM_BAND * original.bounds().diagonal();
     let (of_original, of_lod) = surface_keys(&original, &lod);
     let (mut sum, mut max, mut over, mut total) = (0.0f64, 0.0f32, 0.0f64, 0.0f64);
+    let (mut sum_texels, mut max_texels) = (0.0f64, 0.0f32);
+    let flat = |u: Vec2| u.extend(0.0);
     let mut stack = Vec::new();
     for t in 0..lod.triangles.len() {
         let corners = lod.triangle(t);
         let area = 0.25 * lod.triangle_area(t) as f64;
         let part = of_lod(t);
+        let texels = lod
+            .materials
+            .as_ref()
+            .map_or(UNTEXTURED_TEXELS, |m| m.texels_per_uv(lod.part(t)));
         for w in SAMPLES {
             let x = corners[0] * w[0] + corners[1] * w[1] + corners[2] * w[2];
             let uv = uv_at(luv, lod.triangles[t], w);
@@ -125,8 +126,8 @@ pub fn uv_error(original: &TriMesh, lod: &TriMesh) -> Option<UvError> {
             let Some((nearest, _)) = bvh.nearest(x, dist) else {
                 continue;
             };
-            // The best agreeing original triangle within the band.
-            let reach = nearest + band;
+            // The best agreeing original point within reach.
+            let reach = (nearest + band).max(reach);
             let mut best = f32::INFINITY;
             stack.clear();
             stack.push(0u32);
@@ -141,9 +142,19 @@ pub fn uv_error(original: &TriMesh, lod: &TriMesh) -> Option<UvError> {
                                 continue;
                             }
                             let p = original.triangle(o as usize);
-                            let q = closest_point_on_triangle(x, p[0], p[1], p[2]);
-                            let ouv_q =
-                                uv_at(ouv, original.triangles[o as usize], barycentric(q, p));
+                            let tri = original.triangles[o as usize];
+                            // The point of o whose UV is nearest, if within reach ...
+                            let [u0, u1, u2] = tri.map(|v| flat(ouv[v as usize]));
+                            let nearest_uv = closest_point_on_triangle(flat(uv), u0, u1, u2);
+                            let [b0, b1, b2] = barycentric(nearest_uv, u0, u1, u2);
+                            let y = p[0] * b0 + p[1] * b1 + p[2] * b2;
+                            let ouv_q = if y.distance(x) <= reach {
+                                nearest_uv.truncate()
+                            } else {
+                                // ... else the UV at o's point nearest to x.
+                                let q = closest_point_on_triangle(x, p[0], p[1], p[2]);
+                                uv_at(ouv, tri, barycentric(q, p[0], p[1], p[2]))
+                            };
                             best = best.min(ouv_q.distance(uv));
                         }
                     }
@@ -153,6 +164,8 @@ pub fn uv_error(original: &TriMesh, lod: &TriMesh) -> Option<UvError> {
             if best.is_finite() {
                 sum += best as f64 * area;
                 max = max.max(best);
+                sum_texels += (best * texels) as f64 * area;
+                max_texels = max_texels.max(best * texels);
                 total += area;
                 if best > UV_ERROR_THRESHOLD {
                     over += area;
@@ -164,6 +177,8 @@ pub fn uv_error(original: &TriMesh, lod: &TriMesh) -> Option<UvError> {
     Some(UvError {
         mean: of_total(sum),
         max,
+        mean_texels: of_total(sum_texels),
+        max_texels,
         area_over_threshold: of_total(over),
     })
 }
@@ -171,6 +186,7 @@ pub fn uv_error(original: &TriMesh, lod: &TriMesh) -> Option<UvError> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use glam::Vec3;
 
     /// A strip of squares along x, UV u = x / 4, with a seam at x = 2 where
     /// the right half's UVs are shifted by `shift`.
@@ -194,18 +210,27 @@ mod tests {
     #[test]
     fn a_copy_has_no_uv_error_and_a_shift_shows_on_its_side_only() {
         let original = strip(0.5);
-        let same = uv_error(&original, &original).unwrap();
+        let same = uv_error(&original, &original, 0.0).unwrap();
         assert!(
             same.max < 1e-6 && same.area_over_threshold == 0.0,
             "{same:?}"
         );
         // The same surface with the seam's shift gone: the right half is off by 0.5.
-        let wrong = uv_error(&original, &strip(0.0)).unwrap();
+        let wrong = uv_error(&original, &strip(0.0), 0.0).unwrap();
         assert!((wrong.area_over_threshold - 0.5).abs() < 1e-6, "{wrong:?}");
         assert!((wrong.max - 0.5).abs() < 1e-5);
+        // The texture carried along a move of 0.2 is found within that reach.
+        let mut moved = strip(0.0);
+        moved.positions.iter_mut().for_each(|p| p.x += 0.2);
+        let near = uv_error(&strip(0.0), &moved, 0.0).unwrap();
+        let within = uv_error(&strip(0.0), &moved, 0.2 + 1e-4).unwrap();
+        assert!((near.max - 0.05).abs() < 1e-4, "{near:?}");
+        assert!(within.max < 1e-4, "{within:?}");
+        // Untextured, errors count 1024 texels per UV unit.
+        assert!((near.max_texels - 0.05 * 1024.0).abs() < 0.1, "{near:?}");
         // Without UVs there is nothing to measure.
         let mut bare = original.clone();
         bare.uvs = None;
-        assert!(uv_error(&bare, &original).is_none());
+        assert!(uv_error(&bare, &original, 0.0).is_none());
     }
 }

@@ -30,6 +30,42 @@ pub struct Image {
     pub wrap_t: u32,
 }
 
+/// The width and height an encoded image declares in its header (PNG's
+/// IHDR, a JPEG's start-of-frame), read without decoding anything.
+pub fn declared_size(bytes: &[u8]) -> Option<(u32, u32)> {
+    let be32 = |at: usize| Some(u32::from_be_bytes(bytes.get(at..at + 4)?.try_into().ok()?));
+    let be16 = |at: usize| Some(u16::from_be_bytes(bytes.get(at..at + 2)?.try_into().ok()?) as u32);
+    if bytes.starts_with(b"\x89PNG\r\n\x1a\n") && bytes.get(12..16) == Some(b"IHDR") {
+        return Some((be32(16)?, be32(20)?));
+    }
+    if !bytes.starts_with(&[0xff, 0xd8]) {
+        return None;
+    }
+    // JPEG: walk the marker segments to the first start-of-frame.
+    let mut at = 2;
+    while bytes.get(at) == Some(&0xff) {
+        let marker = *bytes.get(at + 1)?;
+        let len = be16(at + 2)? as usize;
+        let sof = matches!(marker, 0xc0..=0xcf) && !matches!(marker, 0xc4 | 0xc8 | 0xcc);
+        if sof {
+            return Some((be16(at + 7)?, be16(at + 5)?));
+        }
+        at = at.checked_add(2 + len)?;
+    }
+    None
+}
+
+impl Image {
+    /// Its declared width and height ([`declared_size`]).
+    pub fn size(&self) -> Option<(u32, u32)> {
+        declared_size(&self.bytes)
+    }
+}
+
+/// Texels per UV unit assumed where a material has no texture (its UVs
+/// still map whatever texture a client gives it).
+pub const UNTEXTURED_TEXELS: f32 = 1024.0;
+
 /// A metallic–roughness material (glTF 2.0 §3.9.2).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Material {
@@ -104,6 +140,16 @@ impl Materials {
             table: vec![m],
             of_part: vec![0],
         }
+    }
+
+    /// Texels per UV unit on part `p`: its base-colour texture's larger
+    /// side (texture errors are counted in these), [`UNTEXTURED_TEXELS`]
+    /// without one.
+    pub fn texels_per_uv(&self, part: u32) -> f32 {
+        self.table
+            .get(self.of(part) as usize)
+            .and_then(|m| m.base_color_texture.as_ref()?.size())
+            .map_or(UNTEXTURED_TEXELS, |(w, h)| w.max(h) as f32)
     }
 
     /// The material index of part `p` (parts past the list wear the first).

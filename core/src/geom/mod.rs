@@ -14,7 +14,9 @@ use glam::{Vec2, Vec3};
 
 pub use adjacency::Adjacency;
 pub use gather::MeshArrays;
-pub use material::{AlphaMode, Image, Material, Materials, VertexAttributes};
+pub use material::{
+    AlphaMode, Image, Material, Materials, UNTEXTURED_TEXELS, VertexAttributes, declared_size,
+};
 pub use payload::Payload;
 pub use repair::{RepairOptions, RepairReport, Weld};
 pub use topology::{ComponentTopology, Topology};

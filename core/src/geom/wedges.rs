@@ -225,10 +225,20 @@ impl Wedges {
     /// kept, then oriented on export), so a faceted model, whose every edge
     /// is a normal seam, still simplifies.
     pub fn same_surface(&self, a: u32, b: u32) -> bool {
+        a == b
+            || self.same_but_uv(a, b)
+                && self
+                    .uvs
+                    .as_ref()
+                    .is_none_or(|u| u[a as usize] == u[b as usize])
+    }
+
+    /// [`Wedges::same_surface`] but for their UVs: a UV seam, the only one
+    /// a collapse may cross (within a tolerance, `simplify::collapse`).
+    pub fn same_but_uv(&self, a: u32, b: u32) -> bool {
         let (a, b) = (a as usize, b as usize);
         a == b
             || self.colors.as_ref().is_none_or(|c| c[a] == c[b])
-                && self.uvs.as_ref().is_none_or(|u| u[a] == u[b])
                 && self.payload.as_ref().is_none_or(|p| p.same_hard(a, b))
     }
 

@@ -57,36 +57,11 @@ pub fn encode_png(tex: &Texture) -> Vec<u8> {
     out
 }
 
-/// The width and height an encoded image declares in its header (PNG's
-/// IHDR, a JPEG's start-of-frame), read without decoding anything.
-pub fn declared_size(bytes: &[u8]) -> Option<(u32, u32)> {
-    let be32 = |at: usize| Some(u32::from_be_bytes(bytes.get(at..at + 4)?.try_into().ok()?));
-    let be16 = |at: usize| Some(u16::from_be_bytes(bytes.get(at..at + 2)?.try_into().ok()?) as u32);
-    if bytes.starts_with(b"\x89PNG\r\n\x1a\n") && bytes.get(12..16) == Some(b"IHDR") {
-        return Some((be32(16)?, be32(20)?));
-    }
-    if !bytes.starts_with(&[0xff, 0xd8]) {
-        return None;
-    }
-    // JPEG: walk the marker segments to the first start-of-frame.
-    let mut at = 2;
-    while bytes.get(at) == Some(&0xff) {
-        let marker = *bytes.get(at + 1)?;
-        let len = be16(at + 2)? as usize;
-        let sof = matches!(marker, 0xc0..=0xcf) && !matches!(marker, 0xc4 | 0xc8 | 0xcc);
-        if sof {
-            return Some((be16(at + 7)?, be16(at + 5)?));
-        }
-        at = at.checked_add(2 + len)?;
-    }
-    None
-}
-
 /// Refuses an image whose declared size would not fit the memory budget
 /// once decoded to RGBA8 (a 60000×60000 PNG is a few KB on disk and 13 GB
 /// decoded): checked from the header, before any decoder runs.
 pub fn check_declared_size(bytes: &[u8]) -> Result<(), String> {
-    let Some((w, h)) = declared_size(bytes) else {
+    let Some((w, h)) = crate::geom::declared_size(bytes) else {
         return Ok(()); // not decoded by lodstudio; carried as stored
     };
     super::limits::check_budget(
@@ -202,6 +177,7 @@ mod tests {
 
     #[test]
     fn a_declared_size_is_read_from_the_header_and_checked_against_the_budget() {
+        use crate::geom::declared_size;
         // A PNG signature and IHDR declaring 60000×60000 texels: 13.4 GB decoded.
         let mut bomb = b"\x89PNG\r\n\x1a\n\0\0\0\x0dIHDR".to_vec();
         bomb.extend(60_000u32.to_be_bytes());

@@ -109,6 +109,10 @@ pub struct Row {
     /// Voxel: how each extracted level is simplified further (paper §5).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub post: Option<PostSpec>,
+    /// Edge collapse: texels a seam crossing may move a texture coordinate
+    /// (`CollapseOptions::uv_tolerance`; unset: its default).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub uv_tolerance: Option<f32>,
 }
 
 impl Row {
@@ -122,6 +126,7 @@ impl Row {
             tau: None,
             resolution: None,
             post: None,
+            uv_tolerance: None,
         };
         match Params::default_for(method) {
             Params::Hybrid(h) => (row.kappa, row.tau) = (Some(h.kappa), Some(h.tau)),
@@ -139,7 +144,10 @@ impl Row {
     pub fn params(&self, lock_borders: bool) -> Params {
         let mut params = Params::default_for(self.method);
         match &mut params {
-            Params::EdgeCollapse(p) => p.collapse.lock_borders = lock_borders,
+            Params::EdgeCollapse(p) => {
+                p.collapse.lock_borders = lock_borders;
+                p.collapse.uv_tolerance = self.uv_tolerance.unwrap_or(p.collapse.uv_tolerance);
+            }
             Params::Hybrid(h) => {
                 h.kappa = self.kappa.unwrap_or(h.kappa);
                 h.tau = self.tau.unwrap_or(h.tau);
@@ -489,6 +497,11 @@ impl Row {
         only("tau", self.tau.is_some(), Method::Hybrid)?;
         only("resolution", self.resolution.is_some(), Method::Voxel)?;
         only("post", self.post.is_some(), Method::Voxel)?;
+        only(
+            "uv_tolerance",
+            self.uv_tolerance.is_some(),
+            Method::EdgeCollapse,
+        )?;
         let value = match self.tolerance {
             RowTolerance::Percent(v) | RowTolerance::Pixels(v) => v.is_finite() && v >= 0.0,
             RowTolerance::Ratio(r) => r > 0.0 && r <= 1.0,

@@ -313,7 +313,7 @@ impl SceneChains {
                             vertex_data,
                             pose_error,
                             target_errors,
-                            uv_error: crate::distance::uv_error(&m.mesh, lod),
+                            uv_error: crate::distance::uv_error(&m.mesh, lod, l.bound()),
                             area: lod.area(),
                         }
                     })

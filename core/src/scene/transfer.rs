@@ -14,7 +14,7 @@ use std::sync::OnceLock;
 use glam::Vec3;
 
 use super::carry::Columns;
-use crate::distance::MeshDistance;
+use crate::distance::{MeshDistance, barycentric};
 use crate::geom::TriMesh;
 use crate::io::scene::{MorphTarget, SceneMesh, Skinning, VertexExtras};
 
@@ -116,21 +116,6 @@ impl<'a> Transfer<'a> {
     }
 }
 
-/// The barycentric coordinates of `p` (a point of triangle abc), each in
-/// [0, 1] and summing to 1; a degenerate triangle answers its first corner.
-pub fn barycentric(p: Vec3, a: Vec3, b: Vec3, c: Vec3) -> [f32; 3] {
-    let (v0, v1, v2) = (b - a, c - a, p - a);
-    let (d00, d01, d11) = (v0.dot(v0), v0.dot(v1), v1.dot(v1));
-    let (d20, d21) = (v2.dot(v0), v2.dot(v1));
-    let denom = d00 * d11 - d01 * d01;
-    if denom.abs() <= f32::EPSILON * d00 * d11 || !denom.is_finite() {
-        return [1.0, 0.0, 0.0];
-    }
-    let v = ((d11 * d20 - d01 * d21) / denom).clamp(0.0, 1.0);
-    let w = ((d00 * d21 - d01 * d20) / denom).clamp(0.0, 1.0 - v);
-    [1.0 - v - w, v, w]
-}
-
 /// The joints and weights at a point: the corners' weights blended joint
 /// by joint, the four largest kept and renormalised (a point without any:
 /// joint 0 at full weight).
@@ -176,15 +161,6 @@ pub(super) fn four_largest(sum: &mut Vec<(u16, f32)>) -> ([u16; 4], [f32; 4]) {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn barycentric_coordinates_rebuild_the_point() {
-        let (a, b, c) = (Vec3::ZERO, Vec3::X, Vec3::Y);
-        let p = Vec3::new(0.25, 0.5, 0.0);
-        let [u, v, w] = barycentric(p, a, b, c);
-        assert!(((u * a + v * b + w * c) - p).length() < 1e-6);
-        assert_eq!(barycentric(Vec3::ONE, a, a, a), [1.0, 0.0, 0.0]);
-    }
 
     #[test]
     fn blended_weights_keep_the_four_largest_and_sum_to_one() {

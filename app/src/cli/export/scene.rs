@@ -203,6 +203,8 @@ fn report(
                 j["uv_error"] = serde_json::json!({
                     "mean": uv.iter().map(|(e, a)| e.mean * a).sum::<f64>() / area,
                     "max": uv.iter().map(|(e, _)| e.max).fold(0.0f32, f32::max),
+                    "mean_texels": uv.iter().map(|(e, a)| e.mean_texels * a).sum::<f64>() / area,
+                    "max_texels": uv.iter().map(|(e, _)| e.max_texels).fold(0.0f32, f32::max),
                     "area_over_threshold": uv.iter().map(|(e, a)| e.area_over_threshold * a).sum::<f64>() / area,
                 });
             }
