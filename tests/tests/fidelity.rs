@@ -143,6 +143,16 @@ fn truck_textures_stay_on_their_side_of_every_seam() {
                 uv["area_over_threshold"].as_f64().unwrap() < 0.01,
                 "{method} LOD {l}: {uv}"
             );
+            // In texels too: 2,048 per UV unit on the textured faces (the
+            // truck's 2048² texture), 1,024 on the untextured.
+            let (texels, mean) = (
+                uv["mean_texels"].as_f64().unwrap(),
+                uv["mean"].as_f64().unwrap(),
+            );
+            assert!(
+                texels >= 1024.0 * mean - 1e-6 && texels <= 2048.0 * mean + 1e-6,
+                "{method} LOD {l}: {uv}"
+            );
             let meshes = lod_meshes(&doc, l);
             for p in meshes
                 .iter()

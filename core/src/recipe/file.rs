@@ -616,6 +616,7 @@ mod tests {
             Some(Method::EdgeCollapse),
         )
         .unwrap();
+        rows[0].uv_tolerance = Some(16.0);
         rows[1].kappa = Some(5.0);
         rows[2].post = Some(PostSpec::Triangles(900));
         let mut recipe = Recipe::new(rows);
@@ -632,6 +633,16 @@ mod tests {
         let bytes = recipe.to_json();
         let back = Recipe::from_json(&bytes).unwrap();
         assert_eq!(back, recipe);
+        // The row builds with its own tolerance (rows of two tolerances are
+        // two hierarchies).
+        match back.row_params(0) {
+            Params::EdgeCollapse(p) => assert_eq!(p.collapse.uv_tolerance, 16.0),
+            other => panic!("{other:?}"),
+        }
+        assert!(
+            !back.rows[0]
+                .same_hierarchy(&Row::new(Method::EdgeCollapse, RowTolerance::Percent(0.5)))
+        );
         assert_eq!(back.to_json(), bytes, "byte-identical when written again");
         // What is left out takes its default.
         let short = br#"{"format":"lodstudio-recipe","version":1,"rows":[{"method":"hybrid","tolerance":"2%"}]}"#;
@@ -665,6 +676,14 @@ mod tests {
             (
                 with_row(r#"{"method":"voxel","tolerance":"2%","resolution":3}"#),
                 "rows[1].resolution",
+            ),
+            (
+                with_row(r#"{"method":"simplify","tolerance":"2%","uv_tolerance":-1}"#),
+                "rows[1].uv_tolerance",
+            ),
+            (
+                with_row(r#"{"method":"hybrid","tolerance":"2%","uv_tolerance":4}"#),
+                "rows[1].uv_tolerance",
             ),
             (
                 with_row(r#"{"method":"voxel","tolerance":"2%","post":{"voxels":-1}}"#),
