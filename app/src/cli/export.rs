@@ -8,6 +8,7 @@ use super::*;
 use lodstudio_core::io::gltf_writer::PointsAs;
 use lodstudio_core::lod::Method;
 use lodstudio_core::recipe::{Chain, ChainError, Flag, Recipe, build_chain, parse_lods};
+use lodstudio_core::simplify::collapse::AttributeWeights;
 
 mod batch;
 mod scene;
@@ -31,7 +32,7 @@ pub struct ExportArgs {
     /// rows, their methods and parameters, the switch tolerance.
     #[arg(long, value_name = "R.json", conflicts_with_all = [
         "method", "lods", "pixels", "viewport_height", "coverage", "lock_borders", "keep_seams",
-        "uv_tolerance", "kappa", "tau", "resolution", "points_as", "no_simplify", "post_error", "post_triangles",
+        "uv_tolerance", "attribute_weights", "kappa", "tau", "resolution", "points_as", "no_simplify", "post_error", "post_triangles",
         "weld_tolerance", "no_weld",
     ])]
     recipe: Option<PathBuf>,
@@ -101,6 +102,10 @@ pub struct ExportArgs {
     /// coordinate off its UV seam (default 1; 0 keeps every seam).
     #[arg(long, value_name = "TEXELS")]
     uv_tolerance: Option<f32>,
+    /// Edge collapse rows: appearance in the collapse order, normal=W,uv=W,color=W
+    /// (as simplify's).
+    #[arg(long, value_name = "WEIGHTS", value_parser = AttributeWeights::parse)]
+    attribute_weights: Option<AttributeWeights>,
     /// Hybrid: points per triangle's rendering time (κ).
     #[arg(long)]
     kappa: Option<f32>,
@@ -224,7 +229,10 @@ fn recipe_of(args: &ExportArgs) -> Result<Recipe, CliError> {
         || args.post.post_triangles.is_some();
     for row in &mut rows {
         match row.method {
-            Method::EdgeCollapse => row.uv_tolerance = args.uv_tolerance,
+            Method::EdgeCollapse => {
+                row.uv_tolerance = args.uv_tolerance;
+                row.attribute_weights = args.attribute_weights;
+            }
             Method::Hybrid => {
                 row.kappa = args.kappa.or(row.kappa);
                 row.tau = args.tau.or(row.tau);
@@ -264,6 +272,7 @@ fn recipe_of(args: &ExportArgs) -> Result<Recipe, CliError> {
             "viewport_height" => "--viewport-height",
             "coverage" => "--coverage",
             "uv_tolerance" => "--uv-tolerance",
+            "attribute_weights" => "--attribute-weights",
             _ => "--lods",
         };
         CliError::BadInput(format!("{option}: {}", e.message))

@@ -2,6 +2,7 @@
 
 use super::*;
 use lodstudio_core::simplify;
+use lodstudio_core::simplify::collapse::AttributeWeights;
 
 #[derive(Args, Debug)]
 #[command(group(clap::ArgGroup::new("target").required(true).args(["triangles", "ratio", "error"])))]
@@ -34,6 +35,11 @@ pub struct SimplifyArgs {
     /// its UV seam (texture deviation); 0 keeps every seam.
     #[arg(long, value_name = "TEXELS", default_value_t = CollapseOptions::default().uv_tolerance)]
     uv_tolerance: f32,
+    /// Appearance in the collapse order, as weights of lengths:
+    /// normal=W,uv=W,color=W (any subset, the rest 0; default all 0: the
+    /// order is geometric). The certified bound stays geometric.
+    #[arg(long, value_name = "WEIGHTS", value_parser = AttributeWeights::parse)]
+    attribute_weights: Option<AttributeWeights>,
     #[command(flatten)]
     report: ReportArgs,
     /// Also save the progressive collapse, from the input down to this run's
@@ -88,6 +94,7 @@ pub fn run(args: SimplifyArgs) -> Result<(), CliError> {
         lock_borders: args.lock_borders || args.keep_seams,
         min_quality: args.min_quality,
         uv_tolerance: args.uv_tolerance,
+        attribute_weights: args.attribute_weights.unwrap_or_default(),
         ..Default::default()
     };
     collapse.validate()?;

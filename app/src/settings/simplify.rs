@@ -6,7 +6,9 @@ use std::ops::RangeInclusive;
 
 use lodstudio_core::lod::PrefixTarget;
 use lodstudio_core::simplify::CollapseOptions;
-pub use lodstudio_core::simplify::collapse::{GUARD_RANGE, UV_TOLERANCE_RANGE};
+pub use lodstudio_core::simplify::collapse::{
+    ATTRIBUTE_WEIGHT_RANGE, AttributeWeights, GUARD_RANGE, UV_TOLERANCE_RANGE,
+};
 use lodstudio_core::simplify::progressive::{FLOOR_RATIO, ProgressiveOptions};
 use serde::{Deserialize, Serialize};
 
@@ -46,6 +48,8 @@ pub struct EdgeCollapseSettings {
     pub min_normal_cos: f32,
     /// Texels a seam crossing may move a texture coordinate (0 keeps seams).
     pub uv_tolerance: f32,
+    /// Appearance in the collapse order.
+    pub attribute_weights: AttributeWeights,
 }
 
 impl Default for EdgeCollapseSettings {
@@ -59,6 +63,7 @@ impl Default for EdgeCollapseSettings {
             min_quality: collapse.min_quality,
             min_normal_cos: collapse.min_normal_cos,
             uv_tolerance: collapse.uv_tolerance,
+            attribute_weights: collapse.attribute_weights,
         }
     }
 }
@@ -75,6 +80,14 @@ impl EdgeCollapseSettings {
             min_quality: clamp_or(self.min_quality, GUARD_RANGE, d.min_quality),
             min_normal_cos: clamp_or(self.min_normal_cos, GUARD_RANGE, d.min_normal_cos),
             uv_tolerance: clamp_or(self.uv_tolerance, UV_TOLERANCE_RANGE, d.uv_tolerance),
+            attribute_weights: {
+                let (w, dw) = (self.attribute_weights, d.attribute_weights);
+                AttributeWeights {
+                    normal: clamp_or(w.normal, ATTRIBUTE_WEIGHT_RANGE, dw.normal),
+                    uv: clamp_or(w.uv, ATTRIBUTE_WEIGHT_RANGE, dw.uv),
+                    color: clamp_or(w.color, ATTRIBUTE_WEIGHT_RANGE, dw.color),
+                }
+            },
         }
     }
 
@@ -86,6 +99,7 @@ impl EdgeCollapseSettings {
             min_quality: s.min_quality,
             min_normal_cos: s.min_normal_cos,
             uv_tolerance: s.uv_tolerance,
+            attribute_weights: s.attribute_weights,
         }
     }
 

@@ -18,6 +18,7 @@ use crate::io::gltf_writer::PointsAs;
 use crate::io::meshopt_compression::Compression;
 use crate::io::scene_writer::Layout;
 use crate::lod::{Method, Params};
+use crate::simplify::collapse::AttributeWeights;
 use crate::voxel::PostSimplify;
 use crate::voxel::VoxelParams;
 
@@ -113,6 +114,10 @@ pub struct Row {
     /// (`CollapseOptions::uv_tolerance`; unset: its default).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub uv_tolerance: Option<f32>,
+    /// Edge collapse: appearance in the collapse order
+    /// (`CollapseOptions::attribute_weights`; unset: its default).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub attribute_weights: Option<AttributeWeights>,
 }
 
 impl Row {
@@ -127,6 +132,7 @@ impl Row {
             resolution: None,
             post: None,
             uv_tolerance: None,
+            attribute_weights: None,
         };
         match Params::default_for(method) {
             Params::Hybrid(h) => (row.kappa, row.tau) = (Some(h.kappa), Some(h.tau)),
@@ -147,6 +153,9 @@ impl Row {
             Params::EdgeCollapse(p) => {
                 p.collapse.lock_borders = lock_borders;
                 p.collapse.uv_tolerance = self.uv_tolerance.unwrap_or(p.collapse.uv_tolerance);
+                p.collapse.attribute_weights = self
+                    .attribute_weights
+                    .unwrap_or(p.collapse.attribute_weights);
             }
             Params::Hybrid(h) => {
                 h.kappa = self.kappa.unwrap_or(h.kappa);

@@ -19,7 +19,11 @@
 //! cheap lower bound [`quadric_mean`] and computed in full only when a
 //! candidate reaches the front.
 
+mod appearance;
+
 use glam::{Vec2, Vec3};
+
+pub use appearance::{ATTRIBUTE_WEIGHT_RANGE, AttributeWeights};
 
 use super::quadric::Quadric;
 use super::queue::CollapseQueue;
@@ -49,6 +53,9 @@ pub struct CollapseOptions {
     /// within this many texels of where its chart shows it (module doc of
     /// [`EdgeCollapser`]); 0 keeps every seam.
     pub uv_tolerance: f32,
+    /// How much the appearance a collapse loses weighs in the order
+    /// (`appearance`); the certified bound stays geometric.
+    pub attribute_weights: AttributeWeights,
 }
 
 /// The UV tolerance's range, in texels.
@@ -61,6 +68,7 @@ impl Default for CollapseOptions {
             min_quality: 0.0,
             min_normal_cos: 0.7,
             uv_tolerance: 1.0,
+            attribute_weights: AttributeWeights::default(),
         }
     }
 }
@@ -71,7 +79,8 @@ impl CollapseOptions {
         use crate::lod::in_range;
         in_range("min_quality", self.min_quality, &GUARD_RANGE)?;
         in_range("min_normal_cos", self.min_normal_cos, &GUARD_RANGE)?;
-        in_range("uv_tolerance", self.uv_tolerance, &UV_TOLERANCE_RANGE)
+        in_range("uv_tolerance", self.uv_tolerance, &UV_TOLERANCE_RANGE)?;
+        self.attribute_weights.validate()
     }
 }
 
@@ -374,6 +383,19 @@ fn corner_vertices(mesh: &TriMesh, adj: &Adjacency, faces: impl Fn(usize) -> boo
     marked
 }
 
+/// Where `p` projects onto the edge from `pa` (0) to `pb` (1): how the
+/// collapsed vertex interpolates the ends' attributes.
+fn edge_parameter(pa: Vec3, pb: Vec3, p: Vec3) -> f32 {
+    let ab = pb - pa;
+    if p == pa || ab.length_squared() == 0.0 {
+        0.0
+    } else if p == pb {
+        1.0
+    } else {
+        ((p - pa).dot(ab) / ab.length_squared()).clamp(0.0, 1.0)
+    }
+}
+
 /// The quadric error over the quadric's weight: the mean squared distance of
 /// the placement to the planes (area weighted), a lower bound of [`quadric_cost`].
 pub fn quadric_mean(cand: &Candidate) -> f64 {
@@ -386,16 +408,19 @@ pub fn quadric_mean(cand: &Candidate) -> f64 {
 /// move far for little cost, and a mean misses how far a tip moves along its
 /// ridge or a new edge bridges a groove; the larger of the two follows the
 /// largest error, which is what the certificate and the Hausdorff distance
-/// measure (the horse at 10%: 1.01e-3 → 1.7e-4, BENCHMARKS.md).
+/// measure (the horse at 10%: 1.01e-3 → 1.7e-4, BENCHMARKS.md). Plus the
+/// appearance the collapse loses, as a squared length (`appearance`).
 pub fn quadric_cost(cand: &Candidate, col: &EdgeCollapser) -> f64 {
     let mean = quadric_mean(cand);
     let floor = mean as f32;
     let moved = col.deviation_squared(cand, floor);
-    if moved > floor {
+    let geometric = if moved > floor {
         mean.max(moved as f64)
     } else {
         mean
-    }
+    };
+    // What the collapse loses of the appearance, as a length (`appearance`).
+    geometric + f64::from(col.appearance_squared(cand))
 }
 
 impl EdgeCollapser {
@@ -1239,16 +1264,7 @@ impl EdgeCollapser {
         let c = self.pos.len() as u32;
         self.collapsed_since_retry = true;
         self.collapses += 1;
-        // Attributes: interpolate by where p projects onto the edge.
-        let (pa, pb) = (self.pos[a as usize], self.pos[b as usize]);
-        let ab = pb - pa;
-        let s = if p == pa || ab.length_squared() == 0.0 {
-            0.0
-        } else if p == pb {
-            1.0
-        } else {
-            ((p - pa).dot(ab) / ab.length_squared()).clamp(0.0, 1.0)
-        };
+        let s = edge_parameter(self.pos[a as usize], self.pos[b as usize], p);
         let seam = match self.wedges.is_some()
             && (self.constrained[a as usize] || self.constrained[b as usize])
         {
