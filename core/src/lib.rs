@@ -10,6 +10,7 @@
 #![warn(clippy::unwrap_used)]
 
 pub mod amg;
+pub mod bake;
 pub mod batch;
 pub mod builtins;
 pub mod distance;

@@ -40,6 +40,14 @@ pub struct SimplifyArgs {
     /// order is geometric). The certified bound stays geometric.
     #[arg(long, value_name = "WEIGHTS", value_parser = AttributeWeights::parse)]
     attribute_weights: Option<AttributeWeights>,
+    /// Give the result its own texture: a new UV atlas, the original's
+    /// base colour transferred onto it (GLB output). UV seams then stop
+    /// nothing (the tolerance is the largest).
+    #[arg(long)]
+    bake: bool,
+    /// The baked texture's side in texels.
+    #[arg(long, value_name = "N", default_value_t = 1024, requires = "bake")]
+    texture_size: u32,
     #[command(flatten)]
     report: ReportArgs,
     /// Also save the progressive collapse, from the input down to this run's
@@ -93,11 +101,32 @@ pub fn run(args: SimplifyArgs) -> Result<(), CliError> {
     let collapse = CollapseOptions {
         lock_borders: args.lock_borders || args.keep_seams,
         min_quality: args.min_quality,
-        uv_tolerance: args.uv_tolerance,
+        // A baked result wears a new atlas: the old one's seams stop nothing.
+        uv_tolerance: match args.bake {
+            true => *simplify::collapse::UV_TOLERANCE_RANGE.end(),
+            false => args.uv_tolerance,
+        },
         attribute_weights: args.attribute_weights.unwrap_or_default(),
         ..Default::default()
     };
     collapse.validate()?;
+    let glb = args
+        .output
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("glb"));
+    if args.bake && !glb {
+        return Err(CliError::BadInput(
+            "--bake writes a texture: give a .glb output".into(),
+        ));
+    }
+    if args.bake && !lodstudio_core::bake::TEXTURE_SIZE_RANGE.contains(&args.texture_size) {
+        return Err(CliError::BadInput(format!(
+            "--texture-size must be in {}..={}, got {}",
+            lodstudio_core::bake::TEXTURE_SIZE_RANGE.start(),
+            lodstudio_core::bake::TEXTURE_SIZE_RANGE.end(),
+            args.texture_size
+        )));
+    }
     args.save.check(args.report.force)?;
     let mut input = args.input;
     input.no_weld |= args.keep_seams;
@@ -113,7 +142,17 @@ pub fn run(args: SimplifyArgs) -> Result<(), CliError> {
         simplify::SimplifyError::Cancelled => CliError::Failure(e.to_string()),
     })?;
     let seconds = start.elapsed().as_secs_f64();
-    write_mesh(&args.output, &result.mesh)?;
+    let baked = match args.bake {
+        true => Some(
+            lodstudio_core::bake::bake(&mesh, &result.mesh, args.texture_size)
+                .map_err(CliError::Failure)?,
+        ),
+        false => None,
+    };
+    write_mesh(
+        &args.output,
+        baked.as_ref().map_or(&result.mesh, |b| &b.mesh),
+    )?;
     if args.save.save.is_some() {
         // The record down to this run's result, built as every
         // edge-collapse hierarchy is.
@@ -152,6 +191,9 @@ pub fn run(args: SimplifyArgs) -> Result<(), CliError> {
         // A count the collapse could not reach, and why.
         if let Some(unmet) = &result.unmet {
             report["unmet"] = serde_json::json!(unmet);
+        }
+        if let Some(b) = &baked {
+            report["baked"] = serde_json::json!(b.report);
         }
         println!("{report}");
     } else {

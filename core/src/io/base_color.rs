@@ -13,65 +13,114 @@ use crate::geom::{Image, TriMesh};
 const CLAMP_TO_EDGE: u32 = 33071;
 const MIRRORED_REPEAT: u32 = 33648;
 
+/// A mesh's materials with their textures decoded: the colour the surface
+/// shows at any point of a triangle.
+pub struct SurfaceColor<'a> {
+    mesh: &'a TriMesh,
+    materials: &'a crate::geom::Materials,
+    /// Per material, its decoded texture (one that does not decode, JPEG or
+    /// damaged, leaves its factor).
+    textures: Vec<Option<(Rgba, &'a Image)>>,
+}
+
+impl<'a> SurfaceColor<'a> {
+    /// `None` when the mesh has no materials.
+    pub fn new(mesh: &'a TriMesh) -> Option<SurfaceColor<'a>> {
+        let materials = mesh.materials.as_ref()?;
+        let textures = materials
+            .table
+            .iter()
+            .map(|m| {
+                let image = m.base_color_texture.as_ref()?;
+                decode_rgba(image).ok().map(|rgba| (rgba, image))
+            })
+            .collect();
+        Some(SurfaceColor {
+            mesh,
+            materials,
+            textures,
+        })
+    }
+
+    /// Whether the materials add nothing to the vertex colours (no texture,
+    /// white factors).
+    fn plain(&self) -> bool {
+        self.materials
+            .table
+            .iter()
+            .all(|m| m.base_color_texture.is_none() && m.base_color[..3] == [1.0; 3])
+    }
+
+    /// The linear colour at barycentric `bary` of triangle `t`: its
+    /// material's factor × its texture at the interpolated UV × the
+    /// interpolated vertex colour.
+    pub fn at(&self, t: usize, bary: [f32; 3]) -> Vec3 {
+        let mesh = self.mesh;
+        let part = mesh.parts.as_ref().map_or(0, |p| p[t]);
+        let m = self.materials.of(part) as usize;
+        let Some(material) = self.materials.table.get(m) else {
+            return Vec3::ONE;
+        };
+        let tri = mesh.triangles[t];
+        let wedges = mesh.wedges.as_ref();
+        // A corner's attribute: its wedge's, else its vertex's.
+        let corner =
+            |k: usize, per_wedge: Option<&Vec<Vec3>>, per_vertex: Option<&Vec<Vec3>>| match (
+                wedges, per_wedge,
+            ) {
+                (Some(w), Some(a)) => a.get(w.corners[t][k] as usize).copied(),
+                _ => per_vertex.and_then(|a| a.get(tri[k] as usize).copied()),
+            };
+        let mut colour = Vec3::from_slice(&material.base_color[..3]);
+        if material.vertex_attributes.uvs
+            && let Some((rgba, image)) = &self.textures[m]
+        {
+            let uv_of = |k: usize| match (wedges, wedges.and_then(|w| w.uvs.as_ref())) {
+                (Some(w), Some(u)) => u.get(w.corners[t][k] as usize).copied(),
+                _ => mesh
+                    .uvs
+                    .as_ref()
+                    .and_then(|u| u.get(tri[k] as usize).copied()),
+            };
+            if let (Some(a), Some(b), Some(c)) = (uv_of(0), uv_of(1), uv_of(2)) {
+                colour *= bilinear(rgba, image, a * bary[0] + b * bary[1] + c * bary[2]);
+            }
+        }
+        if material.vertex_attributes.colors {
+            let c = |k| {
+                corner(
+                    k,
+                    wedges.and_then(|w| w.colors.as_ref()),
+                    mesh.colors.as_ref(),
+                )
+            };
+            if let (Some(a), Some(b), Some(d)) = (c(0), c(1), c(2)) {
+                colour *= a * bary[0] + b * bary[1] + d * bary[2];
+            }
+        }
+        colour
+    }
+}
+
 /// Each vertex's surface colour, its corners' colours weighted by their
 /// triangles' areas; `None` when the materials add nothing to the vertex
 /// colours (no texture, white factors) or there are none.
 pub fn vertex_colors(mesh: &TriMesh) -> Option<Vec<Vec3>> {
-    let materials = mesh.materials.as_ref()?;
-    let plain =
-        |m: &crate::geom::Material| m.base_color_texture.is_none() && m.base_color[..3] == [1.0; 3];
-    if materials.table.iter().all(plain) {
+    let surface = SurfaceColor::new(mesh)?;
+    if surface.plain() {
         return None;
     }
-    // A texture that does not decode (JPEG, damaged) leaves its factor.
-    let textures: Vec<Option<(Rgba, &Image)>> = materials
-        .table
-        .iter()
-        .map(|m| {
-            let image = m.base_color_texture.as_ref()?;
-            decode_rgba(image).ok().map(|rgba| (rgba, image))
-        })
-        .collect();
-    let wedges = mesh.wedges.as_ref();
     let mut sum = vec![Vec3::ZERO; mesh.positions.len()];
     let mut weight = vec![0.0f32; mesh.positions.len()];
     for (t, tri) in mesh.triangles.iter().enumerate() {
-        let part = mesh.parts.as_ref().map_or(0, |p| p[t]);
-        let m = materials.of(part) as usize;
-        let Some(material) = materials.table.get(m) else {
-            continue;
-        };
         let [a, b, c] = tri.map(|v| mesh.positions[v as usize]);
         let area = 0.5 * (b - a).cross(c - a).length();
-        let factor = Vec3::from_slice(&material.base_color[..3]);
         for (k, &v) in tri.iter().enumerate() {
-            let wedge = wedges.map(|w| w.corners[t][k] as usize);
-            let attribute = |per_wedge: Option<&Vec<Vec2>>, per_vertex: Option<&Vec<Vec2>>| match (
-                wedge, per_wedge,
-            ) {
-                (Some(w), Some(a)) => a.get(w).copied(),
-                _ => per_vertex.and_then(|a| a.get(v as usize).copied()),
-            };
-            let mut colour = factor;
-            if material.vertex_attributes.uvs
-                && let Some((rgba, image)) = &textures[m]
-                && let Some(uv) = attribute(wedges.and_then(|w| w.uvs.as_ref()), mesh.uvs.as_ref())
-            {
-                colour *= bilinear(rgba, image, uv);
-            }
-            if material.vertex_attributes.colors {
-                let vertex = match (wedge, wedges.and_then(|w| w.colors.as_ref())) {
-                    (Some(w), Some(c)) => c.get(w).copied(),
-                    _ => mesh
-                        .colors
-                        .as_ref()
-                        .and_then(|c| c.get(v as usize).copied()),
-                };
-                colour *= vertex.unwrap_or(Vec3::ONE);
-            }
+            let mut bary = [0.0; 3];
+            bary[k] = 1.0;
             // A degenerate triangle still speaks for an isolated corner.
             let w = area.max(f32::MIN_POSITIVE);
-            sum[v as usize] += w * colour;
+            sum[v as usize] += w * surface.at(t, bary);
             weight[v as usize] += w;
         }
     }

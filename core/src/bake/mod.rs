@@ -1,0 +1,436 @@
+//! Baking: a LOD gets its own texture. Past its seams' floor (or past the
+//! UV tolerance) a textured LOD cannot keep the original's atlas: its
+//! charts no longer fit the surface. Here the LOD is unwrapped afresh and
+//! the original's appearance is transferred onto its new atlas, as
+//! Simplygon, InstaLOD and meshoptimizer's demo (remesh → unwrap → rebake)
+//! do; every material of the LOD becomes one, so it is also one draw call.
+//!
+//! The steps, in order:
+//! 1. **Unwrap**: charts, LSCM and packing by `uvunwrap` (pure Rust; chosen
+//!    over xatlas bindings, which need a C++ toolchain in the build and on
+//!    every CI machine, for the same segmentation → LSCM → packing
+//!    pipeline), `padding` empty texels around each chart.
+//! 2. **Transfer**: every texel whose centre lies in a LOD triangle's UV
+//!    image is the LOD surface point there; the original's nearest surface
+//!    point (the BVH of `distance`) gives the colour it shows
+//!    (`io::base_color`: factor × texture × vertex colour). The LOD is
+//!    within its certified bound of the original, so that point is at most
+//!    the bound away.
+//! 3. **Dilate**: `padding` rings of empty texels around the charts take
+//!    their covered neighbours' mean, so bilinear filtering and mip levels
+//!    never fetch the empty background at a chart's edge.
+//! 4. **Encode**: sRGB PNG, the LOD's only material's base-colour texture.
+
+use glam::{Vec2, Vec3};
+use rayon::prelude::*;
+
+use crate::distance::{MeshDistance, barycentric};
+use crate::geom::{Image, Material, Materials, TriMesh, VertexAttributes, Wedges};
+use crate::io::base_color::SurfaceColor;
+use crate::io::image::{encode_png, encode_srgb};
+use crate::lod::Texture;
+
+/// The baked texture's side's range, in texels.
+pub const TEXTURE_SIZE_RANGE: std::ops::RangeInclusive<u32> = 64..=8192;
+
+/// Empty texels around each chart, filled by dilation.
+const PADDING: u32 = 4;
+
+/// What a bake made.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct BakeReport {
+    /// The texture's size in texels.
+    pub width: u32,
+    pub height: u32,
+    pub charts: u32,
+    /// Texels whose centre lies in a chart (transferred), of the texture.
+    pub covered: f64,
+    pub seconds: f64,
+}
+
+/// A LOD with its own baked texture, and what it took.
+pub struct Baked {
+    pub mesh: TriMesh,
+    pub report: BakeReport,
+}
+
+/// Bakes `original`'s appearance onto `lod` with a texture of at most
+/// `size` texels a side.
+///
+/// # Errors
+/// A message when the size is out of range, the LOD is empty, or its
+/// charts do not fit one texture.
+pub fn bake(original: &TriMesh, lod: &TriMesh, size: u32) -> Result<Baked, String> {
+    let start = std::time::Instant::now();
+    if !TEXTURE_SIZE_RANGE.contains(&size) {
+        return Err(format!(
+            "texture size must be in {}..={}, got {size}",
+            TEXTURE_SIZE_RANGE.start(),
+            TEXTURE_SIZE_RANGE.end()
+        ));
+    }
+    if lod.triangles.is_empty() {
+        return Err("an empty LOD has nothing to bake".into());
+    }
+    // 1. Unwrap.
+    let positions: Vec<[f32; 3]> = lod.positions.iter().map(|p| p.to_array()).collect();
+    let indices: Vec<u32> = lod.triangles.iter().flatten().copied().collect();
+    let options = uvunwrap::Options {
+        density: uvunwrap::Density::Auto { page_size: size },
+        padding: PADDING,
+        ..Default::default()
+    };
+    let atlas = uvunwrap::generate(&[uvunwrap::MeshInput::new(&positions, &indices)], &options)
+        .map_err(|e| format!("unwrapping the LOD: {e}"))?;
+    if atlas.page_count != 1 {
+        return Err(format!(
+            "the LOD's {} charts need {} textures of {size}²: give a larger texture size",
+            atlas.chart_count, atlas.page_count
+        ));
+    }
+    let unwrapped = &atlas.meshes[0];
+    let (width, height) = (atlas.width, atlas.height);
+    let mesh = with_atlas_uvs(lod, unwrapped);
+
+    // 2. Transfer.
+    let nearest = MeshDistance::new(original);
+    let surface = SurfaceColor::new(original);
+    let uvs = mesh.wedges.as_ref().and_then(|w| w.uvs.as_ref());
+    let corner_uv = |t: usize, k: usize| match (&mesh.wedges, uvs) {
+        (Some(w), Some(u)) => u[w.corners[t][k] as usize],
+        _ => Vec2::ZERO,
+    };
+    // Per row of texels, the triangles whose UV bounds cross it.
+    let mut rows: Vec<Vec<u32>> = vec![Vec::new(); height as usize];
+    for t in 0..mesh.triangles.len() {
+        let ys = [0, 1, 2].map(|k| corner_uv(t, k).y * height as f32 - 0.5);
+        let lo = ys
+            .iter()
+            .copied()
+            .fold(f32::INFINITY, f32::min)
+            .floor()
+            .max(0.0) as usize;
+        let hi = ys.iter().copied().fold(f32::NEG_INFINITY, f32::max).ceil();
+        let hi = (hi.max(0.0) as usize).min(height as usize - 1);
+        for row in rows.iter_mut().take(hi + 1).skip(lo) {
+            row.push(t as u32);
+        }
+    }
+    let texels: Vec<Option<Vec3>> = rows
+        .par_iter()
+        .enumerate()
+        .flat_map_iter(|(y, tris)| {
+            let mut line = vec![None; width as usize];
+            for &t in tris {
+                let t = t as usize;
+                let uv =
+                    [0, 1, 2].map(|k| corner_uv(t, k) * Vec2::new(width as f32, height as f32));
+                let x0 = uv
+                    .iter()
+                    .map(|u| u.x)
+                    .fold(f32::INFINITY, f32::min)
+                    .floor()
+                    .max(0.0) as usize;
+                let x1 = (uv
+                    .iter()
+                    .map(|u| u.x)
+                    .fold(f32::NEG_INFINITY, f32::max)
+                    .ceil()
+                    .max(0.0) as usize)
+                    .min(width as usize);
+                let corners = mesh.triangle(t);
+                for (x, slot) in line.iter_mut().enumerate().take(x1).skip(x0) {
+                    let c = Vec2::new(x as f32 + 0.5, y as f32 + 0.5);
+                    let Some(b) = inside(c, uv) else {
+                        continue;
+                    };
+                    let p = corners[0] * b[0] + corners[1] * b[1] + corners[2] * b[2];
+                    *slot = Some(match (nearest.closest(p), &surface) {
+                        (Some((q, o)), Some(s)) => {
+                            let [a, bb, cc] = original.triangle(o as usize);
+                            s.at(o as usize, barycentric(q, a, bb, cc))
+                        }
+                        _ => Vec3::ONE,
+                    });
+                }
+            }
+            line
+        })
+        .collect();
+    let covered = texels.iter().filter(|t| t.is_some()).count();
+
+    // 3. Dilate.
+    let texels = dilate(texels, width as usize, PADDING as usize + 1);
+
+    // 4. Encode.
+    let texture = Texture {
+        width,
+        height,
+        rgba: texels
+            .iter()
+            .map(|c| {
+                let c = c.unwrap_or(Vec3::ZERO);
+                [encode_srgb(c.x), encode_srgb(c.y), encode_srgb(c.z), 255]
+            })
+            .collect(),
+    };
+    let first = lod
+        .materials
+        .as_ref()
+        .and_then(|m| m.table.first())
+        .cloned()
+        .unwrap_or_default();
+    let material = Material {
+        name: Some("baked".into()),
+        base_color: [1.0, 1.0, 1.0, first.base_color[3]],
+        base_color_texture: Some(Image {
+            mime_type: "image/png".into(),
+            bytes: encode_png(&texture).into(),
+            mag_filter: None,
+            min_filter: None,
+            // The atlas is padded: its edges never need the other side.
+            wrap_s: CLAMP_TO_EDGE,
+            wrap_t: CLAMP_TO_EDGE,
+        }),
+        vertex_attributes: VertexAttributes {
+            colors: false,
+            uvs: true,
+        },
+        ..first
+    };
+    let mut mesh = mesh;
+    mesh.materials = Some(Materials::single(material));
+    mesh.parts = None;
+    Ok(Baked {
+        mesh,
+        report: BakeReport {
+            width,
+            height,
+            charts: atlas.chart_count,
+            covered: covered as f64 / (width as f64 * height as f64),
+            seconds: start.elapsed().as_secs_f64(),
+        },
+    })
+}
+
+/// glTF's `CLAMP_TO_EDGE` wrap mode.
+const CLAMP_TO_EDGE: u32 = 33071;
+
+/// The barycentric coordinates of `c` in the 2-D triangle `t`, when it is
+/// inside (edges included); `None` outside or for a degenerate triangle.
+fn inside(c: Vec2, t: [Vec2; 3]) -> Option<[f32; 3]> {
+    let d = (t[1] - t[0]).perp_dot(t[2] - t[0]);
+    if d.abs() <= f32::MIN_POSITIVE {
+        return None;
+    }
+    let b1 = (c - t[0]).perp_dot(t[2] - t[0]) / d;
+    let b2 = (t[1] - t[0]).perp_dot(c - t[0]) / d;
+    let b0 = 1.0 - b1 - b2;
+    const EDGE: f32 = -1e-5;
+    (b0 >= EDGE && b1 >= EDGE && b2 >= EDGE).then(|| [b0, b1, b2].map(|b| b.max(0.0)))
+}
+
+/// `lod` with the atlas's UVs as its wedges: one wedge per atlas vertex and
+/// normal wedge of the LOD (normal seams stay, chart seams are new), the
+/// LOD's colours dropped (they are in the texture now).
+fn with_atlas_uvs(lod: &TriMesh, unwrapped: &uvunwrap::OutputMesh) -> TriMesh {
+    let old = lod.wedges.as_ref();
+    let mut ids = std::collections::HashMap::new();
+    let mut wedges = Wedges {
+        corners: Vec::with_capacity(lod.triangles.len()),
+        vertex: Vec::new(),
+        normals: lod.normals.as_ref().map(|_| Vec::new()),
+        colors: None,
+        uvs: Some(Vec::new()),
+        payload: None,
+    };
+    let mut picked = Vec::new();
+    for (t, tri) in lod.triangles.iter().enumerate() {
+        let corners = [0, 1, 2].map(|k| {
+            let out = unwrapped.indices[3 * t + k];
+            let before = old.map_or(tri[k], |w| w.corners[t][k]);
+            *ids.entry((out, before)).or_insert_with(|| {
+                let v = &unwrapped.vertices[out as usize];
+                wedges.vertex.push(v.xref);
+                if let Some(n) = &mut wedges.normals {
+                    n.push(match old.and_then(|w| w.normals.as_ref()) {
+                        Some(wn) => wn[before as usize],
+                        None => lod.normals.as_ref().map_or(Vec3::Z, |n| n[tri[k] as usize]),
+                    });
+                }
+                if let Some(u) = &mut wedges.uvs {
+                    u.push(Vec2::from_array(v.uv));
+                }
+                picked.push(before as usize);
+                wedges.vertex.len() as u32 - 1
+            })
+        });
+        wedges.corners.push(corners);
+    }
+    wedges.payload = match (old.and_then(|w| w.payload.as_ref()), &lod.payload) {
+        (Some(p), _) => Some(p.pick(picked.iter().copied())),
+        (None, Some(p)) => Some(p.pick(picked.iter().copied())),
+        _ => None,
+    };
+    let mut uvs = vec![Vec2::ZERO; lod.positions.len()];
+    if let Some(u) = &wedges.uvs {
+        for (i, &v) in wedges.vertex.iter().enumerate() {
+            uvs[v as usize] = u[i];
+        }
+    }
+    TriMesh {
+        colors: None,
+        uvs: Some(uvs),
+        wedges: Some(wedges),
+        ..lod.clone()
+    }
+}
+
+/// `rings` passes of filling each empty texel next to a filled one with its
+/// filled neighbours' mean (8-connected).
+fn dilate(mut texels: Vec<Option<Vec3>>, width: usize, rings: usize) -> Vec<Option<Vec3>> {
+    let height = texels.len() / width.max(1);
+    for _ in 0..rings {
+        let before = texels.clone();
+        for y in 0..height {
+            for x in 0..width {
+                if before[y * width + x].is_some() {
+                    continue;
+                }
+                let (mut sum, mut n) = (Vec3::ZERO, 0);
+                for (dx, dy) in [
+                    (-1, -1),
+                    (0, -1),
+                    (1, -1),
+                    (-1, 0),
+                    (1, 0),
+                    (-1, 1),
+                    (0, 1),
+                    (1, 1),
+                ] {
+                    let (i, j) = (x as i64 + dx, y as i64 + dy);
+                    if i < 0 || j < 0 || i >= width as i64 || j >= height as i64 {
+                        continue;
+                    }
+                    if let Some(c) = before[j as usize * width + i as usize] {
+                        sum += c;
+                        n += 1;
+                    }
+                }
+                if n > 0 {
+                    texels[y * width + x] = Some(sum / n as f32);
+                }
+            }
+        }
+    }
+    texels
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::io::image::decode_rgba;
+
+    /// A unit square in z = 0, `n`×`n` cells, textured by a 32² image whose
+    /// texel (i, j) is (i/31, j/31, ½) over UV = (x, y), and a vertex colour.
+    fn textured_square(n: u32) -> TriMesh {
+        let mut m = TriMesh::default();
+        let mut uvs = Vec::new();
+        for j in 0..=n {
+            for i in 0..=n {
+                let (x, y) = (i as f32 / n as f32, j as f32 / n as f32);
+                m.positions.push(Vec3::new(x, y, 0.0));
+                uvs.push(Vec2::new(x, y));
+            }
+        }
+        for j in 0..n {
+            for i in 0..n {
+                let at = |i: u32, j: u32| j * (n + 1) + i;
+                let (a, b, c, d) = (at(i, j), at(i + 1, j), at(i + 1, j + 1), at(i, j + 1));
+                m.triangles.extend([[a, b, c], [a, c, d]]);
+            }
+        }
+        m.uvs = Some(uvs);
+        let texture = Texture {
+            width: 32,
+            height: 32,
+            rgba: (0..32 * 32)
+                .map(|k| [(k % 32) as u8 * 8, (k / 32) as u8 * 8, 128, 255])
+                .collect(),
+        };
+        m.materials = Some(Materials::single(Material {
+            base_color_texture: Some(Image {
+                mime_type: "image/png".into(),
+                bytes: encode_png(&texture).into(),
+                mag_filter: None,
+                min_filter: None,
+                wrap_s: CLAMP_TO_EDGE,
+                wrap_t: CLAMP_TO_EDGE,
+            }),
+            vertex_attributes: VertexAttributes {
+                colors: false,
+                uvs: true,
+            },
+            ..Default::default()
+        }));
+        m
+    }
+
+    #[test]
+    fn a_baked_lod_shows_the_originals_colours_and_no_empty_texel_in_a_chart() {
+        let original = textured_square(16);
+        let lod = textured_square(2);
+        let baked = bake(&original, &lod, 128).unwrap();
+        let report = &baked.report;
+        assert!(report.width <= 128 && report.height <= 128, "{report:?}");
+        assert!(report.covered > 0.3, "{report:?}");
+        let m = &baked.mesh;
+        assert_eq!(m.triangles, lod.triangles, "the LOD's triangles, in order");
+        let material = &m.materials.as_ref().unwrap().table[0];
+        let image = decode_rgba(material.base_color_texture.as_ref().unwrap()).unwrap();
+        let surface = SurfaceColor::new(&original).unwrap();
+        let truth = SurfaceColor::new(m).unwrap();
+        let mut worst = 0.0f32;
+        for t in 0..m.triangles.len() {
+            for b in [
+                [1.0 / 3.0; 3],
+                [0.6, 0.2, 0.2],
+                [0.2, 0.6, 0.2],
+                [0.2, 0.2, 0.6],
+            ] {
+                let [p0, p1, p2] = m.triangle(t);
+                let p = p0 * b[0] + p1 * b[1] + p2 * b[2];
+                let (q, o) = MeshDistance::new(&original).closest(p).unwrap();
+                let [a, bb, c] = original.triangle(o as usize);
+                let want = surface.at(o as usize, barycentric(q, a, bb, c));
+                worst = worst.max((truth.at(t, b) - want).abs().max_element());
+            }
+        }
+        // A baked texel is the colour at its centre: within a texel's
+        // step of the gradient (1/31 over ~1/40 of the square) and 8 bits.
+        assert!(worst < 0.06, "{worst}");
+        // Every texel of every chart was transferred or dilated: none is
+        // the black background.
+        let w = image.width as usize;
+        let uvs = m.wedges.as_ref().unwrap();
+        for (t, corners) in uvs.corners.iter().enumerate() {
+            let uv = corners.map(|c| {
+                uvs.uvs.as_ref().unwrap()[c as usize]
+                    * Vec2::new(image.width as f32, image.height as f32)
+            });
+            for y in 0..image.height as usize {
+                for x in 0..w {
+                    if inside(Vec2::new(x as f32 + 0.5, y as f32 + 0.5), uv).is_some() {
+                        assert_ne!(
+                            image.texels[y * w + x][..3],
+                            [0, 0, 0],
+                            "triangle {t} at {x},{y}"
+                        );
+                    }
+                }
+            }
+        }
+        assert!(bake(&original, &lod, 16).is_err());
+        assert!(bake(&original, &TriMesh::default(), 256).is_err());
+    }
+}
