@@ -69,3 +69,53 @@ fn the_baked_truck_looks_more_like_the_truck_than_its_crossed_seams() {
         assert_eq!(lodstudio(&args).status.code(), Some(2), "{args:?}");
     }
 }
+
+/// `export --bake`: every LOD but the source wears its own baked texture in
+/// the scene's GLB (the milk truck is a scene: the writer gives a baked LOD
+/// its own material, not the scene's), reports it, and looks at least as
+/// much like the truck as the same LOD keeping the old atlas.
+#[test]
+fn an_exported_chain_bakes_every_lod_but_the_source() {
+    let dir = tempfile::tempdir().unwrap();
+    let truck = shared_model("CesiumMilkTruck.glb");
+    let truck = truck.to_str().unwrap();
+    let (plain, baked) = (
+        dir.path().join("plain.glb").display().to_string(),
+        dir.path().join("baked.glb").display().to_string(),
+    );
+    let lods = ["--method", "simplify", "--lods", "source,0.25"];
+    let mut args = vec!["export", truck, "-o", &plain, "--uv-tolerance", "4096"];
+    args.extend(lods);
+    lodstudio_json(&args);
+    let mut args = vec![
+        "export",
+        truck,
+        "-o",
+        &baked,
+        "--bake",
+        "--texture-size",
+        "512",
+    ];
+    args.extend(lods);
+    let report = lodstudio_json(&args);
+    for mesh in report["meshes"].as_array().unwrap() {
+        let lods = mesh["lods"].as_array().unwrap();
+        assert!(lods[0].get("baked").is_none(), "{mesh}");
+        let b = &lods[1]["baked"];
+        assert!(b["width"].as_u64().unwrap() <= 512, "{mesh}");
+    }
+    let doc = glb_json(&std::fs::read(&baked).unwrap());
+    let images = doc["images"].as_array().unwrap().len();
+    // The truck's one texture, and one per baked mesh LOD (truck, wheels).
+    assert_eq!(images, 1 + 2, "{}", doc["images"]);
+    let psnr = |file: String| {
+        lodstudio_json(&["compare", truck, &file])["psnr"]
+            .as_f64()
+            .unwrap()
+    };
+    let (p_plain, p_baked) = (psnr(format!("{plain}#lod1")), psnr(format!("{baked}#lod1")));
+    eprintln!(
+        "truck chain LOD1 (25 %): PSNR {p_plain:.2} dB keeping its atlas, {p_baked:.2} dB baked at 512²"
+    );
+    assert!(p_baked > p_plain - 0.5, "{p_baked} vs {p_plain}");
+}

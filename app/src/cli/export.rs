@@ -32,7 +32,7 @@ pub struct ExportArgs {
     /// rows, their methods and parameters, the switch tolerance.
     #[arg(long, value_name = "R.json", conflicts_with_all = [
         "method", "lods", "pixels", "viewport_height", "coverage", "lock_borders", "keep_seams",
-        "uv_tolerance", "attribute_weights", "kappa", "tau", "resolution", "points_as", "no_simplify", "post_error", "post_triangles",
+        "uv_tolerance", "attribute_weights", "bake", "texture_size", "kappa", "tau", "resolution", "points_as", "no_simplify", "post_error", "post_triangles",
         "weld_tolerance", "no_weld",
     ])]
     recipe: Option<PathBuf>,
@@ -106,6 +106,13 @@ pub struct ExportArgs {
     /// (as simplify's).
     #[arg(long, value_name = "WEIGHTS", value_parser = AttributeWeights::parse)]
     attribute_weights: Option<AttributeWeights>,
+    /// Every LOD but the source gets its own texture, baked from the model
+    /// (edge-collapse rows then cross every UV seam).
+    #[arg(long)]
+    bake: bool,
+    /// The baked textures' side in texels (default 1024).
+    #[arg(long, value_name = "N", requires = "bake")]
+    texture_size: Option<u32>,
     /// Hybrid: points per triangle's rendering time (κ).
     #[arg(long)]
     kappa: Option<f32>,
@@ -228,6 +235,10 @@ fn recipe_of(args: &ExportArgs) -> Result<Recipe, CliError> {
         || args.post.post_error.is_some()
         || args.post.post_triangles.is_some();
     for row in &mut rows {
+        if args.bake && row.tolerance != lodstudio_core::recipe::RowTolerance::Source {
+            row.bake = true;
+            row.texture = args.texture_size;
+        }
         match row.method {
             Method::EdgeCollapse => {
                 row.uv_tolerance = args.uv_tolerance;
@@ -272,6 +283,7 @@ fn recipe_of(args: &ExportArgs) -> Result<Recipe, CliError> {
             "viewport_height" => "--viewport-height",
             "coverage" => "--coverage",
             "uv_tolerance" => "--uv-tolerance",
+            "texture" => "--texture-size",
             "attribute_weights" => "--attribute-weights",
             _ => "--lods",
         };
@@ -355,8 +367,14 @@ fn report(
                 "build_seconds": l.build_seconds,
                 // Geometric bounds say nothing of textures: how far the UVs
                 // moved beyond what the bound carries them.
-                "uv_error": input.and_then(|m| lodstudio_core::distance::uv_error(m, &l.set.mesh, l.bound())),
+                "uv_error": input
+                    .filter(|_| l.baked.is_none())
+                    .and_then(|m| lodstudio_core::distance::uv_error(m, &l.set.mesh, l.bound())),
             });
+            // Its own texture, when it was baked.
+            if let Some(baked) = &l.baked {
+                j["baked"] = serde_json::json!(baked);
+            }
             // A budget the row could not reach, and why.
             if let Some(unmet) = &l.set.unmet {
                 j["unmet"] = serde_json::json!(unmet);

@@ -80,6 +80,9 @@ const RADIUS_NOTE: &str = "_RADIUS: object-space radius of each point; draw each
 /// its surface (skin, morph target deltas), given the vertices.
 pub struct ScenePrimitives<'a> {
     pub materials: &'a [Option<usize>],
+    /// The materials of the scene mesh's parts, which `materials` writes: a
+    /// LOD wearing others (a baked texture) writes its own.
+    pub source: Option<&'a crate::geom::Materials>,
     pub extras: &'a dyn Fn(&TriMesh) -> VertexExtras,
 }
 
@@ -283,7 +286,10 @@ impl GltfWriter {
         };
         // Groups: materials, or a scene's glTF materials (two parts may wear
         // equal materials that are distinct glTF materials, or one glTF
-        // material: a skinned mesh's parts are its bones').
+        // material: a skinned mesh's parts are its bones'). A LOD that wears
+        // its own materials (baked) writes them, with the scene's extras.
+        let extras = scene.map(|s| s.extras);
+        let scene = scene.filter(|s| s.source == Some(materials));
         let scene_groups: Vec<Option<usize>> = match scene {
             Some(s) => {
                 let mut g: Vec<Option<usize>> = s.materials.to_vec();
@@ -339,19 +345,17 @@ impl GltfWriter {
                     piece.colors = None;
                 }
             }
-            let (material, extras) = match scene {
-                Some(s) => {
-                    // Normals are oriented before the extras are taken, so
-                    // the vertices it splits off have extras too (a second
-                    // orientation in `triangles` splits none).
-                    piece.orient_normals_to_winding();
-                    (
-                        scene_groups.get(g).copied().flatten(),
-                        Some((s.extras)(&piece)),
-                    )
-                }
-                None => (Some(self.original_material(m)), None),
+            let material = match scene {
+                Some(_) => scene_groups.get(g).copied().flatten(),
+                None => Some(self.original_material(m)),
             };
+            // Normals are oriented before the extras are taken, so the
+            // vertices it splits off have extras too (a second orientation in
+            // `triangles` splits none).
+            let extras = extras.map(|e| {
+                piece.orient_normals_to_winding();
+                e(&piece)
+            });
             out.extend(self.triangles(&piece, material, extras));
         }
         out

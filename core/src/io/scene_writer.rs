@@ -155,6 +155,7 @@ fn write_meshes(w: &mut GltfWriter, lods: &[MeshLods], in_place: Option<usize>) 
         let original = w.meshes_mut()[index].clone();
         let scene = ScenePrimitives {
             materials: l.materials,
+            source: l.mesh.mesh.materials.as_ref(),
             extras: l.extras,
         };
         let mut ids = Vec::new();

@@ -31,6 +31,8 @@ pub struct ChainLod {
     pub build_seconds: f64,
     /// Taken from a [`ChainCache`]: this build made nothing for it.
     pub reused: bool,
+    /// Its own texture, baked (`bake`), when its row asked for one.
+    pub baked: Option<crate::bake::BakeReport>,
 }
 
 impl ChainLod {
@@ -224,7 +226,21 @@ fn build(
         {
             progress.publish(last.clone());
         }
-        for (j, set) in group.into_iter().zip(sets) {
+        for (j, mut set) in group.into_iter().zip(sets) {
+            // A row that asks for its own texture gets it baked from the model.
+            let baked = match (recipe.rows[j].bake, mesh) {
+                (true, Some(original)) if !set.mesh.triangles.is_empty() => {
+                    progress.stage("baking");
+                    let b = crate::bake::bake(original, &set.mesh, recipe.rows[j].texture_size())
+                        .map_err(|e| ChainError::Row {
+                        row: j,
+                        rest: format!(": baking: {e}"),
+                    })?;
+                    set.mesh = b.mesh;
+                    Some(b.report)
+                }
+                _ => None,
+            };
             lods.push(ChainLod {
                 rows: vec![j],
                 labels: vec![recipe.rows[j].label()],
@@ -232,6 +248,7 @@ fn build(
                 set,
                 build_seconds,
                 reused,
+                baked,
             });
         }
     }
@@ -289,6 +306,7 @@ fn source_lod(recipe: &Recipe, j: usize, mesh: Option<&TriMesh>) -> Result<Chain
         },
         build_seconds: 0.0,
         reused: false,
+        baked: None,
     })
 }
 

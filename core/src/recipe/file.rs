@@ -18,7 +18,10 @@ use crate::io::gltf_writer::PointsAs;
 use crate::io::meshopt_compression::Compression;
 use crate::io::scene_writer::Layout;
 use crate::lod::{Method, Params};
-use crate::simplify::collapse::AttributeWeights;
+use crate::simplify::collapse::{AttributeWeights, UV_TOLERANCE_RANGE};
+
+/// A baked texture's side where a row gives none.
+pub const DEFAULT_TEXTURE_SIZE: u32 = 1024;
 use crate::voxel::PostSimplify;
 use crate::voxel::VoxelParams;
 
@@ -118,6 +121,13 @@ pub struct Row {
     /// (`CollapseOptions::attribute_weights`; unset: its default).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub attribute_weights: Option<AttributeWeights>,
+    /// The LOD gets its own texture, baked from the model (`bake`); an
+    /// edge-collapse row then crosses every UV seam.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub bake: bool,
+    /// The baked texture's side in texels (unset: 1024).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub texture: Option<u32>,
 }
 
 impl Row {
@@ -133,6 +143,8 @@ impl Row {
             post: None,
             uv_tolerance: None,
             attribute_weights: None,
+            bake: false,
+            texture: None,
         };
         match Params::default_for(method) {
             Params::Hybrid(h) => (row.kappa, row.tau) = (Some(h.kappa), Some(h.tau)),
@@ -152,7 +164,12 @@ impl Row {
         match &mut params {
             Params::EdgeCollapse(p) => {
                 p.collapse.lock_borders = lock_borders;
-                p.collapse.uv_tolerance = self.uv_tolerance.unwrap_or(p.collapse.uv_tolerance);
+                // A baked LOD wears a new atlas: the old one's seams stop nothing.
+                let seams = match self.bake {
+                    true => *UV_TOLERANCE_RANGE.end(),
+                    false => p.collapse.uv_tolerance,
+                };
+                p.collapse.uv_tolerance = self.uv_tolerance.unwrap_or(seams);
                 p.collapse.attribute_weights = self
                     .attribute_weights
                     .unwrap_or(p.collapse.attribute_weights);
@@ -179,6 +196,11 @@ impl Row {
     pub fn tau(&self) -> f32 {
         self.tau.unwrap_or(HybridOptions::default().tau)
     }
+    /// The baked texture's side (the default where the row gives none).
+    pub fn texture_size(&self) -> u32 {
+        self.texture.unwrap_or(DEFAULT_TEXTURE_SIZE)
+    }
+
     pub fn resolution(&self) -> usize {
         self.resolution.unwrap_or(VoxelParams::default().resolution)
     }
@@ -511,6 +533,29 @@ impl Row {
             self.uv_tolerance.is_some(),
             Method::EdgeCollapse,
         )?;
+        only(
+            "attribute_weights",
+            self.attribute_weights.is_some(),
+            Method::EdgeCollapse,
+        )?;
+        if self.texture.is_some() && !self.bake {
+            return Err((
+                "texture",
+                "applies to rows that bake (\"bake\": true)".into(),
+            ));
+        }
+        if !crate::bake::TEXTURE_SIZE_RANGE.contains(&self.texture_size()) {
+            let r = crate::bake::TEXTURE_SIZE_RANGE;
+            return Err((
+                "texture",
+                format!(
+                    "must be in {}..={}, got {}",
+                    r.start(),
+                    r.end(),
+                    self.texture_size()
+                ),
+            ));
+        }
         let value = match self.tolerance {
             RowTolerance::Percent(v) | RowTolerance::Pixels(v) => v.is_finite() && v >= 0.0,
             RowTolerance::Ratio(r) => r > 0.0 && r <= 1.0,
@@ -626,6 +671,8 @@ mod tests {
         )
         .unwrap();
         rows[0].uv_tolerance = Some(16.0);
+        rows[1].bake = true;
+        rows[1].texture = Some(512);
         rows[1].kappa = Some(5.0);
         rows[2].post = Some(PostSpec::Triangles(900));
         let mut recipe = Recipe::new(rows);
@@ -693,6 +740,20 @@ mod tests {
             (
                 with_row(r#"{"method":"hybrid","tolerance":"2%","uv_tolerance":4}"#),
                 "rows[1].uv_tolerance",
+            ),
+            (
+                with_row(
+                    r#"{"method":"hybrid","tolerance":"2%","attribute_weights":{"normal":1}}"#,
+                ),
+                "rows[1].attribute_weights",
+            ),
+            (
+                with_row(r#"{"method":"simplify","tolerance":"2%","texture":512}"#),
+                "rows[1].texture",
+            ),
+            (
+                with_row(r#"{"method":"simplify","tolerance":"2%","bake":true,"texture":9}"#),
+                "rows[1].texture",
             ),
             (
                 with_row(r#"{"method":"voxel","tolerance":"2%","post":{"voxels":-1}}"#),

@@ -219,6 +219,7 @@ mod tests {
             },
             build_seconds: 0.0,
             reused: false,
+            baked: None,
         }
     }
 

@@ -313,7 +313,11 @@ impl SceneChains {
                             vertex_data,
                             pose_error,
                             target_errors,
-                            uv_error: crate::distance::uv_error(&m.mesh, lod, l.bound()),
+                            // A baked LOD's UVs are its own atlas's.
+                            uv_error: match l.baked {
+                                Some(_) => None,
+                                None => crate::distance::uv_error(&m.mesh, lod, l.bound()),
+                            },
                             area: lod.area(),
                         }
                     })
@@ -371,6 +375,9 @@ impl SceneChains {
                         });
                         if !target_bounds.is_empty() {
                             j["target_bounds"] = json!(target_bounds);
+                        }
+                        if let Some(baked) = &l.baked {
+                            j["baked"] = json!(baked);
                         }
                         if let Some(unmet) = &l.set.unmet {
                             j["unmet"] = json!(unmet);
