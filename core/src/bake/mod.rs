@@ -89,8 +89,17 @@ pub fn bake(original: &TriMesh, lod: &TriMesh, size: u32) -> Result<Baked, Strin
         ));
     }
     let unwrapped = &atlas.meshes[0];
-    let (width, height) = (atlas.width, atlas.height);
-    let mesh = with_atlas_uvs(lod, unwrapped);
+    // Power-of-two sides (the atlas crops its unused rows), for mip chains
+    // on every client: the UVs shrink to the part the atlas fills.
+    let (width, height) = (
+        atlas.width.next_power_of_two(),
+        atlas.height.next_power_of_two(),
+    );
+    let fill = Vec2::new(
+        atlas.width as f32 / width as f32,
+        atlas.height as f32 / height as f32,
+    );
+    let mesh = with_atlas_uvs(lod, unwrapped, fill);
 
     // 2. Transfer.
     let nearest = MeshDistance::new(original);
@@ -230,10 +239,11 @@ fn inside(c: Vec2, t: [Vec2; 3]) -> Option<[f32; 3]> {
     (b0 >= EDGE && b1 >= EDGE && b2 >= EDGE).then(|| [b0, b1, b2].map(|b| b.max(0.0)))
 }
 
-/// `lod` with the atlas's UVs as its wedges: one wedge per atlas vertex and
+/// `lod` with the atlas's UVs (scaled by `fill`, the share of the texture
+/// the atlas covers) as its wedges: one wedge per atlas vertex and
 /// normal wedge of the LOD (normal seams stay, chart seams are new), the
 /// LOD's colours dropped (they are in the texture now).
-fn with_atlas_uvs(lod: &TriMesh, unwrapped: &uvunwrap::OutputMesh) -> TriMesh {
+fn with_atlas_uvs(lod: &TriMesh, unwrapped: &uvunwrap::OutputMesh, fill: Vec2) -> TriMesh {
     let old = lod.wedges.as_ref();
     let mut ids = std::collections::HashMap::new();
     let mut wedges = Wedges {
@@ -259,7 +269,7 @@ fn with_atlas_uvs(lod: &TriMesh, unwrapped: &uvunwrap::OutputMesh) -> TriMesh {
                     });
                 }
                 if let Some(u) = &mut wedges.uvs {
-                    u.push(Vec2::from_array(v.uv));
+                    u.push(Vec2::from_array(v.uv) * fill);
                 }
                 picked.push(before as usize);
                 wedges.vertex.len() as u32 - 1
@@ -383,6 +393,7 @@ mod tests {
         let baked = bake(&original, &lod, 128).unwrap();
         let report = &baked.report;
         assert!(report.width <= 128 && report.height <= 128, "{report:?}");
+        assert!(report.width.is_power_of_two() && report.height.is_power_of_two());
         assert!(report.covered > 0.3, "{report:?}");
         let m = &baked.mesh;
         assert_eq!(m.triangles, lod.triangles, "the LOD's triangles, in order");
