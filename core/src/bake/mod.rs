@@ -192,20 +192,7 @@ pub fn bake(original: &TriMesh, lod: &TriMesh, size: u32) -> Result<Baked, Strin
     let material = Material {
         name: Some("baked".into()),
         base_color: [1.0, 1.0, 1.0, first.base_color[3]],
-        base_color_texture: Some(Image {
-            mime_type: "image/png".into(),
-            bytes: encode_png(&texture).into(),
-            mag_filter: None,
-            min_filter: None,
-            // The atlas is padded: its edges never need the other side.
-            wrap_s: CLAMP_TO_EDGE,
-            wrap_t: CLAMP_TO_EDGE,
-        }),
-        vertex_attributes: VertexAttributes {
-            colors: false,
-            uvs: true,
-        },
-        ..first
+        ..textured(&texture, first)
     };
     let mut mesh = mesh;
     mesh.materials = Some(Materials::single(material));
@@ -224,6 +211,26 @@ pub fn bake(original: &TriMesh, lod: &TriMesh, size: u32) -> Result<Baked, Strin
 
 /// glTF's `CLAMP_TO_EDGE` wrap mode.
 const CLAMP_TO_EDGE: u32 = 33071;
+
+/// `base` wearing `texture` (PNG) with UVs and no vertex colours.
+fn textured(texture: &Texture, base: Material) -> Material {
+    Material {
+        base_color_texture: Some(Image {
+            mime_type: "image/png".into(),
+            bytes: encode_png(texture).into(),
+            mag_filter: None,
+            min_filter: None,
+            // The atlas is padded: its edges never need the other side.
+            wrap_s: CLAMP_TO_EDGE,
+            wrap_t: CLAMP_TO_EDGE,
+        }),
+        vertex_attributes: VertexAttributes {
+            colors: false,
+            uvs: true,
+        },
+        ..base
+    }
+}
 
 /// The barycentric coordinates of `c` in the 2-D triangle `t`, when it is
 /// inside (edges included); `None` outside or for a degenerate triangle.
@@ -342,25 +349,10 @@ mod tests {
     use crate::io::image::decode_rgba;
 
     /// A unit square in z = 0, `n`×`n` cells, textured by a 32² image whose
-    /// texel (i, j) is (i/31, j/31, ½) over UV = (x, y), and a vertex colour.
+    /// texel (i, j) is (i/31, j/31, ½) over UV = (x, y).
     fn textured_square(n: u32) -> TriMesh {
-        let mut m = TriMesh::default();
-        let mut uvs = Vec::new();
-        for j in 0..=n {
-            for i in 0..=n {
-                let (x, y) = (i as f32 / n as f32, j as f32 / n as f32);
-                m.positions.push(Vec3::new(x, y, 0.0));
-                uvs.push(Vec2::new(x, y));
-            }
-        }
-        for j in 0..n {
-            for i in 0..n {
-                let at = |i: u32, j: u32| j * (n + 1) + i;
-                let (a, b, c, d) = (at(i, j), at(i + 1, j), at(i + 1, j + 1), at(i, j + 1));
-                m.triangles.extend([[a, b, c], [a, c, d]]);
-            }
-        }
-        m.uvs = Some(uvs);
+        let mut m = crate::simplify::collapse::tests::height_grid(n, |_, _| 0.0);
+        m.uvs = Some(m.positions.iter().map(|p| p.truncate()).collect());
         let texture = Texture {
             width: 32,
             height: 32,
@@ -368,21 +360,7 @@ mod tests {
                 .map(|k| [(k % 32) as u8 * 8, (k / 32) as u8 * 8, 128, 255])
                 .collect(),
         };
-        m.materials = Some(Materials::single(Material {
-            base_color_texture: Some(Image {
-                mime_type: "image/png".into(),
-                bytes: encode_png(&texture).into(),
-                mag_filter: None,
-                min_filter: None,
-                wrap_s: CLAMP_TO_EDGE,
-                wrap_t: CLAMP_TO_EDGE,
-            }),
-            vertex_attributes: VertexAttributes {
-                colors: false,
-                uvs: true,
-            },
-            ..Default::default()
-        }));
+        m.materials = Some(Materials::single(textured(&texture, Material::default())));
         m
     }
 

@@ -1585,12 +1585,17 @@ pub(crate) mod tests {
     /// An open (n+1)² grid over the unit square, gently waved: every border
     /// vertex on the mesh's own border.
     pub(crate) fn wavy_grid(n: u32) -> TriMesh {
+        height_grid(n, |x, y| 0.05 * (6.0 * x).sin() * (5.0 * y).cos())
+    }
+
+    /// An n×n grid over the unit square at heights `z(x, y)`, two
+    /// triangles a cell.
+    pub(crate) fn height_grid(n: u32, z: impl Fn(f32, f32) -> f32) -> TriMesh {
         let mut grid = TriMesh::default();
         for j in 0..=n {
             for i in 0..=n {
                 let (x, y) = (i as f32 / n as f32, j as f32 / n as f32);
-                grid.positions
-                    .push(Vec3::new(x, y, 0.05 * (6.0 * x).sin() * (5.0 * y).cos()));
+                grid.positions.push(Vec3::new(x, y, z(x, y)));
             }
         }
         for j in 0..n {

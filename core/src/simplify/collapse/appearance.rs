@@ -227,23 +227,8 @@ mod tests {
 
     /// A flat n×n grid of the unit square coloured by `color(x, y)`.
     fn grid(n: u32, color: impl Fn(f32, f32) -> Vec3) -> TriMesh {
-        let mut m = TriMesh::default();
-        let mut colors = Vec::new();
-        for j in 0..=n {
-            for i in 0..=n {
-                let (x, y) = (i as f32 / n as f32, j as f32 / n as f32);
-                m.positions.push(Vec3::new(x, y, 0.0));
-                colors.push(color(x, y));
-            }
-        }
-        for j in 0..n {
-            for i in 0..n {
-                let at = |i: u32, j: u32| j * (n + 1) + i;
-                let (a, b, c, d) = (at(i, j), at(i + 1, j), at(i + 1, j + 1), at(i, j + 1));
-                m.triangles.extend([[a, b, c], [a, c, d]]);
-            }
-        }
-        m.colors = Some(colors);
+        let mut m = crate::simplify::collapse::tests::height_grid(n, |_, _| 0.0);
+        m.colors = Some(m.positions.iter().map(|p| color(p.x, p.y)).collect());
         m
     }
 
