@@ -41,8 +41,8 @@ pub struct SimplifyArgs {
     #[arg(long, value_name = "WEIGHTS", value_parser = AttributeWeights::parse)]
     attribute_weights: Option<AttributeWeights>,
     /// Give the result its own texture: a new UV atlas, the original's
-    /// base colour transferred onto it (GLB output). UV seams then stop
-    /// nothing (the tolerance is the largest).
+    /// base colour transferred onto it (GLB output). Part, UV and colour
+    /// seams then stop nothing.
     #[arg(long)]
     bake: bool,
     /// The baked texture's side in texels.
@@ -101,11 +101,9 @@ pub fn run(args: SimplifyArgs) -> Result<(), CliError> {
     let collapse = CollapseOptions {
         lock_borders: args.lock_borders || args.keep_seams,
         min_quality: args.min_quality,
+        uv_tolerance: args.uv_tolerance,
         // A baked result wears a new atlas: the old one's seams stop nothing.
-        uv_tolerance: match args.bake {
-            true => *simplify::collapse::UV_TOLERANCE_RANGE.end(),
-            false => args.uv_tolerance,
-        },
+        free_seams: args.bake,
         attribute_weights: args.attribute_weights.unwrap_or_default(),
         ..Default::default()
     };

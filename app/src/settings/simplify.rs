@@ -100,6 +100,7 @@ impl EdgeCollapseSettings {
             min_normal_cos: s.min_normal_cos,
             uv_tolerance: s.uv_tolerance,
             attribute_weights: s.attribute_weights,
+            free_seams: false,
         }
     }
 

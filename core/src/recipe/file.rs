@@ -18,7 +18,7 @@ use crate::io::gltf_writer::PointsAs;
 use crate::io::meshopt_compression::Compression;
 use crate::io::scene_writer::Layout;
 use crate::lod::{Method, Params};
-use crate::simplify::collapse::{AttributeWeights, UV_TOLERANCE_RANGE};
+use crate::simplify::collapse::AttributeWeights;
 
 /// A baked texture's side where a row gives none.
 pub const DEFAULT_TEXTURE_SIZE: u32 = 1024;
@@ -122,7 +122,7 @@ pub struct Row {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub attribute_weights: Option<AttributeWeights>,
     /// The LOD gets its own texture, baked from the model (`bake`); an
-    /// edge-collapse row then crosses every UV seam.
+    /// edge-collapse row's seams then constrain nothing.
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub bake: bool,
     /// The baked texture's side in texels (unset: 1024).
@@ -165,11 +165,8 @@ impl Row {
             Params::EdgeCollapse(p) => {
                 p.collapse.lock_borders = lock_borders;
                 // A baked LOD wears a new atlas: the old one's seams stop nothing.
-                let seams = match self.bake {
-                    true => *UV_TOLERANCE_RANGE.end(),
-                    false => p.collapse.uv_tolerance,
-                };
-                p.collapse.uv_tolerance = self.uv_tolerance.unwrap_or(seams);
+                p.collapse.free_seams = self.bake;
+                p.collapse.uv_tolerance = self.uv_tolerance.unwrap_or(p.collapse.uv_tolerance);
                 p.collapse.attribute_weights = self
                     .attribute_weights
                     .unwrap_or(p.collapse.attribute_weights);

@@ -56,6 +56,10 @@ pub struct CollapseOptions {
     /// How much the appearance a collapse loses weighs in the order
     /// (`appearance`); the certified bound stays geometric.
     pub attribute_weights: AttributeWeights,
+    /// Part, UV and colour seams constrain nothing, only the mesh's own
+    /// borders do: the result's appearance is baked afresh (`bake`), so the
+    /// input's charts and materials no longer matter.
+    pub free_seams: bool,
 }
 
 /// The UV tolerance's range, in texels.
@@ -69,6 +73,7 @@ impl Default for CollapseOptions {
             min_normal_cos: 0.7,
             uv_tolerance: 1.0,
             attribute_weights: AttributeWeights::default(),
+            free_seams: false,
         }
     }
 }
@@ -464,7 +469,11 @@ impl EdgeCollapser {
         }
         // Border and seam edges get planes that keep them in place.
         let adj = Adjacency::new(&mesh.triangles);
-        let constrained = constrained_vertices(mesh, &adj, &tri_part);
+        let constrained = match opts.free_seams {
+            true => border_vertices(mesh, &adj),
+            false => constrained_vertices(mesh, &adj, &tri_part),
+        };
+        // (Free seams keep their planes: they order and place, not forbid.)
         for c in 0..adj.opposite.len() {
             if !constrained_corner(mesh, &adj, &tri_part, c) {
                 continue;
@@ -680,6 +689,7 @@ impl EdgeCollapser {
     fn is_constrained_edge(&self, a: u32, b: u32) -> bool {
         let mut shared = self.shared(a, b);
         match (shared.next(), shared.next(), shared.next()) {
+            (Some(_), Some(_), None) if self.opts.free_seams => false,
             (Some(t0), Some(t1), None) => {
                 self.tri_part[t0 as usize] != self.tri_part[t1 as usize]
                     || self.wedges.as_ref().is_some_and(|w| {
@@ -979,9 +989,10 @@ impl EdgeCollapser {
             _ if self.opts.lock_borders && (ca || cb) => return Err(Blocker::Seams),
             // Seam vertices whose wedges cannot follow the edge stay put, or cross.
             (true, true)
-                if self.wedges.as_ref().is_some_and(|w| {
-                    !self.wedges_follow(w, a, b) || !self.wedges_follow(w, b, a)
-                }) =>
+                if !self.opts.free_seams
+                    && self.wedges.as_ref().is_some_and(|w| {
+                        !self.wedges_follow(w, a, b) || !self.wedges_follow(w, b, a)
+                    }) =>
             {
                 let w = self.wedges.as_ref().ok_or(Blocker::Seams)?;
                 match (self.wedges_follow(w, a, b), self.wedges_follow(w, b, a)) {
@@ -1006,7 +1017,7 @@ impl EdgeCollapser {
             }
         }
         // Seams move only within the tolerance (a straight one slides).
-        if self.wedges.is_some() && (ca || cb) {
+        if self.wedges.is_some() && !self.opts.free_seams && (ca || cb) {
             let mut kept = 0;
             for k in 0..n {
                 if self.seam_shift_texels(a, b, places[k].1) <= self.opts.uv_tolerance + 1e-3 {
