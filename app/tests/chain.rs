@@ -260,6 +260,35 @@ fn the_panel_edits_rows_and_refuses_bad_recipes() {
     click(&mut harness, "Remove");
     harness.run();
     assert_eq!(rows(&harness), before + 1);
+    // The last row bakes its own texture from its Edit menu (a source row
+    // offers no such thing).
+    harness
+        .get_all_by_label("Edit")
+        .last()
+        .expect("Edit")
+        .click();
+    harness.run();
+    click(&mut harness, "Bake its own texture");
+    harness.run();
+    let last = |h: &Harness<'_, StudioApp>| {
+        h.state()
+            .chain_settings()
+            .recipe
+            .rows
+            .last()
+            .cloned()
+            .unwrap()
+    };
+    assert!(last(&harness).bake && last(&harness).texture == Some(1024));
+    let bakes: Vec<bool> = harness
+        .state()
+        .chain_settings()
+        .recipe
+        .rows
+        .iter()
+        .map(|r| r.bake)
+        .collect();
+    assert_eq!(bakes.iter().filter(|b| **b).count(), 1, "{bakes:?}");
     // Auto chain replaces the rows and builds them.
     click(&mut harness, "Auto chain");
     harness.step();

@@ -2,6 +2,7 @@
 //! parameters; add, remove, reorder, duplicate) beside what each built, and
 //! "Auto chain". What the controls set is `settings::chain`.
 
+use lodstudio_core::bake::TEXTURE_SIZE_RANGE;
 use lodstudio_core::hybrid::{KAPPA_RANGE, TAU_RANGE};
 use lodstudio_core::recipe::{Row, RowTolerance};
 use lodstudio_core::voxel::RESOLUTION_RANGE;
@@ -125,9 +126,10 @@ impl ChainSettings {
                                 ui.close();
                             }
                         }
+                        bake_ui(ui, row);
                     })
                     .response
-                    .on_hover_text("Move, duplicate or remove this row.");
+                    .on_hover_text("Move, duplicate or remove this row; bake its own texture.");
                     match fig {
                         Some(f) => {
                             for (c, cell) in f.cells.iter().enumerate() {
@@ -328,6 +330,33 @@ fn tolerance_ui(ui: &mut egui::Ui, row: &mut Row) {
             (_, false) => RowTolerance::Ratio(0.5),
         };
     });
+}
+
+const BAKE_HINT: &str = "Give this LOD its own texture: a new UV atlas with the model's \
+    colours transferred onto it (factor × texture × vertex colour). Its seams then stop \
+    nothing, so a textured model reaches any triangle budget; one material, one image.";
+
+/// Whether the row bakes its own texture, and at what size (not a source row).
+fn bake_ui(ui: &mut egui::Ui, row: &mut Row) {
+    if row.tolerance == RowTolerance::Source {
+        return;
+    }
+    ui.separator();
+    ui.checkbox(&mut row.bake, "Bake its own texture")
+        .on_hover_text(BAKE_HINT);
+    row.texture = match row.bake {
+        true => {
+            let mut size = row.texture_size();
+            ui.add(
+                egui::DragValue::new(&mut size)
+                    .range(TEXTURE_SIZE_RANGE)
+                    .prefix("texture ")
+                    .suffix(" px"),
+            );
+            Some(size)
+        }
+        false => None,
+    };
 }
 
 /// The parameters of the row's method: κ, τ (hybrid), resolution (voxel).

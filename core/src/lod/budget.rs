@@ -32,7 +32,8 @@ impl Blocker {
             Blocker::Seams => {
                 "borders and seams stay: the edges left lie on a border or a part, UV or colour \
                  seam (all borders with --lock-borders); a larger --uv-tolerance lets UV seams \
-                 be crossed, and voxel or amg, which make a new surface, reach any count"
+                 be crossed, --bake (a texture of its own) frees every seam, and voxel or amg, \
+                 which make a new surface, reach any count"
             }
             Blocker::Topology => {
                 "topology kept: every edge left would pinch the surface, close a handle or make \
