@@ -79,6 +79,11 @@ pub struct Material {
     pub double_sided: bool,
     /// Sampled with `TEXCOORD_0`.
     pub base_color_texture: Option<Image>,
+    /// A tangent-space normal map sampled with `TEXCOORD_0`, in the frame of
+    /// MikkTSpace tangents (glTF's default, [`super::tangents`]), and its
+    /// `scale` (glTF 2.0 §3.9.3).
+    #[serde(default)]
+    pub normal_texture: Option<(Image, f32)>,
     /// The vertex attributes the input gave this material's vertices.
     pub vertex_attributes: VertexAttributes,
 }
@@ -115,6 +120,7 @@ impl Default for Material {
             alpha_mode: AlphaMode::Opaque,
             double_sided: false,
             base_color_texture: None,
+            normal_texture: None,
             vertex_attributes: VertexAttributes::default(),
         }
     }

@@ -7,6 +7,7 @@ pub mod material;
 pub mod normals;
 pub mod payload;
 pub mod repair;
+pub mod tangents;
 pub mod topology;
 pub mod wedges;
 

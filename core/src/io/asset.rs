@@ -95,12 +95,18 @@ pub const READ: [&str; 3] = [
     super::meshopt_compression::NAMES[1],
 ];
 
-/// Material textures beside the base colour, which the outputs leave out.
-const OTHER_TEXTURES: [(&str, &str); 4] = [
-    ("normalTexture", "normal texture"),
-    ("occlusionTexture", "occlusion texture"),
-    ("emissiveTexture", "emissive texture"),
-    ("metallicRoughnessTexture", "metallic-roughness texture"),
+/// Material textures: whether the outputs carry each (on `TEXCOORD_0`, the
+/// only UV set read), and its name in the list of what is left out.
+const TEXTURES: [(&str, &str, bool); 5] = [
+    ("baseColorTexture", "base-colour texture", true),
+    ("normalTexture", "normal texture", true),
+    ("occlusionTexture", "occlusion texture", false),
+    ("emissiveTexture", "emissive texture", false),
+    (
+        "metallicRoughnessTexture",
+        "metallic-roughness texture",
+        false,
+    ),
 ];
 
 /// The attributes a primitive's triangles are read with.
@@ -323,13 +329,18 @@ pub fn audit_gltf(
     }
     for (i, material) in list("materials").iter().enumerate() {
         let pbr = material.get("pbrMetallicRoughness");
-        for (key, what) in OTHER_TEXTURES {
-            if material
-                .get(key)
-                .or_else(|| pbr.and_then(|p| p.get(key)))
-                .is_some()
-            {
-                drop(what, label("material", i, material));
+        for (key, what, carried) in TEXTURES {
+            let Some(info) = material.get(key).or_else(|| pbr.and_then(|p| p.get(key))) else {
+                continue;
+            };
+            let set = info.get("texCoord").and_then(Value::as_u64).unwrap_or(0);
+            match (carried, set) {
+                (true, 0) => {}
+                (true, n) => drop(
+                    &format!("{what} on TEXCOORD_{n}"),
+                    label("material", i, material),
+                ),
+                (false, _) => drop(what, label("material", i, material)),
             }
         }
     }
@@ -423,7 +434,8 @@ mod tests {
             "skins": [{"joints": [0, 1]}],
             "animations": [{"name": "walk", "channels": [{}, {}]}],
             "cameras": [{}],
-            "materials": [{"normalTexture": {"index": 0},
+            "materials": [{"normalTexture": {"index": 0, "texCoord": 1},
+                           "occlusionTexture": {"index": 0},
                            "pbrMetallicRoughness": {"baseColorTexture": {"index": 0,
                                "extensions": {"KHR_texture_transform": {}}}},
                            "extensions": {"KHR_materials_clearcoat": {}}}],
@@ -456,7 +468,8 @@ mod tests {
             "skin",
             "animation",
             "camera",
-            "normal texture",
+            "normal texture on TEXCOORD_1",
+            "occlusion texture",
             "KHR_texture_transform",
             "KHR_materials_clearcoat",
         ] {

@@ -659,17 +659,7 @@ fn read_material(
     let texture = match pbr.base_color_texture() {
         // Only TEXCOORD_0 is carried, so textures on other sets are left out.
         Some(info) if info.tex_coord() == 0 => {
-            let tex = info.texture();
-            let (bytes, mime_type) = images.get(&tex.source(), buffers)?;
-            let sampler = tex.sampler();
-            Some(Image {
-                mime_type,
-                bytes,
-                mag_filter: sampler.mag_filter().map(|f| f.as_gl_enum()),
-                min_filter: sampler.min_filter().map(|f| f.as_gl_enum()),
-                wrap_s: sampler.wrap_s().as_gl_enum(),
-                wrap_t: sampler.wrap_t().as_gl_enum(),
-            })
+            Some(texture_image(&info.texture(), buffers, images)?)
         }
         _ => None,
     };
@@ -686,7 +676,32 @@ fn read_material(
         },
         double_sided: m.double_sided(),
         base_color_texture: texture,
+        normal_texture: match m.normal_texture() {
+            Some(info) if info.tex_coord() == 0 => Some((
+                texture_image(&info.texture(), buffers, images)?,
+                info.scale(),
+            )),
+            _ => None,
+        },
         vertex_attributes: VertexAttributes::default(),
+    })
+}
+
+/// A texture's image with its sampler's settings.
+fn texture_image(
+    tex: &gltf::Texture,
+    buffers: &[gltf::buffer::Data],
+    images: &mut ImageCache,
+) -> ParseResult<Image> {
+    let (bytes, mime_type) = images.get(&tex.source(), buffers)?;
+    let sampler = tex.sampler();
+    Ok(Image {
+        mime_type,
+        bytes,
+        mag_filter: sampler.mag_filter().map(|f| f.as_gl_enum()),
+        min_filter: sampler.min_filter().map(|f| f.as_gl_enum()),
+        wrap_s: sampler.wrap_s().as_gl_enum(),
+        wrap_t: sampler.wrap_t().as_gl_enum(),
     })
 }
 

@@ -237,6 +237,15 @@ impl GltfWriter {
         self.materials.len() - 1
     }
 
+    /// A texture of `img` with its own sampler.
+    fn material_texture(&mut self, img: &crate::geom::Image) -> usize {
+        let sampler = self.sampler(json!({
+            "magFilter": img.mag_filter, "minFilter": img.min_filter,
+            "wrapS": img.wrap_s, "wrapT": img.wrap_t,
+        }));
+        self.image(&img.bytes, &img.mime_type, sampler)
+    }
+
     /// The glTF material of one of the input's materials (each written once).
     fn original_material(&mut self, m: &Material) -> usize {
         if let Some((_, i)) = self.originals.iter().find(|(o, _)| o == m) {
@@ -244,14 +253,12 @@ impl GltfWriter {
         }
         let mut pbr = json!({"baseColorFactor": m.base_color, "metallicFactor": m.metallic, "roughnessFactor": m.roughness});
         if let Some(img) = &m.base_color_texture {
-            let sampler = self.sampler(json!({
-                "magFilter": img.mag_filter, "minFilter": img.min_filter,
-                "wrapS": img.wrap_s, "wrapT": img.wrap_t,
-            }));
-            let texture = self.image(&img.bytes, &img.mime_type, sampler);
-            pbr["baseColorTexture"] = json!({"index": texture});
+            pbr["baseColorTexture"] = json!({"index": self.material_texture(img)});
         }
         let mut v = json!({"pbrMetallicRoughness": pbr, "emissiveFactor": m.emissive, "doubleSided": m.double_sided});
+        if let Some((img, scale)) = &m.normal_texture {
+            v["normalTexture"] = json!({"index": self.material_texture(img), "scale": scale});
+        }
         match m.alpha_mode {
             AlphaMode::Opaque => {}
             AlphaMode::Mask(cutoff) => {
@@ -352,10 +359,26 @@ impl GltfWriter {
             // Normals are oriented before the extras are taken, so the
             // vertices it splits off have extras too (a second orientation in
             // `triangles` splits none).
-            let extras = extras.map(|e| {
+            // A normal map needs the frame it was made in: MikkTSpace
+            // tangents of the vertices as written (`geom::tangents`), which
+            // may split some.
+            let tangents = match &m.normal_texture {
+                Some(_) => {
+                    piece.orient_normals_to_winding();
+                    piece.with_tangents().map(|(split, t)| {
+                        piece = split;
+                        t.iter().map(|t| t.to_array()).collect::<Vec<_>>()
+                    })
+                }
+                None => None,
+            };
+            let mut extras = extras.map(|e| {
                 piece.orient_normals_to_winding();
                 e(&piece)
             });
+            if let Some(t) = tangents {
+                extras.get_or_insert_with(VertexExtras::default).tangents = Some(t);
+            }
             out.extend(self.triangles(&piece, material, extras));
         }
         out
@@ -1005,6 +1028,14 @@ mod round_trips {
             height: 1,
             rgba: vec![[255, 0, 0, 255], [0, 0, 255, 128]],
         });
+        let image = |png: &[u8]| Image {
+            mime_type: "image/png".into(),
+            bytes: png.into(),
+            mag_filter: Some(9729),
+            min_filter: None,
+            wrap_s: 10497,
+            wrap_t: 33648,
+        };
         let textured = Material {
             name: Some("paint".into()),
             base_color: [1.0, 1.0, 1.0, 1.0],
@@ -1013,14 +1044,8 @@ mod round_trips {
             emissive: [0.0, 0.1, 0.0],
             alpha_mode: AlphaMode::Mask(0.3),
             double_sided: true,
-            base_color_texture: Some(Image {
-                mime_type: "image/png".into(),
-                bytes: png.into(),
-                mag_filter: Some(9729),
-                min_filter: None,
-                wrap_s: 10497,
-                wrap_t: 33648,
-            }),
+            base_color_texture: Some(image(&png)),
+            normal_texture: Some((image(&png[..]), 0.75)),
             vertex_attributes: Default::default(),
         };
         let glass = Material {
@@ -1064,6 +1089,11 @@ mod round_trips {
         // The textured part's vertex colour is white: no COLOR_0 was written for it.
         let first = &doc["meshes"][0]["primitives"][0]["attributes"];
         assert!(first.get("COLOR_0").is_none() && first.get("TEXCOORD_0").is_some());
+        // The normal map's frame is written: a MikkTSpace tangent per vertex.
+        let count =
+            |a: &serde_json::Value| doc["accessors"][a.as_u64().unwrap() as usize]["count"].clone();
+        assert_eq!(count(&first["TANGENT"]), count(&first["POSITION"]));
+        assert_eq!(doc["materials"][0]["normalTexture"]["scale"], 0.75);
         let (want, got) = (m.colors.clone().unwrap(), back.colors.clone().unwrap());
         for t in 0..m.triangles.len() {
             let p = m.part(t);

@@ -17,7 +17,7 @@ use serde::de::DeserializeOwned;
 
 const MAGIC: &[u8; 8] = b"LODSTHRY";
 /// Bumped whenever a saved structure changes shape.
-pub const VERSION: u32 = 8;
+pub const VERSION: u32 = 9;
 
 /// The body codec: fixed-width little-endian integers, no trailing bytes, and
 /// never reading (or allocating for) more than `limit` bytes.
@@ -246,10 +246,10 @@ mod tests {
             assert!(load::<Toy>(&bad, "mergetree").is_err(), "flip at {at}");
         }
         let mut future = bytes.clone();
-        future[8] = 9;
+        future[8] = VERSION as u8 + 1;
         assert_eq!(
             load::<Toy>(&future, "mergetree").unwrap_err(),
-            HierarchyFileError::Version { found: 9 }
+            HierarchyFileError::Version { found: VERSION + 1 }
         );
         // A hostile length does not allocate: it is checked against what is left.
         let mut huge = bytes[..8 + 4 + 2 + 9].to_vec();
