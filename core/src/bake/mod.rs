@@ -13,15 +13,20 @@
 //! 2. **Transfer**: every texel whose centre lies in a LOD triangle's UV
 //!    image is the LOD surface point there; the original's nearest surface
 //!    point (the BVH of `distance`) gives the colour it shows
-//!    (`io::base_color`: factor × texture × vertex colour). The LOD is
-//!    within its certified bound of the original, so that point is at most
-//!    the bound away.
+//!    (`io::base_color`: factor × texture × vertex colour) and its shading
+//!    normal, written in the LOD's tangent frame there (MikkTSpace,
+//!    `geom::tangents`, as glTF clients rebuild it): a normal map that
+//!    gives the LOD the original's shading detail, creases included. The
+//!    LOD is within its certified bound of the original, so that point is
+//!    at most the bound away. (An original's own normal map is not looked
+//!    up: its interpolated vertex normals are what is transferred.)
 //! 3. **Dilate**: `padding` rings of empty texels around the charts take
 //!    their covered neighbours' mean, so bilinear filtering and mip levels
 //!    never fetch the empty background at a chart's edge.
-//! 4. **Encode**: sRGB PNG, the LOD's only material's base-colour texture.
+//! 4. **Encode**: PNGs, the LOD's only material's base-colour (sRGB) and
+//!    normal (linear) textures.
 
-use glam::{Vec2, Vec3};
+use glam::{Vec2, Vec3, Vec4};
 use rayon::prelude::*;
 
 use crate::distance::{MeshDistance, barycentric};
@@ -99,16 +104,20 @@ pub fn bake(original: &TriMesh, lod: &TriMesh, size: u32) -> Result<Baked, Strin
         atlas.width as f32 / width as f32,
         atlas.height as f32 / height as f32,
     );
-    let mesh = with_atlas_uvs(lod, unwrapped, fill);
+    // One vertex per wedge, normals facing their faces and split where
+    // their MikkTSpace tangents differ: the mesh as written and as a
+    // client builds its frames.
+    let mut mesh = with_atlas_uvs(lod, unwrapped, fill).unwelded();
+    mesh.orient_normals_to_winding();
+    let (mesh, tangents) = mesh.with_tangents().ok_or("the unwrapped LOD has no UVs")?;
+    let normals = mesh.normals.clone().unwrap_or_default();
 
     // 2. Transfer.
     let nearest = MeshDistance::new(original);
     let surface = SurfaceColor::new(original);
-    let uvs = mesh.wedges.as_ref().and_then(|w| w.uvs.as_ref());
-    let corner_uv = |t: usize, k: usize| match (&mesh.wedges, uvs) {
-        (Some(w), Some(u)) => u[w.corners[t][k] as usize],
-        _ => Vec2::ZERO,
-    };
+    let shading = ShadingNormals::new(original);
+    let uvs = mesh.uvs.as_deref().unwrap_or_default();
+    let corner_uv = |t: usize, k: usize| uvs[mesh.triangles[t][k] as usize];
     // Per row of texels, the triangles whose UV bounds cross it.
     let mut rows: Vec<Vec<u32>> = vec![Vec::new(); height as usize];
     for t in 0..mesh.triangles.len() {
@@ -125,7 +134,7 @@ pub fn bake(original: &TriMesh, lod: &TriMesh, size: u32) -> Result<Baked, Strin
             row.push(t as u32);
         }
     }
-    let texels: Vec<Option<Vec3>> = rows
+    let texels: Vec<Option<(Vec3, Vec3)>> = rows
         .par_iter()
         .enumerate()
         .flat_map_iter(|(y, tris)| {
@@ -148,19 +157,21 @@ pub fn bake(original: &TriMesh, lod: &TriMesh, size: u32) -> Result<Baked, Strin
                     .max(0.0) as usize)
                     .min(width as usize);
                 let corners = mesh.triangle(t);
+                let frame = mesh.triangles[t].map(|v| (normals[v as usize], tangents[v as usize]));
                 for (x, slot) in line.iter_mut().enumerate().take(x1).skip(x0) {
                     let c = Vec2::new(x as f32 + 0.5, y as f32 + 0.5);
                     let Some(b) = inside(c, uv) else {
                         continue;
                     };
                     let p = corners[0] * b[0] + corners[1] * b[1] + corners[2] * b[2];
-                    *slot = Some(match (nearest.closest(p), &surface) {
-                        (Some((q, o)), Some(s)) => {
-                            let [a, bb, cc] = original.triangle(o as usize);
-                            s.at(o as usize, barycentric(q, a, bb, cc))
-                        }
-                        _ => Vec3::ONE,
-                    });
+                    let Some((q, o)) = nearest.closest(p) else {
+                        continue;
+                    };
+                    let [a, bb, cc] = original.triangle(o as usize);
+                    let at = barycentric(q, a, bb, cc);
+                    let color = surface.as_ref().map_or(Vec3::ONE, |s| s.at(o as usize, at));
+                    let normal = tangent_space(shading.at(o as usize, at), frame, b);
+                    *slot = Some((color, normal));
                 }
             }
             line
@@ -169,20 +180,35 @@ pub fn bake(original: &TriMesh, lod: &TriMesh, size: u32) -> Result<Baked, Strin
     let covered = texels.iter().filter(|t| t.is_some()).count();
 
     // 3. Dilate.
-    let texels = dilate(texels, width as usize, PADDING as usize + 1);
+    let rings = PADDING as usize + 1;
+    let colors = dilate(
+        texels.iter().map(|t| t.map(|t| t.0)).collect(),
+        width as usize,
+        rings,
+    );
+    let normals = dilate(
+        texels.iter().map(|t| t.map(|t| t.1)).collect(),
+        width as usize,
+        rings,
+    );
 
     // 4. Encode.
-    let texture = Texture {
+    let encode = |texels: &[Option<Vec3>], empty: Vec3, channel: &dyn Fn(f32) -> u8| Texture {
         width,
         height,
         rgba: texels
             .iter()
             .map(|c| {
-                let c = c.unwrap_or(Vec3::ZERO);
-                [encode_srgb(c.x), encode_srgb(c.y), encode_srgb(c.z), 255]
+                let c = c.unwrap_or(empty);
+                [channel(c.x), channel(c.y), channel(c.z), 255]
             })
             .collect(),
     };
+    let texture = encode(&colors, Vec3::ZERO, &encode_srgb);
+    let flat = Vec3::Z;
+    let normal_map = encode(&normals, flat, &|x| {
+        ((x * 0.5 + 0.5) * 255.0).round().clamp(0.0, 255.0) as u8
+    });
     let first = lod
         .materials
         .as_ref()
@@ -192,6 +218,7 @@ pub fn bake(original: &TriMesh, lod: &TriMesh, size: u32) -> Result<Baked, Strin
     let material = Material {
         name: Some("baked".into()),
         base_color: [1.0, 1.0, 1.0, first.base_color[3]],
+        normal_texture: Some((png_image(&normal_map), 1.0)),
         ..textured(&texture, first)
     };
     let mut mesh = mesh;
@@ -215,21 +242,75 @@ const CLAMP_TO_EDGE: u32 = 33071;
 /// `base` wearing `texture` (PNG) with UVs and no vertex colours.
 fn textured(texture: &Texture, base: Material) -> Material {
     Material {
-        base_color_texture: Some(Image {
-            mime_type: "image/png".into(),
-            bytes: encode_png(texture).into(),
-            mag_filter: None,
-            min_filter: None,
-            // The atlas is padded: its edges never need the other side.
-            wrap_s: CLAMP_TO_EDGE,
-            wrap_t: CLAMP_TO_EDGE,
-        }),
+        base_color_texture: Some(png_image(texture)),
         vertex_attributes: VertexAttributes {
             colors: false,
             uvs: true,
         },
         ..base
     }
+}
+
+/// `texture` as a PNG image on the atlas's UVs.
+fn png_image(texture: &Texture) -> Image {
+    Image {
+        mime_type: "image/png".into(),
+        bytes: encode_png(texture).into(),
+        mag_filter: None,
+        min_filter: None,
+        // The atlas is padded: its edges never need the other side.
+        wrap_s: CLAMP_TO_EDGE,
+        wrap_t: CLAMP_TO_EDGE,
+    }
+}
+
+/// The original's shading normals: per corner, its wedge's (or vertex's)
+/// normal, area-weighted vertex normals where it has none.
+struct ShadingNormals<'a> {
+    mesh: &'a TriMesh,
+    normals: std::borrow::Cow<'a, [Vec3]>,
+}
+
+impl<'a> ShadingNormals<'a> {
+    fn new(mesh: &'a TriMesh) -> Self {
+        let normals = match (&mesh.wedges, &mesh.normals) {
+            (Some(w), _) if w.normals.is_some() => w.normals.as_deref().unwrap_or_default().into(),
+            (None, Some(n)) => n.as_slice().into(),
+            _ => mesh.vertex_normals().into(),
+        };
+        ShadingNormals { mesh, normals }
+    }
+
+    /// The unit normal interpolated over triangle `t` at barycentric `b`.
+    fn at(&self, t: usize, b: [f32; 3]) -> Vec3 {
+        let c = match &self.mesh.wedges {
+            Some(w) if w.normals.is_some() => w.corners[t],
+            _ => self.mesh.triangles[t],
+        };
+        let n: Vec3 = (0..3).map(|k| self.normals[c[k] as usize] * b[k]).sum();
+        n.try_normalize().unwrap_or_else(|| {
+            let [a, bb, cc] = self.mesh.triangle(t);
+            (bb - a).cross(cc - a).normalize_or(Vec3::Z)
+        })
+    }
+}
+
+/// `n` in the tangent frame interpolated from the corners' (normal,
+/// MikkTSpace tangent) at barycentric `b`, as a client's fragment shader
+/// rebuilds it (tangent made orthogonal to the normal, bitangent
+/// `w · N × T`); a normal behind the surface is laid flat on it.
+fn tangent_space(n: Vec3, frame: [(Vec3, Vec4); 3], b: [f32; 3]) -> Vec3 {
+    let normal: Vec3 = (0..3).map(|k| frame[k].0 * b[k]).sum();
+    let tangent: Vec3 = (0..3).map(|k| frame[k].1.truncate() * b[k]).sum();
+    let Some(normal) = normal.try_normalize() else {
+        return Vec3::Z;
+    };
+    let tangent = (tangent - normal * normal.dot(tangent))
+        .try_normalize()
+        .unwrap_or_else(|| normal.any_orthonormal_vector());
+    let bitangent = normal.cross(tangent) * frame[0].1.w.signum();
+    let local = Vec3::new(n.dot(tangent), n.dot(bitangent), n.dot(normal).max(0.0));
+    local.try_normalize().unwrap_or(Vec3::Z)
 }
 
 /// The barycentric coordinates of `c` in the 2-D triangle `t`, when it is
@@ -374,7 +455,12 @@ mod tests {
         assert!(report.width.is_power_of_two() && report.height.is_power_of_two());
         assert!(report.covered > 0.3, "{report:?}");
         let m = &baked.mesh;
-        assert_eq!(m.triangles, lod.triangles, "the LOD's triangles, in order");
+        let corners = |m: &TriMesh| {
+            (0..m.triangles.len())
+                .map(|t| m.triangle(t))
+                .collect::<Vec<_>>()
+        };
+        assert_eq!(corners(m), corners(&lod), "the LOD's triangles, in order");
         let material = &m.materials.as_ref().unwrap().table[0];
         let image = decode_rgba(material.base_color_texture.as_ref().unwrap()).unwrap();
         let surface = SurfaceColor::new(&original).unwrap();
@@ -401,12 +487,10 @@ mod tests {
         // Every texel of every chart was transferred or dilated: none is
         // the black background.
         let w = image.width as usize;
-        let uvs = m.wedges.as_ref().unwrap();
-        for (t, corners) in uvs.corners.iter().enumerate() {
-            let uv = corners.map(|c| {
-                uvs.uvs.as_ref().unwrap()[c as usize]
-                    * Vec2::new(image.width as f32, image.height as f32)
-            });
+        let uvs = m.uvs.as_ref().unwrap();
+        for (t, tri) in m.triangles.iter().enumerate() {
+            let uv =
+                tri.map(|v| uvs[v as usize] * Vec2::new(image.width as f32, image.height as f32));
             for y in 0..image.height as usize {
                 for x in 0..w {
                     if inside(Vec2::new(x as f32 + 0.5, y as f32 + 0.5), uv).is_some() {
@@ -421,5 +505,66 @@ mod tests {
         }
         assert!(bake(&original, &lod, 16).is_err());
         assert!(bake(&original, &TriMesh::default(), 256).is_err());
+    }
+
+    /// A flat LOD of a wavy sheet z = 0.03·sin(2πx) whose vertices carry
+    /// the wave's exact normals: the baked normal map, read back in the
+    /// frames a client builds (the written mesh's MikkTSpace tangents),
+    /// gives the wave's normal wherever the LOD lies over it, within 3°.
+    #[test]
+    fn the_normal_map_gives_the_flat_lod_the_originals_normals() {
+        let wave = |x: f32| {
+            let slope = 0.03 * std::f32::consts::TAU * (std::f32::consts::TAU * x).cos();
+            Vec3::new(-slope, 0.0, 1.0).normalize()
+        };
+        let mut original = textured_square(64);
+        for p in &mut original.positions {
+            p.z = 0.03 * (std::f32::consts::TAU * p.x).sin();
+        }
+        original.normals = Some(original.positions.iter().map(|p| wave(p.x)).collect());
+        let lod = textured_square(2);
+        let baked = bake(&original, &lod, 256).unwrap();
+        let m = &baked.mesh;
+        let (framed, tangents) = m.with_tangents().unwrap();
+        assert_eq!(
+            framed.positions.len(),
+            m.positions.len(),
+            "written as framed"
+        );
+        let (image, _) = m.materials.as_ref().unwrap().table[0]
+            .normal_texture
+            .as_ref()
+            .unwrap();
+        let map = decode_rgba(image).unwrap();
+        let (uvs, normals) = (m.uvs.as_ref().unwrap(), m.normals.as_ref().unwrap());
+        let mut worst = 0.0f32;
+        for tri in &m.triangles {
+            for b in [
+                [1.0 / 3.0; 3],
+                [0.6, 0.3, 0.1],
+                [0.1, 0.6, 0.3],
+                [0.3, 0.1, 0.6],
+            ] {
+                let at = |f: &dyn Fn(usize) -> Vec3| {
+                    (0..3).map(|k| f(tri[k] as usize) * b[k]).sum::<Vec3>()
+                };
+                let n = at(&|v| normals[v]).normalize();
+                let t0 = at(&|v| tangents[v].truncate());
+                let tangent = (t0 - n * n.dot(t0)).normalize();
+                let bitangent = n.cross(tangent) * tangents[tri[0] as usize].w;
+                let uv: Vec2 = (0..3).map(|k| uvs[tri[k] as usize] * b[k]).sum();
+                let (x, y) = (
+                    (uv.x * map.width as f32) as usize,
+                    (uv.y * map.height as f32) as usize,
+                );
+                let texel = map.texels[y * map.width as usize + x];
+                let local =
+                    Vec3::new(texel[0] as f32, texel[1] as f32, texel[2] as f32) / 127.5 - 1.0;
+                let world = (tangent * local.x + bitangent * local.y + n * local.z).normalize();
+                let p: Vec3 = (0..3).map(|k| m.positions[tri[k] as usize] * b[k]).sum();
+                worst = worst.max(world.angle_between(wave(p.x)).to_degrees());
+            }
+        }
+        assert!(worst < 3.0, "{worst}°");
     }
 }
