@@ -224,9 +224,10 @@ struct PartGpu {
     vertices: GrowBuffer,
     indices: GrowBuffer,
     drawn: Option<Drawn>,
-    /// The part's image bound as group 1 (splats, textured meshes), and the
-    /// base-colour texels it was uploaded from (re-used while they are shared).
-    image: Option<(Option<Arc<Atlas>>, wgpu::BindGroup)>,
+    /// The part's images bound as group 1 (splats, textured meshes), and the
+    /// material's texels they were uploaded from (re-used while they are
+    /// shared; none for splats, whose atlas is the part's own).
+    image: Option<(Vec<Arc<Atlas>>, wgpu::BindGroup)>,
 }
 
 impl PartGpu {
@@ -266,8 +267,13 @@ pub(super) struct ViewportResources {
     splat_pipeline: wgpu::RenderPipeline,
     /// Base-colour textured meshes (glTF materials).
     textured_pipeline: wgpu::RenderPipeline,
-    /// An image and its sampler, bound as group 1 (splat atlas, base colour).
+    /// An image and its sampler, bound as group 1 (splat atlas).
     atlas_layout: wgpu::BindGroupLayout,
+    /// A material's base colour (sRGB), sampler and normal map (linear).
+    material_layout: wgpu::BindGroupLayout,
+    /// The normal map of materials without one: +z, the surface's own
+    /// normal (uploaded with the first textured part).
+    flat_normal: Option<wgpu::TextureView>,
     /// Splat atlases clamp; base-colour textures repeat (glTF's default wrap).
     atlas_sampler: wgpu::Sampler,
     repeat_sampler: wgpu::Sampler,
@@ -380,6 +386,34 @@ impl ViewportResources {
                 },
             ],
         });
+        let image_entry = |binding| wgpu::BindGroupLayoutEntry {
+            binding,
+            visibility: wgpu::ShaderStages::FRAGMENT,
+            ty: wgpu::BindingType::Texture {
+                sample_type: wgpu::TextureSampleType::Float { filterable: true },
+                view_dimension: wgpu::TextureViewDimension::D2,
+                multisampled: false,
+            },
+            count: None,
+        };
+        let material_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("viewport material"),
+            entries: &[
+                image_entry(0),
+                wgpu::BindGroupLayoutEntry {
+                    binding: 1,
+                    visibility: wgpu::ShaderStages::FRAGMENT,
+                    ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
+                    count: None,
+                },
+                image_entry(2),
+            ],
+        });
+        let textured_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("viewport textured meshes"),
+            bind_group_layouts: &[Some(&frame_layout), Some(&material_layout)],
+            immediate_size: 0,
+        });
         let splat_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("viewport splats"),
             bind_group_layouts: &[Some(&frame_layout), Some(&atlas_layout)],
@@ -399,8 +433,8 @@ impl ViewportResources {
             min_filter: wgpu::FilterMode::Linear,
             ..Default::default()
         });
-        const TEXTURED_ATTRS: [wgpu::VertexAttribute; 4] = wgpu::vertex_attr_array![
-            0 => Float32x3, 1 => Float32x3, 2 => Float32x4, 3 => Float32x2
+        const TEXTURED_ATTRS: [wgpu::VertexAttribute; 5] = wgpu::vertex_attr_array![
+            0 => Float32x3, 1 => Float32x3, 2 => Float32x4, 3 => Float32x2, 4 => Float32x4
         ];
         let textured_buffers = [Some(wgpu::VertexBufferLayout {
             array_stride: std::mem::size_of::<TexturedVertex>() as u64,
@@ -497,7 +531,7 @@ impl ViewportResources {
             &textured_buffers,
             wgpu::PrimitiveTopology::TriangleList,
             &Style {
-                layout: &splat_layout,
+                layout: &textured_layout,
                 blend: None,
                 depth_bias: 0,
             },
@@ -612,6 +646,8 @@ impl ViewportResources {
             splat_pipeline,
             textured_pipeline,
             atlas_layout,
+            material_layout,
+            flat_normal: None,
             atlas_sampler,
             repeat_sampler,
             blit_pipeline,
@@ -724,16 +760,43 @@ impl ViewportResources {
                     vertices,
                     indices,
                     texture,
+                    normal_map,
                 } => {
-                    let uploaded = image
-                        .as_ref()
-                        .and_then(|(from, _)| from.as_ref())
-                        .is_some_and(|from| Arc::ptr_eq(from, texture));
+                    let sources: Vec<Arc<Atlas>> = std::iter::once(texture)
+                        .chain(normal_map)
+                        .cloned()
+                        .collect();
+                    let uploaded = image.as_ref().is_some_and(|(from, _)| {
+                        from.len() == sources.len()
+                            && from.iter().zip(&sources).all(|(a, b)| Arc::ptr_eq(a, b))
+                    });
                     if !uploaded {
-                        let sampler = &self.repeat_sampler;
-                        let group =
-                            upload_atlas(device, queue, &self.atlas_layout, sampler, texture);
-                        *image = Some((Some(Arc::clone(texture)), group));
+                        let base = upload_texture(
+                            device,
+                            queue,
+                            texture,
+                            wgpu::TextureFormat::Rgba8UnormSrgb,
+                        );
+                        let linear = wgpu::TextureFormat::Rgba8Unorm;
+                        let own = normal_map
+                            .as_ref()
+                            .map(|n| upload_texture(device, queue, n, linear));
+                        let flat = self.flat_normal.get_or_insert_with(|| {
+                            let up = Atlas {
+                                width: 1,
+                                height: 1,
+                                rgba: vec![[128, 128, 255, 255]],
+                            };
+                            upload_texture(device, queue, &up, linear)
+                        });
+                        let views = [&base, own.as_ref().unwrap_or(flat)];
+                        let group = bind_images(
+                            device,
+                            &self.material_layout,
+                            &self.repeat_sampler,
+                            &views,
+                        );
+                        *image = Some((sources, group));
                     }
                     indexed(bytemuck::cast_slice(vertices), indices)
                         .map(|indices| Drawn::Textured { indices })
@@ -743,9 +806,11 @@ impl ViewportResources {
                     indices,
                     atlas,
                 } => {
-                    let sampler = &self.atlas_sampler;
-                    let group = upload_atlas(device, queue, &self.atlas_layout, sampler, atlas);
-                    *image = Some((None, group));
+                    let view =
+                        upload_texture(device, queue, atlas, wgpu::TextureFormat::Rgba8UnormSrgb);
+                    let group =
+                        bind_images(device, &self.atlas_layout, &self.atlas_sampler, &[&view]);
+                    *image = Some((Vec::new(), group));
                     indexed(bytemuck::cast_slice(vertices), indices)
                         .map(|indices| Drawn::Splats { indices })
                 }
@@ -839,14 +904,14 @@ impl ViewportResources {
     }
 }
 
-/// Uploads an image (a splat atlas, a base-colour texture) and binds it with `sampler`.
-fn upload_atlas(
+/// `atlas`'s texels as a texture of `format` (sRGB colour, or linear
+/// data such as a normal map), clamped to the device's largest size.
+fn upload_texture(
     device: &wgpu::Device,
     queue: &wgpu::Queue,
-    layout: &wgpu::BindGroupLayout,
-    sampler: &wgpu::Sampler,
     atlas: &Atlas,
-) -> wgpu::BindGroup {
+    format: wgpu::TextureFormat,
+) -> wgpu::TextureView {
     let max = device.limits().max_texture_dimension_2d;
     let size = wgpu::Extent3d {
         width: atlas.width.clamp(1, max),
@@ -854,12 +919,12 @@ fn upload_atlas(
         depth_or_array_layers: 1,
     };
     let texture = device.create_texture(&wgpu::TextureDescriptor {
-        label: Some("viewport splat atlas"),
+        label: Some("viewport image"),
         size,
         mip_level_count: 1,
         sample_count: 1,
         dimension: wgpu::TextureDimension::D2,
-        format: wgpu::TextureFormat::Rgba8UnormSrgb,
+        format,
         usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
         view_formats: &[],
     });
@@ -884,20 +949,31 @@ fn upload_atlas(
             },
         );
     }
-    let view = texture.create_view(&wgpu::TextureViewDescriptor::default());
+    texture.create_view(&wgpu::TextureViewDescriptor::default())
+}
+
+/// Group 1 of `layout`: the first image at binding 0, the sampler at 1,
+/// the rest from binding 2 on.
+fn bind_images(
+    device: &wgpu::Device,
+    layout: &wgpu::BindGroupLayout,
+    sampler: &wgpu::Sampler,
+    views: &[&wgpu::TextureView],
+) -> wgpu::BindGroup {
+    let mut entries = vec![wgpu::BindGroupEntry {
+        binding: 1,
+        resource: wgpu::BindingResource::Sampler(sampler),
+    }];
+    for (k, view) in views.iter().enumerate() {
+        entries.push(wgpu::BindGroupEntry {
+            binding: if k == 0 { 0 } else { k as u32 + 1 },
+            resource: wgpu::BindingResource::TextureView(view),
+        });
+    }
     device.create_bind_group(&wgpu::BindGroupDescriptor {
-        label: Some("viewport splat atlas"),
+        label: Some("viewport images"),
         layout,
-        entries: &[
-            wgpu::BindGroupEntry {
-                binding: 0,
-                resource: wgpu::BindingResource::TextureView(&view),
-            },
-            wgpu::BindGroupEntry {
-                binding: 1,
-                resource: wgpu::BindingResource::Sampler(sampler),
-            },
-        ],
+        entries: &entries,
     })
 }
 

@@ -46,6 +46,8 @@ pub(super) struct MeshVertex {
 
 /// A vertex of a mesh whose material has a base-colour texture: the colour
 /// (vertex colour × the material's base colour) multiplies the texture at `uv`.
+/// With a normal map, `tangent` is its MikkTSpace frame (`geom::tangents`);
+/// all zero without one.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
 pub(super) struct TexturedVertex {
@@ -53,6 +55,7 @@ pub(super) struct TexturedVertex {
     normal: [f32; 3],
     color: [f32; 4],
     uv: [f32; 2],
+    tangent: [f32; 4],
 }
 
 /// One point, drawn as a screen-facing disc (an instance of a 6-vertex quad).
@@ -107,12 +110,13 @@ pub(super) enum Geometry {
         vertices: Vec<MeshVertex>,
         indices: Vec<u32>,
     },
-    /// Lit triangles sampling a material's base-colour texture (shared by
-    /// every scene of the model: it is decoded and uploaded once).
+    /// Lit triangles sampling a material's base-colour texture and normal
+    /// map (shared by every scene of the model: decoded and uploaded once).
     Textured {
         vertices: Vec<TexturedVertex>,
         indices: Vec<u32>,
         texture: Arc<Atlas>,
+        normal_map: Option<Arc<Atlas>>,
     },
     /// Textured quads blended by their Ψ (AMG paper §4).
     Splats {
@@ -148,6 +152,17 @@ impl Scene {
             }
             None => mesh,
         };
+        // A normal map shades in the frame of the vertices' tangents.
+        let normal_mapped = triangle_colors.is_none()
+            && mesh
+                .materials
+                .as_ref()
+                .is_some_and(|m| m.table.iter().any(|m| m.normal_texture.is_some()));
+        let framed = normal_mapped.then(|| mesh.with_tangents()).flatten();
+        let (mesh, tangents) = match &framed {
+            Some((split, tangents)) => (split, Some(tangents)),
+            None => (mesh, None),
+        };
         let n = mesh.positions.len();
         // Valid triangles and, for the colours, their index in the input.
         let (triangles, faces): (Vec<[u32; 3]>, Vec<usize>) = mesh
@@ -180,17 +195,28 @@ impl Scene {
                 }
             }
         };
-        // The texture each triangle samples (none while coloured by value).
-        let texture = |f: usize| {
+        // The textures each triangle samples (none while coloured by value):
+        // base colour, and the normal map where it has one.
+        type Textures = (Arc<Atlas>, Option<Arc<Atlas>>);
+        let texture = |f: usize| -> Option<Textures> {
             let m = material(f).filter(|m| m.vertex_attributes.uvs)?;
             uvs.filter(|_| triangle_colors.is_none())?;
-            decoded(m.base_color_texture.as_ref()?)
+            let normal_map = m.normal_texture.as_ref().filter(|_| tangents.is_some());
+            Some((
+                decoded(m.base_color_texture.as_ref()?)?,
+                normal_map.and_then(|(image, _)| decoded(image)),
+            ))
         };
-        let mut groups: Vec<(Option<Arc<Atlas>>, Vec<usize>)> = Vec::new();
+        let same_image = |a: &Option<Arc<Atlas>>, b: &Option<Arc<Atlas>>| match (a, b) {
+            (Some(a), Some(b)) => Arc::ptr_eq(a, b),
+            (None, None) => true,
+            _ => false,
+        };
+        let mut groups: Vec<(Option<Textures>, Vec<usize>)> = Vec::new();
         for f in 0..triangles.len() {
             let tex = texture(f);
-            let same = |g: &Option<Arc<Atlas>>| match (g, &tex) {
-                (Some(a), Some(b)) => Arc::ptr_eq(a, b),
+            let same = |g: &Option<Textures>| match (g, &tex) {
+                (Some(a), Some(b)) => Arc::ptr_eq(&a.0, &b.0) && same_image(&a.1, &b.1),
                 (None, None) => true,
                 _ => false,
             };
@@ -222,8 +248,12 @@ impl Scene {
                             });
                         Geometry::Triangles { vertices, indices }
                     }
-                    Some(texture) => {
+                    Some((texture, normal_map)) => {
                         let uvs = uvs.expect("textured triangles have UVs");
+                        let tangent = |v: usize| match (&normal_map, tangents) {
+                            (Some(_), Some(t)) => t[v].to_array(),
+                            _ => [0.0; 4],
+                        };
                         let (vertices, indices) =
                             crease_split(&mesh.positions, &tris, split, |v, k, computed| {
                                 TexturedVertex {
@@ -231,12 +261,14 @@ impl Scene {
                                     normal: normal(v, computed),
                                     color: color(v, members[k]).to_array(),
                                     uv: uvs[v].to_array(),
+                                    tangent: tangent(v),
                                 }
                             });
                         Geometry::Textured {
                             vertices,
                             indices,
                             texture,
+                            normal_map,
                         }
                     }
                 }
@@ -789,6 +821,7 @@ mod tests {
                 vertices,
                 indices,
                 texture,
+                normal_map,
             },
         ] = &scene.parts[..]
         else {
@@ -805,6 +838,22 @@ mod tests {
             panic!("one textured part");
         };
         assert!(Arc::ptr_eq(texture, other));
+        assert!(normal_map.is_none() && vertices.iter().all(|v| v.tangent == [0.0; 4]));
+        // A normal map comes with every vertex's MikkTSpace frame.
+        let mut mapped = mesh.clone();
+        mapped.materials.as_mut().unwrap().table[0].normal_texture = Some((image(&png), 1.0));
+        let [
+            Geometry::Textured {
+                vertices,
+                normal_map,
+                ..
+            },
+        ] = &Scene::from_mesh(&mapped).parts[..]
+        else {
+            panic!("one textured part");
+        };
+        assert!(normal_map.is_some());
+        assert!(vertices.iter().all(|v| v.tangent[3].abs() == 1.0));
         // A second, untextured part draws in its base colour; an image that
         // does not decode leaves its material's base colour alone.
         mesh.parts = Some(vec![0, 1]);
