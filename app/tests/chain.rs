@@ -279,14 +279,14 @@ fn the_panel_edits_rows_and_refuses_bad_recipes() {
             .cloned()
             .unwrap()
     };
-    assert!(last(&harness).bake && last(&harness).texture == Some(1024));
+    assert!(last(&harness).bakes() && last(&harness).texture == Some(1024));
     let bakes: Vec<bool> = harness
         .state()
         .chain_settings()
         .recipe
         .rows
         .iter()
-        .map(|r| r.bake)
+        .map(|r| r.bakes())
         .collect();
     assert_eq!(bakes.iter().filter(|b| **b).count(), 1, "{bakes:?}");
     // Auto chain replaces the rows and builds them.
@@ -459,9 +459,16 @@ fn the_truck_chain_is_drawn_textured_row_by_row() {
         "the texture travels"
     );
     assert!(doc["materials"].as_array().is_some_and(|m| m.len() >= 2));
-    // 5 % of the truck is past its seams' floor: the row's triangle cell is
-    // flagged (its hover says why) and the log line counts it.
-    let recipe = Recipe::new(parse_lods("simplify:0.5%,simplify:0.05", None).unwrap());
+    // 5 % of the truck is past its seams' floor: unasked, the row bakes its
+    // own texture and meets its budget; told never to bake, its triangle
+    // cell is flagged (its hover says why) and the log line counts it.
+    let mut recipe = Recipe::new(parse_lods("simplify:0.5%,simplify:0.05", None).unwrap());
+    harness.state_mut().set_chain_recipe(recipe.clone());
+    built_chain(&mut harness);
+    let far = &harness.state().built_chain().unwrap().chain.lods[1];
+    assert!(far.set.unmet.is_none(), "{:?}", far.set.unmet);
+    assert!(far.baked.as_ref().is_some_and(|b| b.automatic));
+    recipe.rows[1].bake = Some(false);
     harness.state_mut().set_chain_recipe(recipe);
     built_chain(&mut harness);
     harness.run();

@@ -152,3 +152,61 @@ fn an_exported_chain_bakes_every_lod_but_the_source() {
     );
     assert!(p_baked > p_plain - 0.5, "{p_baked} vs {p_plain}");
 }
+
+/// Unasked, a textured model bakes where its seams keep it short of a
+/// triangle budget (issue 50, item 3), and says so; `--no-bake`, or an
+/// output with no room for a texture, leaves the budget unmet with why.
+#[test]
+fn seams_short_of_a_budget_bake_unasked() {
+    let dir = tempfile::tempdir().unwrap();
+    let truck = shared_model("CesiumMilkTruck.glb");
+    let truck = truck.to_str().unwrap();
+    let out = |name: &str| dir.path().join(name).display().to_string();
+    let simplify = |extra: &[&str], file: &str| {
+        let mut args = vec!["simplify", truck, "--triangles", "200", "-o", file];
+        args.extend(extra);
+        lodstudio_json(&args)
+    };
+    let auto = simplify(&[], &out("auto.glb"));
+    assert_eq!(auto["output_triangles"], 200, "{auto}");
+    assert!(auto.get("unmet").is_none(), "{auto}");
+    assert_eq!(auto["baked"]["automatic"], true, "{auto}");
+    for (extra, file) in [(&["--no-bake"][..], "kept.glb"), (&[][..], "kept.obj")] {
+        let kept = simplify(extra, &out(file));
+        assert!(kept.get("baked").is_none(), "{kept}");
+        let unmet = &kept["unmet"];
+        assert_eq!(unmet["asked"], 200, "{kept}");
+        assert!(unmet["reached"].as_u64().unwrap() > 1000, "{kept}");
+        assert!(unmet["why"].as_str().unwrap().contains("--bake"), "{kept}");
+    }
+    // A chain's count rows past the seams' floor bake; the source and the
+    // row above the floor do not; with --no-bake none does and the far
+    // rows are unmet.
+    let chain = |extra: &[&str], file: &str| {
+        let mut args = vec![
+            "export",
+            truck,
+            "--method",
+            "simplify",
+            "--lods",
+            "source,0.8,0.1",
+            "-o",
+            file,
+        ];
+        args.extend(extra);
+        lodstudio_json(&args)
+    };
+    let report = chain(&[], &out("chain.glb"));
+    let body = &report["meshes"][0]["lods"];
+    let automatic: Vec<bool> = (0..3)
+        .map(|k| body[k]["baked"]["automatic"] == true)
+        .collect();
+    assert_eq!(automatic, [false, false, true], "{body}");
+    assert!(body[2].get("unmet").is_none(), "{body}");
+    let report = chain(&["--no-bake"], &out("plain.glb"));
+    let body = &report["meshes"][0]["lods"];
+    assert!(
+        body[2].get("baked").is_none() && body[2]["unmet"].is_object(),
+        "{body}"
+    );
+}

@@ -32,7 +32,7 @@ pub struct ExportArgs {
     /// rows, their methods and parameters, the switch tolerance.
     #[arg(long, value_name = "R.json", conflicts_with_all = [
         "method", "lods", "pixels", "viewport_height", "coverage", "lock_borders", "keep_seams",
-        "uv_tolerance", "attribute_weights", "bake", "texture_size", "kappa", "tau", "resolution", "points_as", "no_simplify", "post_error", "post_triangles",
+        "uv_tolerance", "attribute_weights", "bake", "no_bake", "texture_size", "kappa", "tau", "resolution", "points_as", "no_simplify", "post_error", "post_triangles",
         "weld_tolerance", "no_weld",
     ])]
     recipe: Option<PathBuf>,
@@ -107,11 +107,15 @@ pub struct ExportArgs {
     #[arg(long, value_name = "WEIGHTS", value_parser = AttributeWeights::parse)]
     attribute_weights: Option<AttributeWeights>,
     /// Every LOD but the source gets its own texture, baked from the model
-    /// (edge-collapse rows then cross every UV seam).
+    /// (edge-collapse rows then cross every UV seam). Without it, a textured
+    /// model's edge-collapse rows bake when seams keep them short of their budget.
     #[arg(long)]
     bake: bool,
+    /// No LOD bakes, even when seams keep it short of its budget.
+    #[arg(long, conflicts_with = "bake")]
+    no_bake: bool,
     /// The baked textures' side in texels (default 1024).
-    #[arg(long, value_name = "N", requires = "bake")]
+    #[arg(long, value_name = "N", conflicts_with = "no_bake")]
     texture_size: Option<u32>,
     /// Hybrid: points per triangle's rendering time (κ).
     #[arg(long)]
@@ -235,8 +239,12 @@ fn recipe_of(args: &ExportArgs) -> Result<Recipe, CliError> {
         || args.post.post_error.is_some()
         || args.post.post_triangles.is_some();
     for row in &mut rows {
-        if args.bake && row.tolerance != lodstudio_core::recipe::RowTolerance::Source {
-            row.bake = true;
+        if row.tolerance != lodstudio_core::recipe::RowTolerance::Source {
+            row.bake = match (args.bake, args.no_bake) {
+                (true, _) => Some(true),
+                (_, true) => Some(false),
+                _ => None,
+            };
             row.texture = args.texture_size;
         }
         match row.method {

@@ -41,12 +41,21 @@ pub struct SimplifyArgs {
     #[arg(long, value_name = "WEIGHTS", value_parser = AttributeWeights::parse)]
     attribute_weights: Option<AttributeWeights>,
     /// Give the result its own texture: a new UV atlas, the original's
-    /// base colour transferred onto it (GLB output). Part, UV and colour
-    /// seams then stop nothing.
+    /// base colour and a normal map of its shading transferred onto it (GLB
+    /// output). Part, UV and colour seams then stop nothing. Without it, a
+    /// textured model's GLB bakes when its seams keep it short of the count.
     #[arg(long)]
     bake: bool,
+    /// Never bake, even when seams keep a textured model short of the count.
+    #[arg(long, conflicts_with = "bake")]
+    no_bake: bool,
     /// The baked texture's side in texels.
-    #[arg(long, value_name = "N", default_value_t = 1024, requires = "bake")]
+    #[arg(
+        long,
+        value_name = "N",
+        default_value_t = 1024,
+        conflicts_with = "no_bake"
+    )]
     texture_size: u32,
     #[command(flatten)]
     report: ReportArgs,
@@ -117,7 +126,7 @@ pub fn run(args: SimplifyArgs) -> Result<(), CliError> {
             "--bake writes a texture: give a .glb output".into(),
         ));
     }
-    if args.bake && !lodstudio_core::bake::TEXTURE_SIZE_RANGE.contains(&args.texture_size) {
+    if !lodstudio_core::bake::TEXTURE_SIZE_RANGE.contains(&args.texture_size) {
         return Err(CliError::BadInput(format!(
             "--texture-size must be in {}..={}, got {}",
             lodstudio_core::bake::TEXTURE_SIZE_RANGE.start(),
@@ -135,16 +144,38 @@ pub fn run(args: SimplifyArgs) -> Result<(), CliError> {
         target,
         collapse,
     };
-    let result = simplify::simplify(&mesh, &opts, &Progress::new()).map_err(|e| match e {
-        simplify::SimplifyError::BadTarget(m) => CliError::BadInput(m),
-        simplify::SimplifyError::Cancelled => CliError::Failure(e.to_string()),
-    })?;
+    let run = |opts: &SimplifyOptions| {
+        simplify::simplify(&mesh, opts, &Progress::new()).map_err(|e| match e {
+            simplify::SimplifyError::BadTarget(m) => CliError::BadInput(m),
+            simplify::SimplifyError::Cancelled => CliError::Failure(e.to_string()),
+        })
+    };
+    let mut result = run(&opts)?;
+    // Seams keep a textured model short of its count: again free of them,
+    // with a texture of its own.
+    let automatic = !args.bake
+        && !args.no_bake
+        && !args.keep_seams
+        && glb
+        && lodstudio_core::bake::short_of_seams(&mesh, result.unmet.as_ref());
+    if automatic {
+        let mut free = opts;
+        free.collapse.free_seams = true;
+        result = run(&free)?;
+    }
     let seconds = start.elapsed().as_secs_f64();
-    let baked = match args.bake {
-        true => Some(
-            lodstudio_core::bake::bake(&mesh, &result.mesh, args.texture_size)
-                .map_err(CliError::Failure)?,
-        ),
+    let baked = match args.bake || automatic {
+        true => {
+            let b = lodstudio_core::bake::bake(&mesh, &result.mesh, args.texture_size)
+                .map_err(CliError::Failure)?;
+            Some(lodstudio_core::bake::Baked {
+                report: lodstudio_core::bake::BakeReport {
+                    automatic,
+                    ..b.report
+                },
+                ..b
+            })
+        }
         false => None,
     };
     write_mesh(
@@ -156,7 +187,10 @@ pub fn run(args: SimplifyArgs) -> Result<(), CliError> {
         // edge-collapse hierarchy is.
         let floor = result.mesh.triangles.len();
         let params = Params::EdgeCollapse(simplify::progressive::ProgressiveOptions {
-            collapse,
+            collapse: CollapseOptions {
+                free_seams: collapse.free_seams || automatic,
+                ..collapse
+            },
             floor: Some(floor),
         });
         let progressive: Box<simplify::progressive::ProgressiveCut> =

@@ -333,27 +333,46 @@ fn tolerance_ui(ui: &mut egui::Ui, row: &mut Row) {
 }
 
 const BAKE_HINT: &str = "Give this LOD its own texture: a new UV atlas with the model's \
-    colours transferred onto it (factor × texture × vertex colour). Its seams then stop \
-    nothing, so a textured model reaches any triangle budget; one material, one image.";
+    colours (factor × texture × vertex colour) and a normal map of its shading transferred \
+    onto it. Its seams then stop nothing, so a textured model reaches any triangle budget; \
+    one material, one primitive.";
 
-/// Whether the row bakes its own texture, and at what size (not a source row).
+const SHORT_HINT: &str = "Unchecked, a textured model's row whose seams keep it short of its \
+    triangle budget stops there; checked, it bakes its own texture and reaches the budget.";
+
+/// Whether the row bakes its own texture (always, when short of its budget,
+/// or never), and at what size (not a source row).
 fn bake_ui(ui: &mut egui::Ui, row: &mut Row) {
     if row.tolerance == RowTolerance::Source {
         return;
     }
     ui.separator();
-    ui.checkbox(&mut row.bake, "Bake its own texture")
+    let mut always = row.bakes();
+    ui.checkbox(&mut always, "Bake its own texture")
         .on_hover_text(BAKE_HINT);
-    row.texture = match row.bake {
+    let mut when_short = row.bake.is_none();
+    if !always {
+        ui.checkbox(&mut when_short, "…or when seams keep it short")
+            .on_hover_text(SHORT_HINT);
+    }
+    row.bake = match (always, when_short) {
+        (true, _) => Some(true),
+        (false, true) => None,
+        (false, false) => Some(false),
+    };
+    row.texture = match row.bake != Some(false) {
         true => {
             let mut size = row.texture_size();
-            ui.add(
-                egui::DragValue::new(&mut size)
-                    .range(TEXTURE_SIZE_RANGE)
-                    .prefix("texture ")
-                    .suffix(" px"),
-            );
-            Some(size)
+            let changed = ui
+                .add(
+                    egui::DragValue::new(&mut size)
+                        .range(TEXTURE_SIZE_RANGE)
+                        .prefix("texture ")
+                        .suffix(" px"),
+                )
+                .changed();
+            // A row that may bake says its size once it bakes or is given one.
+            (row.bakes() || changed || row.texture.is_some()).then_some(size)
         }
         false => None,
     };

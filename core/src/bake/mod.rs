@@ -33,7 +33,7 @@ use crate::distance::{MeshDistance, barycentric};
 use crate::geom::{Image, Material, Materials, TriMesh, VertexAttributes, Wedges};
 use crate::io::base_color::SurfaceColor;
 use crate::io::image::{encode_png, encode_srgb};
-use crate::lod::Texture;
+use crate::lod::{Blocker, Texture, Unmet};
 
 /// The baked texture's side's range, in texels.
 pub const TEXTURE_SIZE_RANGE: std::ops::RangeInclusive<u32> = 64..=8192;
@@ -51,6 +51,22 @@ pub struct BakeReport {
     /// Texels whose centre lies in a chart (transferred), of the texture.
     pub covered: f64,
     pub seconds: f64,
+    /// Baked unasked: seams kept the LOD short of its triangle budget
+    /// ([`short_of_seams`]).
+    pub automatic: bool,
+}
+
+/// Whether a LOD of `original` is short of its triangle budget because its
+/// seams stay (`unmet`'s most common rule) and a baked texture of its own
+/// would free them: the original is textured. Such LODs are baked unasked
+/// (issue 50: "automatic when the budget cannot be met within the UV
+/// tolerance").
+pub fn short_of_seams(original: &TriMesh, unmet: Option<&Unmet>) -> bool {
+    let textured = original
+        .materials
+        .as_ref()
+        .is_some_and(|m| m.table.iter().any(|m| m.base_color_texture.is_some()));
+    textured && unmet.is_some_and(|u| u.blockers.first().is_some_and(|b| b.0 == Blocker::Seams))
 }
 
 /// A LOD with its own baked texture, and what it took.
@@ -232,6 +248,7 @@ pub fn bake(original: &TriMesh, lod: &TriMesh, size: u32) -> Result<Baked, Strin
             charts: atlas.chart_count,
             covered: covered as f64 / (width as f64 * height as f64),
             seconds: start.elapsed().as_secs_f64(),
+            automatic: false,
         },
     })
 }

@@ -196,30 +196,16 @@ fn build(
             (done_rows - group.len()) as f32 / n as f32,
             done_rows as f32 / n as f32,
         );
-        let key = cache::group_key(recipe, &group);
-        let found = cache.as_deref_mut().and_then(|c| c.group(&key));
-        let reused = found.is_some();
-        let Hit {
-            sets,
-            seconds: build_seconds,
-        } = match found {
-            Some(hit) => hit,
-            None => {
-                let hit = build_group(
-                    recipe,
-                    &group,
-                    model,
-                    mesh,
-                    cache.as_deref_mut(),
-                    progress,
-                    pixels_to_error,
-                )?;
-                if let Some(c) = cache.as_deref_mut() {
-                    c.keep_group(key, hit.sets.clone(), hit.seconds);
-                }
-                hit
-            }
+        let build = |recipe: &Recipe, group: &[usize], cache: Option<&mut ChainCache>| {
+            cached_group(recipe, group, model, mesh, cache, progress, pixels_to_error)
         };
+        let (
+            Hit {
+                sets,
+                seconds: build_seconds,
+            },
+            reused,
+        ) = build(recipe, &group, cache.as_deref_mut())?;
         // Watchers see each group's coarsest LOD once it is made.
         if progress.wants_preview()
             && let Some(last) = sets.last()
@@ -227,8 +213,20 @@ fn build(
             progress.publish(last.clone());
         }
         for (j, mut set) in group.into_iter().zip(sets) {
+            // A textured model's row that its seams keep short of its
+            // budget is built again free of them and baked (unless it says
+            // "bake": false, or the recipe keeps every seam).
+            let automatic = recipe.rows[j].bake.is_none()
+                && !recipe.keep_seams
+                && mesh.is_some_and(|m| crate::bake::short_of_seams(m, set.unmet.as_ref()));
+            if automatic {
+                let mut baking = recipe.clone();
+                baking.rows[j].bake = Some(true);
+                let (hit, _) = build(&baking, &[j], cache.as_deref_mut())?;
+                set = hit.sets.into_iter().next().expect("one set per row");
+            }
             // A row that asks for its own texture gets it baked from the model.
-            let baked = match (recipe.rows[j].bake, mesh) {
+            let baked = match (recipe.rows[j].bakes() || automatic, mesh) {
                 (true, Some(original)) if !set.mesh.triangles.is_empty() => {
                     progress.stage("baking");
                     let b = crate::bake::bake(original, &set.mesh, recipe.rows[j].texture_size())
@@ -237,7 +235,10 @@ fn build(
                         rest: format!(": baking: {e}"),
                     })?;
                     set.mesh = b.mesh;
-                    Some(b.report)
+                    Some(crate::bake::BakeReport {
+                        automatic,
+                        ..b.report
+                    })
                 }
                 _ => None,
             };
@@ -312,6 +313,36 @@ fn source_lod(recipe: &Recipe, j: usize, mesh: Option<&TriMesh>) -> Result<Chain
 
 /// Builds one group's LODs (one per row): its collapse, or its hierarchy
 /// (taken from `cache` when built there before) cut once per row.
+/// The LODs of a group of rows, from `cache` where it holds them (and
+/// whether it did), else built and kept there.
+fn cached_group(
+    recipe: &Recipe,
+    group: &[usize],
+    model: &Model,
+    mesh: Option<&TriMesh>,
+    mut cache: Option<&mut ChainCache>,
+    progress: &Progress,
+    pixels_to_error: impl Fn(f32) -> f32,
+) -> Result<(Hit, bool), ChainError> {
+    let key = cache::group_key(recipe, group);
+    if let Some(hit) = cache.as_deref_mut().and_then(|c| c.group(&key)) {
+        return Ok((hit, true));
+    }
+    let hit = build_group(
+        recipe,
+        group,
+        model,
+        mesh,
+        cache.as_deref_mut(),
+        progress,
+        pixels_to_error,
+    )?;
+    if let Some(c) = cache {
+        c.keep_group(key, hit.sets.clone(), hit.seconds);
+    }
+    Ok((hit, false))
+}
+
 fn build_group(
     recipe: &Recipe,
     group: &[usize],

@@ -121,10 +121,12 @@ pub struct Row {
     /// (`CollapseOptions::attribute_weights`; unset: its default).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub attribute_weights: Option<AttributeWeights>,
-    /// The LOD gets its own texture, baked from the model (`bake`); an
-    /// edge-collapse row's seams then constrain nothing.
-    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
-    pub bake: bool,
+    /// The LOD gets its own texture, baked from the model (`bake`; true):
+    /// an edge-collapse row's seams then constrain nothing. Unset, a
+    /// textured model's edge-collapse row bakes when its seams keep it
+    /// short of its triangle budget (`bake::short_of_seams`); false never.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub bake: Option<bool>,
     /// The baked texture's side in texels (unset: 1024).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub texture: Option<u32>,
@@ -143,7 +145,7 @@ impl Row {
             post: None,
             uv_tolerance: None,
             attribute_weights: None,
-            bake: false,
+            bake: None,
             texture: None,
         };
         match Params::default_for(method) {
@@ -165,7 +167,7 @@ impl Row {
             Params::EdgeCollapse(p) => {
                 p.collapse.lock_borders = lock_borders;
                 // A baked LOD wears a new atlas: the old one's seams stop nothing.
-                p.collapse.free_seams = self.bake;
+                p.collapse.free_seams = self.bakes();
                 p.collapse.uv_tolerance = self.uv_tolerance.unwrap_or(p.collapse.uv_tolerance);
                 p.collapse.attribute_weights = self
                     .attribute_weights
@@ -193,6 +195,11 @@ impl Row {
     pub fn tau(&self) -> f32 {
         self.tau.unwrap_or(HybridOptions::default().tau)
     }
+    /// Whether the row always bakes its own texture.
+    pub fn bakes(&self) -> bool {
+        self.bake == Some(true)
+    }
+
     /// The baked texture's side (the default where the row gives none).
     pub fn texture_size(&self) -> u32 {
         self.texture.unwrap_or(DEFAULT_TEXTURE_SIZE)
@@ -535,10 +542,11 @@ impl Row {
             self.attribute_weights.is_some(),
             Method::EdgeCollapse,
         )?;
-        if self.texture.is_some() && !self.bake {
+        if self.texture.is_some() && self.bake == Some(false) {
             return Err((
                 "texture",
-                "applies to rows that bake (\"bake\": true)".into(),
+                "applies to rows that bake (\"bake\": true, or unset: when short of the budget)"
+                    .into(),
             ));
         }
         if !crate::bake::TEXTURE_SIZE_RANGE.contains(&self.texture_size()) {
@@ -668,7 +676,7 @@ mod tests {
         )
         .unwrap();
         rows[0].uv_tolerance = Some(16.0);
-        rows[1].bake = true;
+        rows[1].bake = Some(true);
         rows[1].texture = Some(512);
         rows[1].kappa = Some(5.0);
         rows[2].post = Some(PostSpec::Triangles(900));
@@ -745,7 +753,7 @@ mod tests {
                 "rows[1].attribute_weights",
             ),
             (
-                with_row(r#"{"method":"simplify","tolerance":"2%","texture":512}"#),
+                with_row(r#"{"method":"simplify","tolerance":"2%","bake":false,"texture":512}"#),
                 "rows[1].texture",
             ),
             (
