@@ -18,6 +18,7 @@ pub mod geom;
 pub mod hybrid;
 mod id_set;
 pub mod implicit;
+pub mod impostor;
 pub mod io;
 pub mod lod;
 pub mod mergetree;

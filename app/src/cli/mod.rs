@@ -17,6 +17,7 @@ mod cut;
 mod export;
 mod flythrough;
 mod hybrid;
+mod impostor;
 mod info;
 mod measure;
 mod mergetree;
@@ -111,6 +112,9 @@ enum Command {
     Info(info::InfoArgs),
     /// Simplify a mesh by edge collapse with a certified two-sided Hausdorff bound.
     Simplify(simplify::SimplifyArgs),
+    /// An octahedral impostor: the mesh rendered from views² directions into
+    /// one atlas (colour, normal, depth), shown as alpha-masked cards.
+    Impostor(impostor::ImpostorArgs),
     /// Measure the two-sided Hausdorff distance between two meshes by dense sampling.
     Measure(measure::MeasureArgs),
     /// How different two models look: rendered from the same views around A,
@@ -368,6 +372,7 @@ fn dispatch(command: Option<Command>) -> Result<(), CliError> {
         Some(Command::Open { file }) => studio(Some(file)),
         Some(Command::Info(args)) => info::run(args),
         Some(Command::Simplify(args)) => simplify::run(args),
+        Some(Command::Impostor(args)) => impostor::run(args),
         Some(Command::Measure(args)) => measure::run(args),
         Some(Command::Compare(args)) => compare::run(args),
         Some(Command::Voxel(args)) => voxel::run(args),

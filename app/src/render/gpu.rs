@@ -433,8 +433,9 @@ impl ViewportResources {
             min_filter: wgpu::FilterMode::Linear,
             ..Default::default()
         });
-        const TEXTURED_ATTRS: [wgpu::VertexAttribute; 5] = wgpu::vertex_attr_array![
-            0 => Float32x3, 1 => Float32x3, 2 => Float32x4, 3 => Float32x2, 4 => Float32x4
+        const TEXTURED_ATTRS: [wgpu::VertexAttribute; 6] = wgpu::vertex_attr_array![
+            0 => Float32x3, 1 => Float32x3, 2 => Float32x4, 3 => Float32x2, 4 => Float32x4,
+            5 => Float32
         ];
         let textured_buffers = [Some(wgpu::VertexBufferLayout {
             array_stride: std::mem::size_of::<TexturedVertex>() as u64,

@@ -7,7 +7,7 @@ use std::sync::Arc;
 
 use bytemuck::{Pod, Zeroable};
 use glam::{Vec3, Vec4};
-use lodstudio_core::geom::{Aabb, PointSet, TriMesh, Volume};
+use lodstudio_core::geom::{Aabb, AlphaMode, PointSet, TriMesh, Volume};
 use lodstudio_core::io::Model;
 use lodstudio_core::lod::{DrawSet, Layer};
 
@@ -47,7 +47,8 @@ pub(super) struct MeshVertex {
 /// A vertex of a mesh whose material has a base-colour texture: the colour
 /// (vertex colour × the material's base colour) multiplies the texture at `uv`.
 /// With a normal map, `tangent` is its MikkTSpace frame (`geom::tangents`);
-/// all zero without one.
+/// all zero without one. Fragments whose alpha is under `alpha_cutoff` are
+/// not drawn (glTF's MASK; 0 for opaque materials).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
 pub(super) struct TexturedVertex {
@@ -56,6 +57,7 @@ pub(super) struct TexturedVertex {
     color: [f32; 4],
     uv: [f32; 2],
     tangent: [f32; 4],
+    alpha_cutoff: f32,
 }
 
 /// One point, drawn as a screen-facing disc (an instance of a 6-vertex quad).
@@ -262,6 +264,10 @@ impl Scene {
                                     color: color(v, members[k]).to_array(),
                                     uv: uvs[v].to_array(),
                                     tangent: tangent(v),
+                                    alpha_cutoff: match material(members[k]).map(|m| m.alpha_mode) {
+                                        Some(AlphaMode::Mask(cutoff)) => cutoff,
+                                        _ => 0.0,
+                                    },
                                 }
                             });
                         Geometry::Textured {

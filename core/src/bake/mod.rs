@@ -30,10 +30,14 @@ use glam::{Vec2, Vec3, Vec4};
 use rayon::prelude::*;
 
 use crate::distance::{MeshDistance, barycentric};
+use crate::geom::normals::ShadingNormals;
 use crate::geom::{Image, Material, Materials, TriMesh, VertexAttributes, Wedges};
 use crate::io::base_color::SurfaceColor;
 use crate::io::image::{encode_png, encode_srgb};
 use crate::lod::{Blocker, Texture, Unmet};
+
+/// A baked texture's side where none is given, in texels.
+pub const DEFAULT_TEXTURE_SIZE: u32 = 1024;
 
 /// The baked texture's side's range, in texels.
 pub const TEXTURE_SIZE_RANGE: std::ops::RangeInclusive<u32> = 64..=8192;
@@ -281,37 +285,6 @@ fn png_image(texture: &Texture) -> Image {
     }
 }
 
-/// The original's shading normals: per corner, its wedge's (or vertex's)
-/// normal, area-weighted vertex normals where it has none.
-struct ShadingNormals<'a> {
-    mesh: &'a TriMesh,
-    normals: std::borrow::Cow<'a, [Vec3]>,
-}
-
-impl<'a> ShadingNormals<'a> {
-    fn new(mesh: &'a TriMesh) -> Self {
-        let normals = match (&mesh.wedges, &mesh.normals) {
-            (Some(w), _) if w.normals.is_some() => w.normals.as_deref().unwrap_or_default().into(),
-            (None, Some(n)) => n.as_slice().into(),
-            _ => mesh.vertex_normals().into(),
-        };
-        ShadingNormals { mesh, normals }
-    }
-
-    /// The unit normal interpolated over triangle `t` at barycentric `b`.
-    fn at(&self, t: usize, b: [f32; 3]) -> Vec3 {
-        let c = match &self.mesh.wedges {
-            Some(w) if w.normals.is_some() => w.corners[t],
-            _ => self.mesh.triangles[t],
-        };
-        let n: Vec3 = (0..3).map(|k| self.normals[c[k] as usize] * b[k]).sum();
-        n.try_normalize().unwrap_or_else(|| {
-            let [a, bb, cc] = self.mesh.triangle(t);
-            (bb - a).cross(cc - a).normalize_or(Vec3::Z)
-        })
-    }
-}
-
 /// `n` in the tangent frame interpolated from the corners' (normal,
 /// MikkTSpace tangent) at barycentric `b`, as a client's fragment shader
 /// rebuilds it (tangent made orthogonal to the normal, bitangent
@@ -403,7 +376,11 @@ fn with_atlas_uvs(lod: &TriMesh, unwrapped: &uvunwrap::OutputMesh, fill: Vec2) -
 
 /// `rings` passes of filling each empty texel next to a filled one with its
 /// filled neighbours' mean (8-connected).
-fn dilate(mut texels: Vec<Option<Vec3>>, width: usize, rings: usize) -> Vec<Option<Vec3>> {
+pub(crate) fn dilate(
+    mut texels: Vec<Option<Vec3>>,
+    width: usize,
+    rings: usize,
+) -> Vec<Option<Vec3>> {
     let height = texels.len() / width.max(1);
     for _ in 0..rings {
         let before = texels.clone();

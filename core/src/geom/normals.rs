@@ -84,6 +84,38 @@ impl TriMesh {
     }
 }
 
+/// A mesh's shading normals as a renderer interpolates them: per corner,
+/// its wedge's (or vertex's) normal, area-weighted vertex normals where it
+/// has none (what bakes and impostors transfer).
+pub struct ShadingNormals<'a> {
+    mesh: &'a TriMesh,
+    normals: std::borrow::Cow<'a, [Vec3]>,
+}
+
+impl<'a> ShadingNormals<'a> {
+    pub fn new(mesh: &'a TriMesh) -> Self {
+        let normals = match (&mesh.wedges, &mesh.normals) {
+            (Some(w), _) if w.normals.is_some() => w.normals.as_deref().unwrap_or_default().into(),
+            (None, Some(n)) => n.as_slice().into(),
+            _ => mesh.vertex_normals().into(),
+        };
+        ShadingNormals { mesh, normals }
+    }
+
+    /// The unit normal interpolated over triangle `t` at barycentric `b`.
+    pub fn at(&self, t: usize, b: [f32; 3]) -> Vec3 {
+        let c = match &self.mesh.wedges {
+            Some(w) if w.normals.is_some() => w.corners[t],
+            _ => self.mesh.triangles[t],
+        };
+        let n: Vec3 = (0..3).map(|k| self.normals[c[k] as usize] * b[k]).sum();
+        n.try_normalize().unwrap_or_else(|| {
+            let [a, bb, cc] = self.mesh.triangle(t);
+            (bb - a).cross(cc - a).normalize_or(Vec3::Z)
+        })
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

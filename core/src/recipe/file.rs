@@ -20,8 +20,6 @@ use crate::io::scene_writer::Layout;
 use crate::lod::{Method, Params};
 use crate::simplify::collapse::AttributeWeights;
 
-/// A baked texture's side where a row gives none.
-pub const DEFAULT_TEXTURE_SIZE: u32 = 1024;
 use crate::voxel::PostSimplify;
 use crate::voxel::VoxelParams;
 
@@ -202,7 +200,7 @@ impl Row {
 
     /// The baked texture's side (the default where the row gives none).
     pub fn texture_size(&self) -> u32 {
-        self.texture.unwrap_or(DEFAULT_TEXTURE_SIZE)
+        self.texture.unwrap_or(crate::bake::DEFAULT_TEXTURE_SIZE)
     }
 
     pub fn resolution(&self) -> usize {

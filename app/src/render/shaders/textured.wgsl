@@ -9,6 +9,7 @@ struct TexturedIn {
     @location(2) color: vec4<f32>,
     @location(3) uv: vec2<f32>,
     @location(4) tangent: vec4<f32>,
+    @location(5) alpha_cutoff: f32,
 };
 struct TexturedOut {
     @builtin(position) clip: vec4<f32>,
@@ -17,6 +18,7 @@ struct TexturedOut {
     @location(2) color: vec4<f32>,
     @location(3) uv: vec2<f32>,
     @location(4) tangent: vec4<f32>,
+    @location(5) alpha_cutoff: f32,
 };
 
 @vertex
@@ -28,6 +30,7 @@ fn vs_textured(v: TexturedIn) -> TexturedOut {
     out.color = v.color;
     out.uv = v.uv;
     out.tangent = v.tangent;
+    out.alpha_cutoff = v.alpha_cutoff;
     return out;
 }
 
@@ -55,5 +58,9 @@ fn mapped_normal(in: TexturedOut) -> vec3<f32> {
 @fragment
 fn fs_textured(in: TexturedOut) -> @location(0) vec4<f32> {
     let c = in.color * textureSample(atlas, atlas_sampler, in.uv);
-    return vec4<f32>(shade(c.rgb, facing(mapped_normal(in), in.world)), 1.0);
+    let n = mapped_normal(in);
+    if (c.a < in.alpha_cutoff) {
+        discard;
+    }
+    return vec4<f32>(shade(c.rgb, facing(n, in.world)), 1.0);
 }
