@@ -65,10 +65,11 @@ pub fn open_bytes(
 /// an AMG multiscale.
 pub fn reopen(bytes: &[u8]) -> Result<(Header, Box<dyn Hierarchy>), HierarchyFileError> {
     let header = peek(bytes)?;
-    let Some(method) = Method::from_tag(&header.method) else {
+    // Impostors are never saved: they have no hierarchy to cut.
+    let Some(method) = Method::from_tag(&header.method).filter(|m| Method::ALL.contains(m)) else {
         return Err(HierarchyFileError::WrongMethod {
             found: header.method,
-            expected: Method::tags(),
+            expected: Method::ALL.map(Method::tag).join(", "),
         });
     };
     let tag = method.tag();
@@ -125,6 +126,7 @@ pub fn reopen(bytes: &[u8]) -> Result<(Header, Box<dyn Hierarchy>), HierarchyFil
             }
             Box::new(crate::voxel::pyramid::PyramidCut::new(pyramid, None))
         }
+        Method::Impostor => unreachable!("refused above"),
         Method::Amg => {
             let (_, ms) = load::<crate::amg::Multiscale>(bytes, tag)?;
             if !ms.is_consistent() {

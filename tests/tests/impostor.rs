@@ -57,3 +57,53 @@ fn the_trucks_impostor_is_recognisable() {
         assert_eq!(o.status.code(), Some(2), "{args:?}");
     }
 }
+
+/// An impostor row joins a chain as its farthest LOD: its cards, its
+/// measured silhouette error as its bound, and the smallest switch
+/// coverage, whatever tolerance the row gives (it has one cut).
+#[test]
+fn an_impostor_row_ends_the_chain() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("chain.glb").display().to_string();
+    let torus = "builtin:torus";
+    let solo = dir.path().join("solo.glb").display().to_string();
+    let alone = lodstudio_json(&["impostor", torus, "-o", &solo]);
+    let report = lodstudio_json(&[
+        "export",
+        torus,
+        "--lods",
+        "simplify:1%,simplify:0.1,impostor:1px",
+        "-o",
+        &out,
+    ]);
+    let lods = report["lods"].as_array().unwrap();
+    assert_eq!(lods.len(), 3, "{report}");
+    let last = &lods[2];
+    assert_eq!(last["triangles"], alone["triangles"], "{last}");
+    assert_eq!(
+        last["error_bound"], alone["silhouette_error"],
+        "{last} against {alone}"
+    );
+    assert_eq!(last["error_bound_kind"], "estimate");
+    assert!(last.get("uv_error").is_none_or(|u| u.is_null()), "{last}");
+    let coverage = |l: &serde_json::Value| l["screen_coverage"].as_f64().unwrap();
+    assert!(coverage(last) < coverage(&lods[1]) && coverage(&lods[1]) < coverage(&lods[0]));
+    // A recipe row takes views and the atlas's size; it refuses bake.
+    let recipe = dir.path().join("r.json");
+    let saved = dir.path().join("saved.glb").display().to_string();
+    lodstudio_json(&[
+        "export",
+        torus,
+        "--lods",
+        "simplify:1%,impostor:1px",
+        "-o",
+        &saved,
+        "--save-recipe",
+        recipe.to_str().unwrap(),
+    ]);
+    let text = std::fs::read_to_string(&recipe).unwrap();
+    assert!(
+        text.contains("\"views\": 8") || text.contains("\"views\":8"),
+        "{text}"
+    );
+}

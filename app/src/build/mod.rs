@@ -124,6 +124,16 @@ pub fn run(
         )?,
         Params::MergeTree(_) => mergetree::inspect(concrete(hierarchy.as_ref())?, seconds),
         Params::Voxel(p) => voxel::inspect(hierarchy.as_mut(), p, seconds, progress)?,
+        // A chain row only (the studio's method list leaves it out): its
+        // cards are all there is to inspect.
+        Params::Impostor(_) => Inspection {
+            rows: vec![build_time(
+                seconds,
+                "Time to render the frames and measure the silhouette.",
+            )],
+            plots: Vec::new(),
+            voxel: None,
+        },
         Params::Amg(_) => {
             let shown = knobs.amg_level;
             amg::inspect(concrete_mut(hierarchy.as_mut())?, shown, seconds, progress)?

@@ -374,9 +374,10 @@ fn report(
                 "screen_coverage": c,
                 "build_seconds": l.build_seconds,
                 // Geometric bounds say nothing of textures: how far the UVs
-                // moved beyond what the bound carries them.
+                // moved beyond what the bound carries them (baked LODs and
+                // impostors wear atlases of their own).
                 "uv_error": input
-                    .filter(|_| l.baked.is_none())
+                    .filter(|_| l.baked.is_none() && l.method != Method::Impostor)
                     .and_then(|m| lodstudio_core::distance::uv_error(m, &l.set.mesh, l.bound())),
             });
             // Its own texture, when it was baked.

@@ -283,7 +283,7 @@ fn coarser(row: &Row) -> Row {
 /// The method of a row; a new method takes its own default parameters.
 fn method_menu(ui: &mut egui::Ui, row: &mut Row) {
     let mut method = row.method;
-    choose(ui, &mut method, Method::ALL, Method::tag);
+    choose(ui, &mut method, Method::CHAIN, Method::tag);
     if method != row.method {
         *row = Row::new(method, row.tolerance);
     }
@@ -343,7 +343,7 @@ const SHORT_HINT: &str = "Unchecked, a textured model's row whose seams keep it 
 /// Whether the row bakes its own texture (always, when short of its budget,
 /// or never), and at what size (not a source row).
 fn bake_ui(ui: &mut egui::Ui, row: &mut Row) {
-    if row.tolerance == RowTolerance::Source {
+    if row.tolerance == RowTolerance::Source || row.method == Method::Impostor {
         return;
     }
     ui.separator();
@@ -405,6 +405,27 @@ fn parameters_ui(ui: &mut egui::Ui, row: &mut Row) {
                     .prefix("resolution "),
             );
             row.resolution = Some(resolution);
+        }
+        Method::Impostor => {
+            let defaults = lodstudio_core::impostor::ImpostorOptions::default();
+            let (mut views, mut texture) = (
+                row.views.unwrap_or(defaults.views),
+                row.texture.unwrap_or(defaults.texture),
+            );
+            ui.add(
+                egui::DragValue::new(&mut views)
+                    .range(lodstudio_core::impostor::VIEWS_RANGE)
+                    .prefix("views ")
+                    .suffix("²"),
+            )
+            .on_hover_text("Frames per side of the octahedral map of views.");
+            ui.add(
+                egui::DragValue::new(&mut texture)
+                    .range(TEXTURE_SIZE_RANGE)
+                    .prefix("atlas ")
+                    .suffix(" px"),
+            );
+            (row.views, row.texture) = (Some(views), Some(texture));
         }
         _ => {
             ui.weak("defaults");

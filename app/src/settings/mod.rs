@@ -82,6 +82,8 @@ impl MethodSettings {
             Method::MergeTree => Params::MergeTree(self.merge_tree.options()),
             Method::Hybrid => Params::Hybrid(self.hybrid.options()),
             Method::Amg => Params::Amg(self.amg.params()),
+            // Not in the studio's method list: a chain row's kind.
+            Method::Impostor => Params::default_for(Method::Impostor),
         }
     }
 }
@@ -108,6 +110,7 @@ impl MethodSettings {
                 v.simplify = p.post != lodstudio_core::voxel::PostSimplify::Off;
                 v.pyramid = p.pyramid;
             }
+            Params::Impostor(_) => {}
             Params::MergeTree(p) => {
                 self.merge_tree.min_vertices = p.min_vertices;
                 self.merge_tree.min_quality = p.collapse.min_quality;

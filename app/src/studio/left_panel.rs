@@ -104,6 +104,8 @@ impl StudioApp {
                 // Criteria changes re-cut the live tree; only build options rebuild.
                 changed |= self.methods.merge_tree.ui(ui).0;
             }
+            // A chain row's kind, not in the method list.
+            Method::Impostor => {}
         }
         // The cut: its threshold (or, for edge collapse, a budget as the
         // threshold's unit), disabled saying why where it chooses nothing;

@@ -30,7 +30,8 @@ use crate::geom::normals::ShadingNormals;
 use crate::geom::{AlphaMode, Image, Material, Materials, TriMesh, VertexAttributes};
 use crate::io::base_color::SurfaceColor;
 use crate::io::image::{encode_png, encode_srgb};
-use crate::lod::Texture;
+use crate::lod::{BoundKind, DrawSet, Hierarchy, Method, Texture};
+use crate::view::{Tolerance, View};
 
 /// Frames per side of the octahedral map.
 pub const VIEWS_RANGE: std::ops::RangeInclusive<u32> = 2..=32;
@@ -49,6 +50,26 @@ pub struct ImpostorOptions {
     pub views: u32,
     /// The atlas's side in texels.
     pub texture: u32,
+}
+
+impl ImpostorOptions {
+    /// Every value inside its range, each frame at least [`MIN_FRAME`] texels.
+    pub fn validate(&self) -> Result<(), crate::lod::ParamError> {
+        use crate::lod::in_range;
+        in_range("views", self.views, &VIEWS_RANGE)?;
+        in_range("texture", self.texture, &crate::bake::TEXTURE_SIZE_RANGE)?;
+        if self.texture / self.views < MIN_FRAME {
+            return Err(crate::lod::ParamError::new(
+                "texture",
+                format!(
+                    "gives each of the {}² frames {} texels a side, fewer than {MIN_FRAME}",
+                    self.views,
+                    self.texture / self.views
+                ),
+            ));
+        }
+        Ok(())
+    }
 }
 
 impl Default for ImpostorOptions {
@@ -133,24 +154,7 @@ type Texel = Option<(Vec3, Vec3, f32)>;
 /// A message when an option is out of range or the mesh is empty or flat.
 pub fn build(original: &TriMesh, opts: &ImpostorOptions) -> Result<Impostor, String> {
     let start = std::time::Instant::now();
-    if !VIEWS_RANGE.contains(&opts.views) {
-        return Err(format!(
-            "views must be in {}..={}, got {}",
-            VIEWS_RANGE.start(),
-            VIEWS_RANGE.end(),
-            opts.views
-        ));
-    }
-    let sizes = crate::bake::TEXTURE_SIZE_RANGE;
-    if !sizes.contains(&opts.texture) || opts.texture / opts.views < MIN_FRAME {
-        return Err(format!(
-            "texture must be in {}..={} and give each of the {} frames a side at least {MIN_FRAME} texels, got {}",
-            sizes.start(),
-            sizes.end(),
-            opts.views * opts.views,
-            opts.texture
-        ));
-    }
+    opts.validate().map_err(|e| e.to_string())?;
     let bounds = original.bounds();
     let radius = 0.5 * bounds.diagonal();
     if original.triangles.is_empty() || !(radius.is_finite() && radius > 0.0) {
@@ -298,6 +302,43 @@ pub fn build(original: &TriMesh, opts: &ImpostorOptions) -> Result<Impostor, Str
             seconds: start.elapsed().as_secs_f64(),
         },
     })
+}
+
+/// An impostor as the one cut a chain row takes: whatever the view or
+/// tolerance, its cards, with the silhouette error as its bound (an
+/// estimate: measured from some views, not a Hausdorff bound).
+pub struct ImpostorCards {
+    set: DrawSet,
+    diagonal: f32,
+}
+
+impl ImpostorCards {
+    pub fn build(mesh: &TriMesh, opts: &ImpostorOptions) -> Result<ImpostorCards, String> {
+        let imp = build(mesh, opts)?;
+        Ok(ImpostorCards {
+            set: DrawSet {
+                mesh: imp.mesh,
+                error_bound: imp.report.silhouette_error,
+                error_bound_kind: BoundKind::Estimate,
+                ..Default::default()
+            },
+            diagonal: mesh.bounds().diagonal(),
+        })
+    }
+}
+
+impl Hierarchy for ImpostorCards {
+    fn method(&self) -> Method {
+        Method::Impostor
+    }
+
+    fn diagonal(&self) -> f32 {
+        self.diagonal
+    }
+
+    fn select(&mut self, _view: &View, _tolerance: Tolerance) -> DrawSet {
+        self.set.clone()
+    }
 }
 
 /// The largest distance (object units) from a pixel only one of the

@@ -20,6 +20,7 @@ use crate::amg::{self, AmgError, AmgParams};
 use crate::geom::{Model, PointSet, TriMesh, Volume};
 use crate::hybrid::{self, HybridCut, HybridOptions};
 use crate::implicit::{Implicit, MeshSolid};
+use crate::impostor::{ImpostorCards, ImpostorOptions};
 use crate::mergetree::{self, MergeTreeOptions, MergeTreeView};
 use crate::progress::{Cancelled, Progress};
 use crate::simplify::progressive::ProgressiveOptions;
@@ -40,6 +41,8 @@ pub enum Params {
     Hybrid(HybridOptions),
     /// The decomposition and the texel (the level is chosen at run time).
     Amg(AmgParams),
+    /// The views and the atlas (a chain row, not a hierarchy to cut).
+    Impostor(ImpostorOptions),
 }
 
 impl Params {
@@ -51,6 +54,7 @@ impl Params {
             Method::MergeTree => Params::MergeTree(Default::default()),
             Method::Hybrid => Params::Hybrid(Default::default()),
             Method::Amg => Params::Amg(Default::default()),
+            Method::Impostor => Params::Impostor(Default::default()),
         }
     }
 
@@ -61,6 +65,7 @@ impl Params {
             Params::MergeTree(_) => Method::MergeTree,
             Params::Hybrid(_) => Method::Hybrid,
             Params::Amg(_) => Method::Amg,
+            Params::Impostor(_) => Method::Impostor,
         }
     }
 
@@ -77,6 +82,8 @@ impl Params {
             Params::EdgeCollapse(_) => (11, 0),
             Params::MergeTree(_) => (8, 0),
             Params::Voxel(v) => (8, (v.resolution as u64).pow(3) * 4 * 4),
+            // Its BVH and the frames: a few floats per texel of the atlas.
+            Params::Impostor(i) => (8, (i.texture as u64).pow(2) * 32),
         };
         parsed_bytes.saturating_mul(per_byte).saturating_add(grids)
     }
@@ -89,6 +96,7 @@ impl Params {
             Params::MergeTree(p) => p.validate(),
             Params::Hybrid(p) => p.validate(),
             Params::Amg(p) => p.validate(),
+            Params::Impostor(p) => p.validate(),
         }
     }
 }
@@ -159,6 +167,11 @@ pub fn build<'a>(
             let mrg = hybrid::build(mesh_of(input).ok_or_else(refused)?, p, progress)?;
             Box::new(HybridCut::new(Arc::new(mrg)))
         }
+        Params::Impostor(p) => {
+            progress.stage("rendering the frames");
+            let mesh = mesh_of(input).ok_or_else(refused)?;
+            Box::new(ImpostorCards::build(mesh, p).map_err(BuildError::BadInput)?)
+        }
         Params::MergeTree(p) => {
             let tree = mergetree::build(mesh_of(input).ok_or_else(refused)?, p, progress)?;
             Box::new(MergeTreeView::new(Arc::new(tree), Default::default()))
@@ -200,7 +213,9 @@ pub fn accepts(method: Method, input: Input<'_>) -> Result<(), BuildError> {
         (Method::Voxel, Input::Solid(_) | Input::Volume(_)) => true,
         (Method::Voxel, Input::Mesh(mesh)) => !mesh.triangles.is_empty(),
         (Method::Voxel, Input::Points(_)) => false,
-        (Method::EdgeCollapse | Method::Hybrid | Method::MergeTree, _) => mesh_of(input).is_some(),
+        (Method::EdgeCollapse | Method::Hybrid | Method::MergeTree | Method::Impostor, _) => {
+            mesh_of(input).is_some()
+        }
     };
     if ok {
         Ok(())
@@ -234,7 +249,9 @@ fn refusal(method: Method, input: Input<'_>) -> BuildError {
     let needs = match method {
         Method::Voxel => "samples solids (meshes, implicit built-ins, volumes)",
         Method::Amg => "needs points (a point set or a mesh's vertices)",
-        Method::EdgeCollapse | Method::Hybrid | Method::MergeTree => "needs a triangle mesh",
+        Method::EdgeCollapse | Method::Hybrid | Method::MergeTree | Method::Impostor => {
+            "needs a triangle mesh"
+        }
     };
     let what = match input {
         Input::Mesh(mesh) if mesh.triangles.is_empty() => "a mesh without triangles".into(),
@@ -368,7 +385,7 @@ mod tests {
                 Method::EdgeCollapse => Some(Knob::CollapseTarget),
                 Method::Voxel => Some(Knob::PyramidPosition),
                 Method::Amg => Some(Knob::AmgLevel),
-                Method::MergeTree | Method::Hybrid => None,
+                Method::MergeTree | Method::Hybrid | Method::Impostor => None,
             };
             assert_eq!(set.overridden_by, expected, "{method:?}");
             assert!(

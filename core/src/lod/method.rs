@@ -1,6 +1,8 @@
 //! The five methods, listed once: their names, papers and saved-file tags.
 //! The CLI's `--method`, the studio's method list and saved hierarchies all
-//! name a method through [`Method`].
+//! name a method through [`Method`]. Chains have one more kind of row, the
+//! octahedral impostor ([`Method::CHAIN`]): one textured card set, no
+//! hierarchy to cut.
 
 use serde::{Deserialize, Serialize};
 
@@ -18,6 +20,9 @@ pub enum Method {
     Hybrid,
     /// Domain primitives of a point set by algebraic multigrid (AMG paper).
     Amg,
+    /// Textured cards rendered from an octahedral map of views: a chain's
+    /// farthest row, not a hierarchy (`impostor`).
+    Impostor,
 }
 
 impl Method {
@@ -30,6 +35,16 @@ impl Method {
         Method::Amg,
     ];
 
+    /// What a chain's rows may be: every method, and the impostor.
+    pub const CHAIN: [Method; 6] = [
+        Method::EdgeCollapse,
+        Method::Hybrid,
+        Method::MergeTree,
+        Method::Voxel,
+        Method::Amg,
+        Method::Impostor,
+    ];
+
     /// The name on the command line (`--method`, subcommands) and in saved
     /// hierarchies.
     pub fn tag(self) -> &'static str {
@@ -39,17 +54,18 @@ impl Method {
             Method::MergeTree => "mergetree",
             Method::Hybrid => "hybrid",
             Method::Amg => "amg",
+            Method::Impostor => "impostor",
         }
     }
 
-    /// The method a [`Method::tag`] names.
+    /// The method (or chain row kind) a [`Method::tag`] names.
     pub fn from_tag(tag: &str) -> Option<Method> {
-        Method::ALL.into_iter().find(|m| m.tag() == tag)
+        Method::CHAIN.into_iter().find(|m| m.tag() == tag)
     }
 
-    /// Every tag, for messages: "simplify, hybrid, mergetree, voxel, amg".
+    /// Every tag, for messages: "simplify, hybrid, mergetree, voxel, amg, impostor".
     pub fn tags() -> String {
-        Method::ALL.map(Method::tag).join(", ")
+        Method::CHAIN.map(Method::tag).join(", ")
     }
 
     /// The name the studio shows.
@@ -60,6 +76,7 @@ impl Method {
             Method::MergeTree => "Merge tree (view-dependent)",
             Method::Hybrid => "Hybrid (triangles + points)",
             Method::Amg => "AMG (splats)",
+            Method::Impostor => "Octahedral impostor (cards)",
         }
     }
 
@@ -71,6 +88,7 @@ impl Method {
             Method::MergeTree => "view-dependent merge trees, §3-§4",
             Method::Hybrid => "hybrid simplification (MRG), §4-§6",
             Method::Amg => "AMG extreme simplification, §2-§4",
+            Method::Impostor => "octahedral impostors (Brucks 2018), issue 50",
         }
     }
 
@@ -104,6 +122,12 @@ impl Method {
                  the cut follows the camera and the threshold live (hybrid \
                  simplification paper)."
             }
+            Method::Impostor => {
+                "Renders the model from views² directions on an octahedral map into one \
+                 atlas (colour and coverage, normal and depth) and shows the frames facing \
+                 the axes as alpha-masked cards: the farthest LOD, one draw call, its \
+                 switch distance from its measured silhouette error."
+            }
             Method::MergeTree => {
                 "Builds a merge tree of vertex merges level by level with their \
                  dependencies, then refines or coarsens it every frame from the previous \
@@ -125,6 +149,10 @@ mod tests {
             assert_eq!(Method::from_tag(m.tag()), Some(m));
         }
         assert_eq!(Method::from_tag("voxels"), None);
-        assert_eq!(Method::tags(), "simplify, hybrid, mergetree, voxel, amg");
+        assert_eq!(
+            Method::tags(),
+            "simplify, hybrid, mergetree, voxel, amg, impostor"
+        );
+        assert_eq!(Method::from_tag("impostor"), Some(Method::Impostor));
     }
 }

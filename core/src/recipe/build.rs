@@ -487,8 +487,11 @@ fn hierarchy_rows(
             {
                 set.unmet = Some(Unmet::past_coarsest(row.method, n, set.primitive_count()));
             }
+            // An impostor has one cut: its row's tolerance chooses nothing,
+            // its measured silhouette error places its switch.
             if let ChainItem::Error(f) = wanted
                 && set.error_bound > f * diag * (1.0 + 1e-6)
+                && row.method != Method::Impostor
             {
                 return Err(ChainError::Row {
                     row: j,

@@ -125,9 +125,13 @@ pub struct Row {
     /// short of its triangle budget (`bake::short_of_seams`); false never.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub bake: Option<bool>,
-    /// The baked texture's side in texels (unset: 1024).
+    /// The baked texture's (or the impostor's atlas's) side in texels
+    /// (unset: 1024).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub texture: Option<u32>,
+    /// Impostor: frames per side of its octahedral map of views.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub views: Option<u32>,
 }
 
 impl Row {
@@ -145,12 +149,14 @@ impl Row {
             attribute_weights: None,
             bake: None,
             texture: None,
+            views: None,
         };
         match Params::default_for(method) {
             Params::Hybrid(h) => (row.kappa, row.tau) = (Some(h.kappa), Some(h.tau)),
             Params::Voxel(v) => {
                 (row.resolution, row.post) = (Some(v.resolution), Some(v.post.into()))
             }
+            Params::Impostor(i) => row.views = Some(i.views),
             _ => {}
         }
         row
@@ -179,6 +185,10 @@ impl Row {
                 v.resolution = self.resolution.unwrap_or(v.resolution);
                 v.post = self.post.map_or(v.post, PostSimplify::from);
                 v.pyramid = true;
+            }
+            Params::Impostor(i) => {
+                i.views = self.views.unwrap_or(i.views);
+                i.texture = self.texture_size();
             }
             Params::MergeTree(_) | Params::Amg(_) => {}
         }
@@ -530,6 +540,14 @@ impl Row {
         only("tau", self.tau.is_some(), Method::Hybrid)?;
         only("resolution", self.resolution.is_some(), Method::Voxel)?;
         only("post", self.post.is_some(), Method::Voxel)?;
+        only("views", self.views.is_some(), Method::Impostor)?;
+        if m == Method::Impostor && self.bake.is_some() {
+            return Err((
+                "bake",
+                "an impostor row's cards wear their own atlas: give \"texture\", not \"bake\""
+                    .into(),
+            ));
+        }
         only(
             "uv_tolerance",
             self.uv_tolerance.is_some(),
@@ -540,7 +558,7 @@ impl Row {
             self.attribute_weights.is_some(),
             Method::EdgeCollapse,
         )?;
-        if self.texture.is_some() && self.bake == Some(false) {
+        if self.texture.is_some() && self.bake == Some(false) && m != Method::Impostor {
             return Err((
                 "texture",
                 "applies to rows that bake (\"bake\": true, or unset: when short of the budget)"
@@ -761,6 +779,14 @@ mod tests {
             (
                 with_row(r#"{"method":"voxel","tolerance":"2%","post":{"voxels":-1}}"#),
                 "rows[1].post",
+            ),
+            (
+                with_row(r#"{"method":"simplify","tolerance":"2%","views":8}"#),
+                "rows[1].views",
+            ),
+            (
+                with_row(r#"{"method":"impostor","tolerance":"8px","bake":true}"#),
+                "rows[1].bake",
             ),
             (
                 with_row(r#"{"method":"voxels","tolerance":"2%"}"#),

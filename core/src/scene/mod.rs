@@ -313,10 +313,10 @@ impl SceneChains {
                             vertex_data,
                             pose_error,
                             target_errors,
-                            // A baked LOD's UVs are its own atlas's.
-                            uv_error: match l.baked {
-                                Some(_) => None,
-                                None => crate::distance::uv_error(&m.mesh, lod, l.bound()),
+                            // A baked LOD's (or an impostor's) UVs are its own atlas's.
+                            uv_error: match (&l.baked, l.method) {
+                                (Some(_), _) | (_, crate::lod::Method::Impostor) => None,
+                                _ => crate::distance::uv_error(&m.mesh, lod, l.bound()),
                             },
                             area: lod.area(),
                         }
