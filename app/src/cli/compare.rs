@@ -23,7 +23,11 @@ pub struct CompareArgs {
     /// red, only B: green, elsewhere the colour difference ×4).
     #[arg(long, value_name = "DIR")]
     save_diff: Option<PathBuf>,
-    /// Replace difference images that exist in --save-diff's folder.
+    /// Write each view to DIR/viewK.png as A's render, B's and their
+    /// difference side by side.
+    #[arg(long, value_name = "DIR")]
+    save_views: Option<PathBuf>,
+    /// Replace images that exist in --save-diff's or --save-views' folder.
     #[arg(long)]
     force: bool,
     /// Print one JSON object.
@@ -40,7 +44,8 @@ fn diff_path(dir: &std::path::Path, i: usize) -> PathBuf {
 
 pub fn run(args: CompareArgs) -> Result<(), CliError> {
     let opts = args.input.load_options()?;
-    if let Some(dir) = &args.save_diff {
+    let folders = [&args.save_diff, &args.save_views];
+    for dir in folders.into_iter().flatten() {
         for i in 0..args.views as usize {
             check_output(&diff_path(dir, i), args.force)?;
         }
@@ -50,7 +55,7 @@ pub fn run(args: CompareArgs) -> Result<(), CliError> {
         Ok(Scene::from_model(&loaded.model))
     };
     let (a, b) = (scene(&args.a)?, scene(&args.b)?);
-    if let Some(dir) = &args.save_diff {
+    for dir in folders.into_iter().flatten() {
         std::fs::create_dir_all(dir)
             .map_err(|e| CliError::BadInput(format!("{}: cannot create: {e}", dir.display())))?;
     }
@@ -64,6 +69,14 @@ pub fn run(args: CompareArgs) -> Result<(), CliError> {
     if let Some(dir) = &args.save_diff {
         for (i, view) in views.iter().enumerate() {
             write_output(&diff_path(dir, i), &io::image::encode_png(&view.image))?;
+        }
+    }
+    if let Some(dir) = &args.save_views {
+        for (i, view) in views.iter().enumerate() {
+            write_output(
+                &diff_path(dir, i),
+                &io::image::encode_png(&view.side_by_side),
+            )?;
         }
     }
     let n = views.len() as f64;

@@ -35,6 +35,8 @@ pub struct ViewComparison {
     pub difference: Difference,
     /// Where they differ ([`visual::difference_image`]).
     pub image: Texture,
+    /// The two renders and their difference, side by side.
+    pub side_by_side: Texture,
 }
 
 /// Why an off-screen render did not give images.
@@ -181,12 +183,37 @@ impl Offscreen {
         Ok(cameras
             .iter()
             .zip(first.iter().zip(&second))
-            .map(|(camera, (x, y))| ViewComparison {
-                camera: *camera,
-                difference: visual::difference(x, y),
-                image: visual::difference_image(x, y),
+            .map(|(camera, (x, y))| {
+                let image = visual::difference_image(x, y);
+                ViewComparison {
+                    camera: *camera,
+                    difference: visual::difference(x, y),
+                    side_by_side: beside(&[&x.image, &y.image, &image]),
+                    image,
+                }
             })
             .collect())
+    }
+}
+
+/// Images of one height side by side, left to right.
+fn beside(images: &[&Texture]) -> Texture {
+    let height = images.iter().map(|t| t.height).max().unwrap_or(0);
+    let width = images.iter().map(|t| t.width).sum();
+    let mut rgba = Vec::with_capacity((width * height) as usize);
+    for y in 0..height {
+        for t in images {
+            let start = (y * t.width) as usize;
+            match t.rgba.get(start..start + t.width as usize) {
+                Some(row) => rgba.extend_from_slice(row),
+                None => rgba.extend(std::iter::repeat_n([0, 0, 0, 255], t.width as usize)),
+            }
+        }
+    }
+    Texture {
+        width,
+        height,
+        rgba,
     }
 }
 
