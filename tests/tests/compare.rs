@@ -141,15 +141,25 @@ fn difference_images_are_written_per_view() {
         "64",
         "--save-diff",
         &dir_arg,
+        "--save-views",
+        &format!("{dir_arg}-views"),
     ]);
     assert!(
         out.status.success(),
         "{}",
         String::from_utf8_lossy(&out.stderr)
     );
+    let size = |png: &[u8]| {
+        let word = |at: usize| u32::from_be_bytes(png[at..at + 4].try_into().unwrap());
+        (word(16), word(20))
+    };
     for i in 0..3 {
         let png = std::fs::read(dir.join(format!("view{i}.png"))).unwrap();
         assert_eq!(&png[1..4], b"PNG");
+        assert_eq!(size(&png), (64, 64));
+        // The two renders and the difference side by side.
+        let views = std::fs::read(tmp.path().join(format!("diff-views/view{i}.png"))).unwrap();
+        assert_eq!(size(&views), (3 * 64, 64));
     }
     assert!(!dir.join("view3.png").exists());
 }
