@@ -403,15 +403,24 @@ fn the_truck_chain_is_drawn_textured_row_by_row() {
     wait_while(&mut harness, "loading", StudioApp::is_loading);
     harness.run();
     let original = colourful(&viewport_image(&mut harness, "truck-chain-original"));
-    let recipe = Recipe::new(parse_lods("simplify:0.5%,simplify:2%,amg:15%", None).unwrap());
+    let recipe =
+        Recipe::new(parse_lods("simplify:0.5%,impostor:8px,simplify:2%,amg:15%", None).unwrap());
     harness.state_mut().set_chain_recipe(recipe);
     // A method's result too: its live cut is not what a chain row shows.
     harness.state_mut().build();
     wait_while(&mut harness, "building", StudioApp::is_building);
     assert!(harness.query_by_label("cut triangles").is_some());
     built_chain(&mut harness);
-    for row in [0, 1] {
-        harness.get_by_label(&format!("{row}: LOD{row}")).click();
+    // The impostor's cards are drawn textured like the rows.
+    let lods = &harness.state().built_chain().unwrap().chain.lods;
+    assert_eq!(lods.len(), 4);
+    let impostor = lods.iter().position(|l| l.method == Method::Impostor);
+    let impostor = impostor.expect("an impostor LOD");
+    // Buttons say "recipe row: LOD" (the first two rows are in view).
+    for (recipe_row, row) in [(0, 0), (1, impostor)] {
+        harness
+            .get_by_label(&format!("{recipe_row}: LOD{row}"))
+            .click();
         harness.run();
         let lod = harness.state().built_chain().unwrap().chain.lods[row]
             .set
