@@ -106,17 +106,8 @@ pub struct ExportArgs {
     /// (as simplify's).
     #[arg(long, value_name = "WEIGHTS", value_parser = AttributeWeights::parse)]
     attribute_weights: Option<AttributeWeights>,
-    /// Every LOD but the source gets its own texture, baked from the model
-    /// (edge-collapse rows then cross every UV seam). Without it, a textured
-    /// model's edge-collapse rows bake when seams keep them short of their budget.
-    #[arg(long)]
-    bake: bool,
-    /// No LOD bakes, even when seams keep it short of its budget.
-    #[arg(long, conflicts_with = "bake")]
-    no_bake: bool,
-    /// The baked textures' side in texels (default 1024).
-    #[arg(long, value_name = "N", conflicts_with = "no_bake")]
-    texture_size: Option<u32>,
+    #[command(flatten)]
+    bake: BakeArgs,
     /// Hybrid: points per triangle's rendering time (κ).
     #[arg(long)]
     kappa: Option<f32>,
@@ -240,12 +231,8 @@ fn recipe_of(args: &ExportArgs) -> Result<Recipe, CliError> {
         || args.post.post_triangles.is_some();
     for row in &mut rows {
         if row.tolerance != lodstudio_core::recipe::RowTolerance::Source {
-            row.bake = match (args.bake, args.no_bake) {
-                (true, _) => Some(true),
-                (_, true) => Some(false),
-                _ => None,
-            };
-            row.texture = args.texture_size;
+            row.bake = args.bake.choice();
+            row.texture = args.bake.texture_size;
         }
         match row.method {
             Method::EdgeCollapse => {

@@ -206,6 +206,41 @@ impl PostArgs {
 }
 
 /// How results are reported and written.
+/// Baked textures (`core::bake`): always, never, or (neither flag) where
+/// seams keep a textured model's LOD short of its triangle budget.
+#[derive(Args, Debug)]
+pub struct BakeArgs {
+    /// Give each LOD (but a source row) its own texture: a new UV atlas, the
+    /// original's base colour and a normal map of its shading transferred
+    /// onto it (GLB output); part, UV and colour seams then stop nothing.
+    /// Without it, a textured model's LOD bakes where its seams keep it
+    /// short of its triangle budget.
+    #[arg(long)]
+    pub bake: bool,
+    /// Never bake, even where seams keep a textured model short of its budget.
+    #[arg(long, conflicts_with = "bake")]
+    pub no_bake: bool,
+    /// The baked textures' side in texels (default 1024).
+    #[arg(long, value_name = "N", conflicts_with = "no_bake")]
+    pub texture_size: Option<u32>,
+}
+
+impl BakeArgs {
+    /// A row's `bake`: always, never, or `None` (when short of its budget).
+    pub fn choice(&self) -> Option<bool> {
+        match (self.bake, self.no_bake) {
+            (true, _) => Some(true),
+            (_, true) => Some(false),
+            _ => None,
+        }
+    }
+
+    pub fn texture_size(&self) -> u32 {
+        self.texture_size
+            .unwrap_or(lodstudio_core::bake::DEFAULT_TEXTURE_SIZE)
+    }
+}
+
 #[derive(Args, Debug)]
 pub struct ReportArgs {
     /// Overwrite output files that exist.

@@ -40,23 +40,8 @@ pub struct SimplifyArgs {
     /// order is geometric). The certified bound stays geometric.
     #[arg(long, value_name = "WEIGHTS", value_parser = AttributeWeights::parse)]
     attribute_weights: Option<AttributeWeights>,
-    /// Give the result its own texture: a new UV atlas, the original's
-    /// base colour and a normal map of its shading transferred onto it (GLB
-    /// output). Part, UV and colour seams then stop nothing. Without it, a
-    /// textured model's GLB bakes when its seams keep it short of the count.
-    #[arg(long)]
-    bake: bool,
-    /// Never bake, even when seams keep a textured model short of the count.
-    #[arg(long, conflicts_with = "bake")]
-    no_bake: bool,
-    /// The baked texture's side in texels.
-    #[arg(
-        long,
-        value_name = "N",
-        default_value_t = 1024,
-        conflicts_with = "no_bake"
-    )]
-    texture_size: u32,
+    #[command(flatten)]
+    bake: BakeArgs,
     #[command(flatten)]
     report: ReportArgs,
     /// Also save the progressive collapse, from the input down to this run's
@@ -112,7 +97,7 @@ pub fn run(args: SimplifyArgs) -> Result<(), CliError> {
         min_quality: args.min_quality,
         uv_tolerance: args.uv_tolerance,
         // A baked result wears a new atlas: the old one's seams stop nothing.
-        free_seams: args.bake,
+        free_seams: args.bake.bake,
         attribute_weights: args.attribute_weights.unwrap_or_default(),
         ..Default::default()
     };
@@ -121,17 +106,18 @@ pub fn run(args: SimplifyArgs) -> Result<(), CliError> {
         .output
         .extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("glb"));
-    if args.bake && !glb {
+    if args.bake.bake && !glb {
         return Err(CliError::BadInput(
             "--bake writes a texture: give a .glb output".into(),
         ));
     }
-    if !lodstudio_core::bake::TEXTURE_SIZE_RANGE.contains(&args.texture_size) {
+    let texture_size = args.bake.texture_size();
+    if !lodstudio_core::bake::TEXTURE_SIZE_RANGE.contains(&texture_size) {
         return Err(CliError::BadInput(format!(
             "--texture-size must be in {}..={}, got {}",
             lodstudio_core::bake::TEXTURE_SIZE_RANGE.start(),
             lodstudio_core::bake::TEXTURE_SIZE_RANGE.end(),
-            args.texture_size
+            texture_size
         )));
     }
     args.save.check(args.report.force)?;
@@ -153,8 +139,7 @@ pub fn run(args: SimplifyArgs) -> Result<(), CliError> {
     let mut result = run(&opts)?;
     // Seams keep a textured model short of its count: again free of them,
     // with a texture of its own.
-    let automatic = !args.bake
-        && !args.no_bake
+    let automatic = args.bake.choice().is_none()
         && !args.keep_seams
         && glb
         && lodstudio_core::bake::short_of_seams(&mesh, result.unmet.as_ref());
@@ -164,9 +149,9 @@ pub fn run(args: SimplifyArgs) -> Result<(), CliError> {
         result = run(&free)?;
     }
     let seconds = start.elapsed().as_secs_f64();
-    let baked = match args.bake || automatic {
+    let baked = match args.bake.bake || automatic {
         true => {
-            let b = lodstudio_core::bake::bake(&mesh, &result.mesh, args.texture_size)
+            let b = lodstudio_core::bake::bake(&mesh, &result.mesh, texture_size)
                 .map_err(CliError::Failure)?;
             Some(lodstudio_core::bake::Baked {
                 report: lodstudio_core::bake::BakeReport {
