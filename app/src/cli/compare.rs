@@ -82,6 +82,7 @@ pub fn run(args: CompareArgs) -> Result<(), CliError> {
     let n = views.len() as f64;
     let silhouette = views.iter().map(|v| v.difference.silhouette).sum::<f64>() / n;
     let psnr = views.iter().map(|v| v.difference.psnr).sum::<f64>() / n;
+    let wrong = views.iter().map(|v| v.difference.wrong_colour).sum::<f64>() / n;
     if args.json {
         let per_view: Vec<_> = views
             .iter()
@@ -91,6 +92,7 @@ pub fn run(args: CompareArgs) -> Result<(), CliError> {
                     "view": i,
                     "silhouette_difference": v.difference.silhouette,
                     "psnr": v.difference.psnr,
+                    "wrong_colour": v.difference.wrong_colour,
                 })
             })
             .collect();
@@ -100,6 +102,7 @@ pub fn run(args: CompareArgs) -> Result<(), CliError> {
                 "views": per_view,
                 "silhouette_difference": silhouette,
                 "psnr": psnr,
+                "wrong_colour": wrong,
                 "size": args.size,
                 "seconds": start.elapsed().as_secs_f64(),
             })

@@ -36,7 +36,18 @@ pub struct Difference {
     pub silhouette: f64,
     /// Of the shaded RGB images, in dB, capped at [`PSNR_CAP_DB`].
     pub psnr: f64,
+    /// Of the pixels both cover, the fraction that shows another colour
+    /// ([`wrong_colour`]): a texture bled across a seam, a chart stretched.
+    pub wrong_colour: f64,
 }
+
+/// A chromaticity difference (each channel's share of r + g + b) past which
+/// a pixel shows another colour, not the same colour shaded differently
+/// (shading scales all three channels, which leaves their shares alone).
+pub const WRONG_COLOUR: f32 = 0.08;
+
+/// Pixels darker than this sum of channels have no reliable hue.
+const DARK: u32 = 60;
 
 /// Both measures of `a` against `b`.
 ///
@@ -46,6 +57,37 @@ pub fn difference(a: &Render, b: &Render) -> Difference {
     Difference {
         silhouette: silhouette_difference(a, b),
         psnr: psnr(&a.image, &b.image),
+        wrong_colour: wrong_colour(a, b),
+    }
+}
+
+/// Of the pixels both `a` and `b` cover and show bright enough to have a
+/// hue, the fraction whose chromaticities differ by more than
+/// [`WRONG_COLOUR`] (0 where they share none).
+///
+/// # Panics
+/// If the renders differ in size.
+pub fn wrong_colour(a: &Render, b: &Render) -> f64 {
+    assert_eq!(a.coverage.len(), b.coverage.len(), "renders of one size");
+    let (mut both, mut wrong) = (0usize, 0usize);
+    for ((p, q), (x, y)) in a
+        .image
+        .rgba
+        .iter()
+        .zip(&b.image.rgba)
+        .zip(a.coverage.iter().zip(&b.coverage))
+    {
+        let sum = |p: &[u8; 4]| p[..3].iter().map(|&c| u32::from(c)).sum::<u32>();
+        if *x && *y && sum(p) >= DARK && sum(q) >= DARK {
+            both += 1;
+            let share = |p: &[u8; 4], c: usize| f32::from(p[c]) / sum(p) as f32;
+            wrong += usize::from((0..3).any(|c| (share(p, c) - share(q, c)).abs() > WRONG_COLOUR));
+        }
+    }
+    if both == 0 {
+        0.0
+    } else {
+        wrong as f64 / both as f64
     }
 }
 
@@ -148,6 +190,28 @@ mod tests {
             },
             coverage,
         }
+    }
+
+    /// The same square shaded darker shows no other colour; a quarter of
+    /// it bled blue does, and only pixels both cover count.
+    #[test]
+    fn another_colour_is_not_the_same_colour_shaded() {
+        let a = square(16, 8, 4, 12);
+        let mut shaded = a.clone();
+        for p in shaded.image.rgba.iter_mut() {
+            *p = [p[0] / 2 + 1, p[1] / 2, p[2] / 2, 255];
+        }
+        assert!(wrong_colour(&a, &shaded) < 1e-9);
+        let mut bled = a.clone();
+        for (i, p) in bled.image.rgba.iter_mut().enumerate() {
+            if (4..6).contains(&(i % 16)) {
+                *p = [60, 90, 200, 255];
+            }
+        }
+        assert_eq!(wrong_colour(&a, &bled), 0.25);
+        let wider = square(16, 8, 0, 16);
+        assert_eq!(wrong_colour(&a, &wider), 0.0, "only where both cover");
+        assert_eq!(difference(&a, &bled).wrong_colour, 0.25);
     }
 
     #[test]

@@ -61,6 +61,7 @@ pub(super) fn measure(
             around: Difference {
                 silhouette: mean(|d| d.silhouette),
                 psnr: mean(|d| d.psnr),
+                wrong_colour: mean(|d| d.wrong_colour),
             },
             image: views[0].image.clone(),
         });
