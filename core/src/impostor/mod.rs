@@ -291,7 +291,7 @@ pub fn build(original: &TriMesh, opts: &ImpostorOptions) -> Result<Impostor, Str
             .min(glam::UVec2::splat(atlas - 1));
         color[(p.y * atlas + p.x) as usize][3] >= 128
     };
-    let silhouette_error = silhouette_error(original, &mesh, &coverage, center, radius);
+    let silhouette_error = silhouette_error(&caster, &mesh, &coverage, center, radius);
     Ok(Impostor {
         mesh,
         report: ImpostorReport {
@@ -347,13 +347,13 @@ impl Hierarchy for ImpostorCards {
 /// spiral, none of them a frame's), plus half a pixel: the masks' two-sided
 /// Hausdorff distance.
 fn silhouette_error(
-    original: &TriMesh,
+    original: &RayCaster,
     cards: &TriMesh,
     covered: &(dyn Fn(Vec2) -> bool + Sync),
     center: Vec3,
     radius: f32,
 ) -> f32 {
-    let (a, b) = (RayCaster::new(original), RayCaster::new(cards));
+    let (a, b) = (original, RayCaster::new(cards));
     let uvs = cards.uvs.as_deref().unwrap_or_default();
     // The first card texel the ray meets that the atlas covers.
     let through_cards = |mut origin: Vec3, dir: Vec3| {
