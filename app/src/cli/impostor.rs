@@ -43,7 +43,11 @@ pub fn run(args: ImpostorArgs) -> Result<(), CliError> {
         views: args.views,
         texture: args.texture_size,
     };
-    let built = impostor::build(&mesh, &opts).map_err(CliError::BadInput)?;
+    let built =
+        impostor::build(&mesh, &opts, &lodstudio_core::Progress::new()).map_err(|e| match e {
+            lodstudio_core::lod::BuildError::Cancelled => CliError::Failure(e.to_string()),
+            e => CliError::BadInput(e.to_string()),
+        })?;
     write_mesh(&args.output, &built.mesh)?;
     let diag = mesh.bounds().diagonal();
     let r = &built.report;

@@ -30,7 +30,8 @@ use crate::geom::normals::ShadingNormals;
 use crate::geom::{AlphaMode, Image, Material, Materials, TriMesh, VertexAttributes};
 use crate::io::base_color::SurfaceColor;
 use crate::io::image::{encode_png, encode_srgb};
-use crate::lod::{BoundKind, DrawSet, Hierarchy, Method, Texture};
+use crate::lod::{BoundKind, BuildError, DrawSet, Hierarchy, Method, Texture};
+use crate::progress::Progress;
 use crate::view::{Tolerance, View};
 
 /// Frames per side of the octahedral map.
@@ -148,17 +149,24 @@ impl Frame {
 /// sphere's front, 1 at its back), `None` where the ray misses.
 type Texel = Option<(Vec3, Vec3, f32)>;
 
-/// Builds the impostor of `original`.
+/// Builds the impostor of `original`, its frames' share done in
+/// `progress`, which may cancel it.
 ///
 /// # Errors
-/// A message when an option is out of range or the mesh is empty or flat.
-pub fn build(original: &TriMesh, opts: &ImpostorOptions) -> Result<Impostor, String> {
+/// An option out of range, a mesh empty or flat, or the build cancelled.
+pub fn build(
+    original: &TriMesh,
+    opts: &ImpostorOptions,
+    progress: &Progress,
+) -> Result<Impostor, BuildError> {
     let start = std::time::Instant::now();
-    opts.validate().map_err(|e| e.to_string())?;
+    opts.validate()?;
     let bounds = original.bounds();
     let radius = 0.5 * bounds.diagonal();
     if original.triangles.is_empty() || !(radius.is_finite() && radius > 0.0) {
-        return Err("an impostor needs a mesh with triangles and an extent".into());
+        return Err(BuildError::BadInput(
+            "an impostor needs a mesh with triangles and an extent".into(),
+        ));
     }
     let center = bounds.center();
     let (n, side) = (opts.views, opts.texture / opts.views);
@@ -167,9 +175,16 @@ pub fn build(original: &TriMesh, opts: &ImpostorOptions) -> Result<Impostor, Str
     let caster = RayCaster::new(original);
     let surface = SurfaceColor::new(original);
     let shading = ShadingNormals::new(original);
+    progress.stage("rendering the frames");
+    let done = std::sync::atomic::AtomicU32::new(0);
     let frames: Vec<Vec<Texel>> = (0..n * n)
         .into_par_iter()
         .map(|k| {
+            if progress.is_cancelled() {
+                return Vec::new();
+            }
+            let d = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
+            progress.set_fraction(d as f32 / (n * n) as f32);
             let f = Frame::of_cell(k % n, k / n, n);
             (0..side * side)
                 .map(|p| {
@@ -191,6 +206,7 @@ pub fn build(original: &TriMesh, opts: &ImpostorOptions) -> Result<Impostor, Str
                 .collect()
         })
         .collect();
+    progress.check()?;
     let atlas = side * n;
     let mut color = vec![[0u8; 4]; (atlas * atlas) as usize];
     let mut normal = vec![[128u8, 128, 255, 255]; (atlas * atlas) as usize];
@@ -285,6 +301,7 @@ pub fn build(original: &TriMesh, opts: &ImpostorOptions) -> Result<Impostor, Str
     }));
 
     // 3. Silhouette error.
+    progress.stage("measuring the silhouette");
     let coverage = |at: Vec2| {
         let p = (at * atlas as f32)
             .as_uvec2()
@@ -313,8 +330,12 @@ pub struct ImpostorCards {
 }
 
 impl ImpostorCards {
-    pub fn build(mesh: &TriMesh, opts: &ImpostorOptions) -> Result<ImpostorCards, String> {
-        let imp = build(mesh, opts)?;
+    pub fn build(
+        mesh: &TriMesh,
+        opts: &ImpostorOptions,
+        progress: &Progress,
+    ) -> Result<ImpostorCards, BuildError> {
+        let imp = build(mesh, opts, progress)?;
         Ok(ImpostorCards {
             set: DrawSet {
                 mesh: imp.mesh,
@@ -477,21 +498,16 @@ mod tests {
         assert_eq!(mask_hausdorff(&square(3), &square(7), side), 4.0);
     }
 
-    /// A torus's impostor: its cards face their frames, its silhouette
-    /// error is measured within a few pixels of the masks, and a card seen
-    /// head-on shows the torus's hole (covered texels around an empty
-    /// centre).
+    /// A torus's impostor: one card (two triangles) per chosen frame, a
+    /// silhouette error measured above zero and under half the bounding
+    /// sphere's radius; bad options and an empty mesh are refused, and a
+    /// cancelled build stops.
     #[test]
     fn a_torus_impostor_covers_its_silhouette() {
         let torus = crate::builtins::torus(1.0, 0.35, 48, 24);
-        let imp = build(
-            &torus,
-            &ImpostorOptions {
-                views: 4,
-                texture: 256,
-            },
-        )
-        .unwrap();
+        let p = Progress::new();
+        let opts = |views, texture| ImpostorOptions { views, texture };
+        let imp = build(&torus, &opts(4, 256), &p).unwrap();
         let r = &imp.report;
         assert_eq!((r.views, r.frame), (4, 64));
         assert!(r.cards >= 6 && imp.mesh.triangles.len() == 2 * r.cards);
@@ -500,26 +516,12 @@ mod tests {
             r.silhouette_error > 0.0 && r.silhouette_error < 0.5 * radius,
             "{r:?} against {radius}"
         );
-        assert!(
-            build(
-                &torus,
-                &ImpostorOptions {
-                    views: 1,
-                    texture: 256
-                }
-            )
-            .is_err()
-        );
-        assert!(
-            build(
-                &torus,
-                &ImpostorOptions {
-                    views: 32,
-                    texture: 256
-                }
-            )
-            .is_err()
-        );
-        assert!(build(&TriMesh::default(), &ImpostorOptions::default()).is_err());
+        assert!(build(&torus, &opts(1, 256), &p).is_err());
+        assert!(build(&torus, &opts(32, 256), &p).is_err());
+        assert!(build(&TriMesh::default(), &ImpostorOptions::default(), &p).is_err());
+        let cancelled = Progress::new();
+        cancelled.cancel();
+        let e = build(&torus, &ImpostorOptions::default(), &cancelled).err();
+        assert_eq!(e, Some(BuildError::Cancelled));
     }
 }

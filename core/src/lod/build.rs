@@ -167,11 +167,11 @@ pub fn build<'a>(
             let mrg = hybrid::build(mesh_of(input).ok_or_else(refused)?, p, progress)?;
             Box::new(HybridCut::new(Arc::new(mrg)))
         }
-        Params::Impostor(p) => {
-            progress.stage("rendering the frames");
-            let mesh = mesh_of(input).ok_or_else(refused)?;
-            Box::new(ImpostorCards::build(mesh, p).map_err(BuildError::BadInput)?)
-        }
+        Params::Impostor(p) => Box::new(ImpostorCards::build(
+            mesh_of(input).ok_or_else(refused)?,
+            p,
+            progress,
+        )?),
         Params::MergeTree(p) => {
             let tree = mergetree::build(mesh_of(input).ok_or_else(refused)?, p, progress)?;
             Box::new(MergeTreeView::new(Arc::new(tree), Default::default()))
