@@ -12,7 +12,7 @@ use lodstudio_core::io::Model;
 use lodstudio_core::lod::{DrawSet, Layer};
 
 use super::camera::Sphere;
-use super::texture::decoded;
+use super::texture::{decoded, white};
 
 /// Surface colour of meshes without vertex colours (linear RGB).
 const CLAY: Vec3 = Vec3::new(0.62, 0.56, 0.50);
@@ -204,10 +204,13 @@ impl Scene {
             let m = material(f).filter(|m| m.vertex_attributes.uvs)?;
             uvs.filter(|_| triangle_colors.is_none())?;
             let normal_map = m.normal_texture.as_ref().filter(|_| tangents.is_some());
-            Some((
-                decoded(m.base_color_texture.as_ref()?)?,
-                normal_map.and_then(|(image, _)| decoded(image)),
-            ))
+            let normal_map = normal_map.and_then(|(image, _)| decoded(image));
+            // A normal map on a plain colour still bends the light.
+            let base = match &m.base_color_texture {
+                Some(image) => decoded(image)?,
+                None => normal_map.as_ref().map(|_| white())?,
+            };
+            Some((base, normal_map))
         };
         let same_image = |a: &Option<Arc<Atlas>>, b: &Option<Arc<Atlas>>| match (a, b) {
             (Some(a), Some(b)) => Arc::ptr_eq(a, b),
@@ -860,6 +863,19 @@ mod tests {
         };
         assert!(normal_map.is_some());
         assert!(vertices.iter().all(|v| v.tangent[3].abs() == 1.0));
+        // A normal map on a plain colour is drawn too, on one white texel.
+        mapped.materials.as_mut().unwrap().table[0].base_color_texture = None;
+        let [
+            Geometry::Textured {
+                texture,
+                normal_map,
+                ..
+            },
+        ] = &Scene::from_mesh(&mapped).parts[..]
+        else {
+            panic!("one normal-mapped part");
+        };
+        assert!(normal_map.is_some() && texture.rgba == [[255; 4]]);
         // A second, untextured part draws in its base colour; an image that
         // does not decode leaves its material's base colour alone.
         mesh.parts = Some(vec![0, 1]);

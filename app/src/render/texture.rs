@@ -2,7 +2,7 @@
 //! of a model shares its materials' bytes, so live cuts and previews reuse
 //! the decoded texels (and the GPU side the uploaded texture).
 
-use std::sync::{Arc, Mutex, Weak};
+use std::sync::{Arc, Mutex, OnceLock, Weak};
 
 use lodstudio_core::geom::Image;
 
@@ -38,4 +38,20 @@ pub(super) fn decoded(image: &Image) -> Option<Arc<Atlas>> {
         });
     cache.push((Arc::downgrade(&image.bytes), texels.clone()));
     texels
+}
+
+/// One white texel: the base-colour texture of a material that has a
+/// normal map and none of its own (the factor and vertex colours then
+/// give its colour alone).
+pub(super) fn white() -> Arc<Atlas> {
+    static WHITE: OnceLock<Arc<Atlas>> = OnceLock::new();
+    WHITE
+        .get_or_init(|| {
+            Arc::new(Atlas {
+                width: 1,
+                height: 1,
+                rgba: vec![[255; 4]],
+            })
+        })
+        .clone()
 }
