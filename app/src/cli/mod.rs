@@ -214,13 +214,15 @@ pub struct BakeArgs {
     /// original's base colour and a normal map of its shading transferred
     /// onto it (GLB output); part, UV and colour seams then stop nothing.
     /// Without it, a textured model's LOD bakes where its seams keep it
-    /// short of its triangle budget.
+    /// short of its triangle budget, or where at a triangle count it
+    /// measures closer to the model baked (`baked.measured`).
     #[arg(long)]
     pub bake: bool,
     /// Never bake, even where seams keep a textured model short of its budget.
     #[arg(long, conflicts_with = "bake")]
     pub no_bake: bool,
-    /// The baked textures' side in texels (default 1024).
+    /// The baked textures' side in texels (default: the model's texels per
+    /// triangle kept, 1024 to 4096).
     #[arg(long, value_name = "N", conflicts_with = "no_bake")]
     pub texture_size: Option<u32>,
 }
@@ -235,9 +237,10 @@ impl BakeArgs {
         }
     }
 
-    pub fn texture_size(&self) -> u32 {
+    /// The side a LOD of `original` with `triangles` bakes at.
+    pub fn texture_size(&self, original: &lodstudio_core::TriMesh, triangles: usize) -> u32 {
         self.texture_size
-            .unwrap_or(lodstudio_core::bake::DEFAULT_TEXTURE_SIZE)
+            .unwrap_or_else(|| lodstudio_core::bake::default_size(original, triangles))
     }
 }
 

@@ -111,13 +111,13 @@ pub fn run(args: SimplifyArgs) -> Result<(), CliError> {
             "--bake writes a texture: give a .glb output".into(),
         ));
     }
-    let texture_size = args.bake.texture_size();
-    if !lodstudio_core::bake::TEXTURE_SIZE_RANGE.contains(&texture_size) {
+    if let Some(size) = args.bake.texture_size
+        && !lodstudio_core::bake::TEXTURE_SIZE_RANGE.contains(&size)
+    {
         return Err(CliError::BadInput(format!(
-            "--texture-size must be in {}..={}, got {}",
+            "--texture-size must be in {}..={}, got {size}",
             lodstudio_core::bake::TEXTURE_SIZE_RANGE.start(),
             lodstudio_core::bake::TEXTURE_SIZE_RANGE.end(),
-            texture_size
         )));
     }
     args.save.check(args.report.force)?;
@@ -137,32 +137,39 @@ pub fn run(args: SimplifyArgs) -> Result<(), CliError> {
         })
     };
     let mut result = run(&opts)?;
-    // Seams keep a textured model short of its count: again free of them,
-    // with a texture of its own.
-    let automatic = args.bake.choice().is_none()
-        && !args.keep_seams
-        && glb
-        && lodstudio_core::bake::short_of_seams(&mesh, result.unmet.as_ref());
-    if automatic {
+    // Neither --bake nor --no-bake: a textured model's LOD bakes where its
+    // seams keep it short of its count or where baked it measures closer
+    // to the original (`bake::choice`).
+    let mut automatic = false;
+    let mut baked = None;
+    if args.bake.bake {
+        baked = Some(
+            lodstudio_core::bake::bake(
+                &mesh,
+                &result.mesh,
+                args.bake.texture_size(&mesh, result.mesh.triangles.len()),
+            )
+            .map_err(CliError::Failure)?,
+        );
+    } else if args.bake.choice().is_none() && !args.keep_seams && glb {
         let mut free = opts;
         free.collapse.free_seams = true;
-        result = run(&free)?;
+        if let Some((free, b)) = lodstudio_core::bake::bake_unasked(
+            &mesh,
+            &result.mesh,
+            lodstudio_core::bake::Asked {
+                unmet: result.unmet.as_ref(),
+                count: args.error.is_none(),
+                size: args.bake.texture_size,
+            },
+            || run(&free),
+            |r| &r.mesh,
+            CliError::Failure,
+        )? {
+            (result, baked, automatic) = (free, Some(b), true);
+        }
     }
     let seconds = start.elapsed().as_secs_f64();
-    let baked = match args.bake.bake || automatic {
-        true => {
-            let b = lodstudio_core::bake::bake(&mesh, &result.mesh, texture_size)
-                .map_err(CliError::Failure)?;
-            Some(lodstudio_core::bake::Baked {
-                report: lodstudio_core::bake::BakeReport {
-                    automatic,
-                    ..b.report
-                },
-                ..b
-            })
-        }
-        false => None,
-    };
     write_mesh(
         &args.output,
         baked.as_ref().map_or(&result.mesh, |b| &b.mesh),

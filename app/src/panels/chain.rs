@@ -2,7 +2,7 @@
 //! parameters; add, remove, reorder, duplicate) beside what each built, and
 //! "Auto chain". What the controls set is `settings::chain`.
 
-use lodstudio_core::bake::TEXTURE_SIZE_RANGE;
+use lodstudio_core::bake::{DEFAULT_TEXTURE_SIZE, TEXTURE_SIZE_RANGE};
 use lodstudio_core::hybrid::{KAPPA_RANGE, TAU_RANGE};
 use lodstudio_core::recipe::{Row, RowTolerance};
 use lodstudio_core::voxel::RESOLUTION_RANGE;
@@ -337,8 +337,14 @@ const BAKE_HINT: &str = "Give this LOD its own texture: a new UV atlas with the 
     onto it. Its seams then stop nothing, so a textured model reaches any triangle budget; \
     one material, one primitive.";
 
-const SHORT_HINT: &str = "Unchecked, a textured model's row whose seams keep it short of its \
-    triangle budget stops there; checked, it bakes its own texture and reaches the budget.";
+const SHORT_HINT: &str = "Checked, a textured model's row bakes its own texture where its \
+    seams keep it short of its triangle budget, or where baked it measures closer to the model \
+    (colour and shading, compared at points of both candidates); unchecked, it keeps the \
+    model's atlas and stops where its seams do.";
+
+const TEXTURE_HINT: &str = "The baked texture's side. auto: the model's texels per triangle \
+    kept (its textures' texels × the share of its triangles this LOD keeps), 1024 to 4096 px; \
+    drag to set one.";
 
 /// Whether the row bakes its own texture (always, when short of its budget,
 /// or never), and at what size (not a source row).
@@ -352,7 +358,7 @@ fn bake_ui(ui: &mut egui::Ui, row: &mut Row) {
         .on_hover_text(BAKE_HINT);
     let mut when_short = row.bake.is_none();
     if !always {
-        ui.checkbox(&mut when_short, "…or when seams keep it short")
+        ui.checkbox(&mut when_short, "…or where that helps")
             .on_hover_text(SHORT_HINT);
     }
     row.bake = match (always, when_short) {
@@ -362,14 +368,20 @@ fn bake_ui(ui: &mut egui::Ui, row: &mut Row) {
     };
     row.texture = match row.bake != Some(false) {
         true => {
-            let mut size = row.texture_size();
+            // Unset, the bake picks the model's texels per triangle kept.
+            let auto = row.texture.is_none();
+            let mut size = row.texture.unwrap_or(DEFAULT_TEXTURE_SIZE);
             let changed = ui
                 .add(
                     egui::DragValue::new(&mut size)
                         .range(TEXTURE_SIZE_RANGE)
                         .prefix("texture ")
-                        .suffix(" px"),
+                        .custom_formatter(move |n, _| match auto {
+                            true => "auto".into(),
+                            false => format!("{n} px"),
+                        }),
                 )
+                .on_hover_text(TEXTURE_HINT)
                 .changed();
             // A row that may bake says its size once it bakes or is given one.
             (row.bakes() || changed || row.texture.is_some()).then_some(size)

@@ -12,32 +12,67 @@
 //!    pipeline), `padding` empty texels around each chart.
 //! 2. **Transfer**: every texel whose centre lies in a LOD triangle's UV
 //!    image is the LOD surface point there; the original's nearest surface
-//!    point (the BVH of `distance`) gives the colour it shows
-//!    (`io::base_color`: factor × texture × vertex colour) and its shading
-//!    normal, written in the LOD's tangent frame there (MikkTSpace,
-//!    `geom::tangents`, as glTF clients rebuild it): a normal map that
-//!    gives the LOD the original's shading detail, creases included. The
-//!    LOD is within its certified bound of the original, so that point is
-//!    at most the bound away. (An original's own normal map is not looked
-//!    up: its interpolated vertex normals are what is transferred.)
+//!    point (the BVH of `distance`) gives what it shows (`io::appearance`):
+//!    its colour (factor × texture × vertex colour) and its shading normal
+//!    (its own normal map's included), written in the LOD's tangent frame
+//!    there (MikkTSpace, `geom::tangents`, as glTF clients rebuild it): a
+//!    normal map that gives the LOD the original's shading detail, creases
+//!    and normal-mapped relief included. The LOD is within its certified
+//!    bound of the original, so that point is at most the bound away.
 //! 3. **Dilate**: `padding` rings of empty texels around the charts take
 //!    their covered neighbours' mean, so bilinear filtering and mip levels
 //!    never fetch the empty background at a chart's edge.
 //! 4. **Encode**: PNGs, the LOD's only material's base-colour (sRGB) and
 //!    normal (linear) textures.
 
+pub mod choice;
+
+pub use choice::{Asked, Measured, bake_unasked, short_of_seams};
+
 use glam::{Vec2, Vec3, Vec4};
 use rayon::prelude::*;
 
-use crate::distance::{MeshDistance, barycentric};
-use crate::geom::normals::ShadingNormals;
+use crate::distance::{MeshDistance, barycentric, closest_point_on_triangle};
+use crate::geom::tangents::TangentFrame;
 use crate::geom::{Image, Material, Materials, TriMesh, VertexAttributes, Wedges};
-use crate::io::base_color::SurfaceColor;
+use crate::io::appearance::Appearance;
 use crate::io::image::{encode_png, encode_srgb};
-use crate::lod::{Blocker, Texture, Unmet};
+use crate::lod::Texture;
 
-/// A baked texture's side where none is given, in texels.
+/// A baked texture's least side where none is given, in texels (and an
+/// impostor's side).
 pub const DEFAULT_TEXTURE_SIZE: u32 = 1024;
+
+/// A baked texture's largest side where none is given, in texels.
+const LARGEST_DEFAULT_SIZE: u32 = 4096;
+
+/// The baked texture's side for a LOD of `original` with `triangles`
+/// where none is given: the original's texels per triangle, kept (its
+/// distinct textures' texels × the share of its triangles the LOD keeps),
+/// the side rounded up to a power of two, within 1024..=4096. At half the
+/// truck's triangles that is its own 2048² (1,024² renders 1.2 dB further
+/// from it, BENCHMARKS.md); far LODs and lightly textured models get 1024².
+pub fn default_size(original: &TriMesh, triangles: usize) -> u32 {
+    let mut seen: Vec<&std::sync::Arc<[u8]>> = Vec::new();
+    let mut texels = 0.0f64;
+    for m in original.materials.iter().flat_map(|m| &m.table) {
+        let maps = [
+            m.base_color_texture.as_ref(),
+            m.normal_texture.as_ref().map(|n| &n.0),
+        ];
+        for image in maps.into_iter().flatten() {
+            if seen.iter().any(|s| std::sync::Arc::ptr_eq(s, &image.bytes)) {
+                continue;
+            }
+            seen.push(&image.bytes);
+            texels += image.size().map_or(0.0, |(w, h)| w as f64 * h as f64);
+        }
+    }
+    let share = triangles as f64 / original.triangles.len().max(1) as f64;
+    let side = (texels * share.min(1.0)).sqrt().ceil() as u32;
+    side.next_power_of_two()
+        .clamp(DEFAULT_TEXTURE_SIZE, LARGEST_DEFAULT_SIZE)
+}
 
 /// The baked texture's side's range, in texels.
 pub const TEXTURE_SIZE_RANGE: std::ops::RangeInclusive<u32> = 64..=8192;
@@ -55,22 +90,12 @@ pub struct BakeReport {
     /// Texels whose centre lies in a chart (transferred), of the texture.
     pub covered: f64,
     pub seconds: f64,
-    /// Baked unasked: seams kept the LOD short of its triangle budget
-    /// ([`short_of_seams`]).
+    /// Baked unasked ([`choice`]): seams kept the LOD short of its
+    /// triangle budget, or it measured closer to the original baked.
     pub automatic: bool,
-}
-
-/// Whether a LOD of `original` is short of its triangle budget because its
-/// seams stay (`unmet`'s most common rule) and a baked texture of its own
-/// would free them: the original is textured. Such LODs are baked unasked
-/// (issue 50: "automatic when the budget cannot be met within the UV
-/// tolerance").
-pub fn short_of_seams(original: &TriMesh, unmet: Option<&Unmet>) -> bool {
-    let textured = original
-        .materials
-        .as_ref()
-        .is_some_and(|m| m.table.iter().any(|m| m.base_color_texture.is_some()));
-    textured && unmet.is_some_and(|u| u.blockers.first().is_some_and(|b| b.0 == Blocker::Seams))
+    /// The measurement that chose the bake, when one did.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub measured: Option<Measured>,
 }
 
 /// A LOD with its own baked texture, and what it took.
@@ -134,8 +159,7 @@ pub fn bake(original: &TriMesh, lod: &TriMesh, size: u32) -> Result<Baked, Strin
 
     // 2. Transfer.
     let nearest = MeshDistance::new(original);
-    let surface = SurfaceColor::new(original);
-    let shading = ShadingNormals::new(original);
+    let appearance = Appearance::new(original);
     let uvs = mesh.uvs.as_deref().unwrap_or_default();
     let corner_uv = |t: usize, k: usize| uvs[mesh.triangles[t][k] as usize];
     // Per row of texels, the triangles whose UV bounds cross it.
@@ -159,6 +183,7 @@ pub fn bake(original: &TriMesh, lod: &TriMesh, size: u32) -> Result<Baked, Strin
         .enumerate()
         .flat_map_iter(|(y, tris)| {
             let mut line = vec![None; width as usize];
+            let mut hint = u32::MAX;
             for &t in tris {
                 let t = t as usize;
                 let uv =
@@ -184,13 +209,17 @@ pub fn bake(original: &TriMesh, lod: &TriMesh, size: u32) -> Result<Baked, Strin
                         continue;
                     };
                     let p = corners[0] * b[0] + corners[1] * b[1] + corners[2] * b[2];
-                    let Some((q, o)) = nearest.closest(p) else {
+                    // The texel before's nearest triangle bounds the search.
+                    let (_, o) = nearest.nearest_near(p, hint);
+                    if o == u32::MAX {
                         continue;
-                    };
+                    }
+                    hint = o;
                     let [a, bb, cc] = original.triangle(o as usize);
+                    let q = closest_point_on_triangle(p, a, bb, cc);
                     let at = barycentric(q, a, bb, cc);
-                    let color = surface.as_ref().map_or(Vec3::ONE, |s| s.at(o as usize, at));
-                    let normal = tangent_space(shading.at(o as usize, at), frame, b);
+                    let color = appearance.color(o as usize, at);
+                    let normal = tangent_space(appearance.normal(o as usize, at), frame, b);
                     *slot = Some((color, normal));
                 }
             }
@@ -253,6 +282,7 @@ pub fn bake(original: &TriMesh, lod: &TriMesh, size: u32) -> Result<Baked, Strin
             covered: covered as f64 / (width as f64 * height as f64),
             seconds: start.elapsed().as_secs_f64(),
             automatic: false,
+            measured: None,
         },
     })
 }
@@ -285,22 +315,18 @@ fn png_image(texture: &Texture) -> Image {
     }
 }
 
-/// `n` in the tangent frame interpolated from the corners' (normal,
-/// MikkTSpace tangent) at barycentric `b`, as a client's fragment shader
-/// rebuilds it (tangent made orthogonal to the normal, bitangent
-/// `w · N × T`); a normal behind the surface is laid flat on it.
+/// `n` in the tangent frame a client rebuilds at barycentric `b` of a
+/// triangle with corners `frame`; a normal behind the surface is laid flat
+/// on it.
 fn tangent_space(n: Vec3, frame: [(Vec3, Vec4); 3], b: [f32; 3]) -> Vec3 {
-    let normal: Vec3 = (0..3).map(|k| frame[k].0 * b[k]).sum();
-    let tangent: Vec3 = (0..3).map(|k| frame[k].1.truncate() * b[k]).sum();
-    let Some(normal) = normal.try_normalize() else {
+    let Some(frame) = TangentFrame::at(frame, b) else {
         return Vec3::Z;
     };
-    let tangent = (tangent - normal * normal.dot(tangent))
+    let local = frame.local(n);
+    local
+        .with_z(local.z.max(0.0))
         .try_normalize()
-        .unwrap_or_else(|| normal.any_orthonormal_vector());
-    let bitangent = normal.cross(tangent) * frame[0].1.w.signum();
-    let local = Vec3::new(n.dot(tangent), n.dot(bitangent), n.dot(normal).max(0.0));
-    local.try_normalize().unwrap_or(Vec3::Z)
+        .unwrap_or(Vec3::Z)
 }
 
 /// The barycentric coordinates of `c` in the 2-D triangle `t`, when it is
@@ -421,6 +447,8 @@ pub(crate) fn dilate(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::io::appearance::Appearance;
+    use crate::io::base_color::SurfaceColor;
     use crate::io::image::decode_rgba;
 
     /// A unit square in z = 0, `n`×`n` cells, textured by a 32² image whose
@@ -560,5 +588,88 @@ mod tests {
             }
         }
         assert!(worst < 3.0, "{worst}°");
+    }
+
+    /// The original's own normal map is part of what it shows: a flat
+    /// square whose map leans its normal towards +x on the left and −x on
+    /// the right (2 × 1 texels, clamped, so it ramps in between) bakes onto
+    /// a coarser square, in new charts, a map that gives the same normals
+    /// (read back in the baked mesh's frames) within 3°.
+    #[test]
+    fn the_originals_own_normal_map_is_baked() {
+        let lean = [Vec3::new(0.6, 0.0, 0.8), Vec3::new(-0.6, 0.0, 0.8)];
+        let encode = |c: f32| ((c * 0.5 + 0.5) * 255.0).round() as u8;
+        let texel = |n: Vec3| [encode(n.x), encode(n.y), encode(n.z), 255];
+        let map = Texture {
+            width: 2,
+            height: 1,
+            rgba: vec![texel(lean[0]), texel(lean[1])],
+        };
+        let image = Image {
+            wrap_s: CLAMP_TO_EDGE,
+            wrap_t: CLAMP_TO_EDGE,
+            ..png_image(&map)
+        };
+        let mut original = textured_square(8);
+        original.normals = Some(vec![Vec3::Z; original.positions.len()]);
+        original.materials.as_mut().unwrap().table[0].normal_texture = Some((image, 1.0));
+        // The map's normal at x: its two texels' (as decoded) mixed from
+        // their centres at x = ¼ and ¾; the square's frame is x, y, z.
+        let decoded = |n: Vec3| {
+            Vec3::from_array(
+                texel(n).map(|c| c as f32 / 127.5 - 1.0)[..3]
+                    .try_into()
+                    .unwrap(),
+            )
+        };
+        let want = |x: f32| {
+            let f = ((x - 0.25) / 0.5).clamp(0.0, 1.0);
+            decoded(lean[0]).lerp(decoded(lean[1]), f).normalize()
+        };
+        let baked = bake(&original, &textured_square(2), 256).unwrap();
+        let shown = Appearance::new(&baked.mesh);
+        let m = &baked.mesh;
+        let mut worst = 0.0f32;
+        for t in 0..m.triangles.len() {
+            for b in [
+                [1.0 / 3.0; 3],
+                [0.6, 0.3, 0.1],
+                [0.1, 0.6, 0.3],
+                [0.3, 0.1, 0.6],
+            ] {
+                let p: Vec3 = (0..3).map(|k| m.triangle(t)[k] * b[k]).sum();
+                worst = worst.max(shown.normal(t, b).angle_between(want(p.x)).to_degrees());
+            }
+        }
+        assert!(worst < 3.0, "{worst}°");
+        // Without the map the bake is flat: the lean is the map's doing.
+        original.materials.as_mut().unwrap().table[0].normal_texture = None;
+        let flat = bake(&original, &textured_square(2), 256).unwrap();
+        let n = Appearance::new(&flat.mesh).normal(0, [1.0 / 3.0; 3]);
+        assert!(n.angle_between(Vec3::Z) < 0.02, "{n}");
+    }
+
+    /// The default side keeps the original's texels per triangle, a power
+    /// of two within 1024..=4096.
+    #[test]
+    fn the_default_size_keeps_the_texels_per_triangle() {
+        let with_texture = |side: u32| {
+            let mut m = textured_square(4);
+            let texture = Texture {
+                width: side,
+                height: side,
+                rgba: vec![[9, 9, 9, 255]; (side * side) as usize],
+            };
+            m.materials = Some(Materials::single(textured(&texture, Material::default())));
+            m
+        };
+        let truck_like = with_texture(2048);
+        let n = truck_like.triangles.len();
+        assert_eq!(default_size(&truck_like, n / 2), 2048);
+        assert_eq!(default_size(&truck_like, n / 4), 1024);
+        assert_eq!(default_size(&truck_like, 1), 1024);
+        assert_eq!(default_size(&with_texture(4096), n), 4096);
+        assert_eq!(default_size(&with_texture(256), n), 1024);
+        assert_eq!(default_size(&textured_square(4), n), 1024);
     }
 }

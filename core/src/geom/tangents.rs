@@ -93,6 +93,50 @@ impl TriMesh {
     }
 }
 
+/// The tangent frame a fragment shader rebuilds at a point of a triangle
+/// from its corners' (normal, MikkTSpace tangent): interpolated, the
+/// tangent made orthogonal to the normal, the bitangent `w · N × T`. A
+/// normal map's texel is a direction in this frame.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TangentFrame {
+    pub tangent: Vec3,
+    pub bitangent: Vec3,
+    pub normal: Vec3,
+}
+
+impl TangentFrame {
+    /// The frame at barycentric `b` of a triangle whose corners have
+    /// `corners`; `None` where the normals cancel.
+    pub fn at(corners: [(Vec3, Vec4); 3], b: [f32; 3]) -> Option<TangentFrame> {
+        let normal: Vec3 = (0..3).map(|k| corners[k].0 * b[k]).sum();
+        let tangent: Vec3 = (0..3).map(|k| corners[k].1.truncate() * b[k]).sum();
+        let normal = normal.try_normalize()?;
+        let tangent = (tangent - normal * normal.dot(tangent))
+            .try_normalize()
+            .unwrap_or_else(|| normal.any_orthonormal_vector());
+        let bitangent = normal.cross(tangent) * corners[0].1.w.signum();
+        Some(TangentFrame {
+            tangent,
+            bitangent,
+            normal,
+        })
+    }
+
+    /// World direction `n` in this frame.
+    pub fn local(&self, n: Vec3) -> Vec3 {
+        Vec3::new(
+            n.dot(self.tangent),
+            n.dot(self.bitangent),
+            n.dot(self.normal),
+        )
+    }
+
+    /// Direction `m` of this frame in the world.
+    pub fn world(&self, m: Vec3) -> Vec3 {
+        self.tangent * m.x + self.bitangent * m.y + self.normal * m.z
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use glam::Vec2;

@@ -83,7 +83,8 @@ impl<'a> SurfaceColor<'a> {
                     .and_then(|u| u.get(tri[k] as usize).copied()),
             };
             if let (Some(a), Some(b), Some(c)) = (uv_of(0), uv_of(1), uv_of(2)) {
-                colour *= bilinear(rgba, image, a * bary[0] + b * bary[1] + c * bary[2]);
+                let uv = a * bary[0] + b * bary[1] + c * bary[2];
+                colour *= bilinear(rgba, image, uv, decode_srgb);
             }
         }
         if material.vertex_attributes.colors {
@@ -132,9 +133,10 @@ pub fn vertex_colors(mesh: &TriMesh) -> Option<Vec<Vec3>> {
     )
 }
 
-/// The texture's linear colour at `uv` (bilinear, the image's wrap modes;
-/// glTF's UV origin is the image's top left).
-fn bilinear(rgba: &Rgba, image: &Image, uv: Vec2) -> Vec3 {
+/// The texture's colour at `uv`, each channel read by `decode` (sRGB for
+/// colours, linear for normal maps), bilinear, under the image's wrap
+/// modes (glTF's UV origin is the image's top left).
+pub(super) fn bilinear(rgba: &Rgba, image: &Image, uv: Vec2, decode: fn(u8) -> f32) -> Vec3 {
     let (w, h) = (rgba.width as i64, rgba.height as i64);
     if !uv.is_finite() || w == 0 || h == 0 {
         return Vec3::ONE;
@@ -146,7 +148,7 @@ fn bilinear(rgba: &Rgba, image: &Image, uv: Vec2) -> Vec3 {
     let texel = |i: i64, j: i64| {
         let (i, j) = (wrap(i, w, image.wrap_s), wrap(j, h, image.wrap_t));
         let [r, g, b, _] = rgba.texels[(j * w + i) as usize];
-        Vec3::new(decode_srgb(r), decode_srgb(g), decode_srgb(b))
+        Vec3::new(decode(r), decode(g), decode(b))
     };
     let (i, j) = (x0 as i64, y0 as i64);
     let top = texel(i, j).lerp(texel(i + 1, j), fx);

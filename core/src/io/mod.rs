@@ -4,6 +4,7 @@
 //! Readers work on bytes and never trust a header count: every count is checked
 //! against the bytes that remain before anything is allocated from it.
 
+pub mod appearance;
 pub mod asset;
 pub mod atlas;
 pub mod base_color;

@@ -213,32 +213,54 @@ fn build(
             progress.publish(last.clone());
         }
         for (j, mut set) in group.into_iter().zip(sets) {
-            // A textured model's row that its seams keep short of its
-            // budget is built again free of them and baked (unless it says
-            // "bake": false, or the recipe keeps every seam).
-            let automatic = recipe.rows[j].bake.is_none()
-                && !recipe.keep_seams
-                && mesh.is_some_and(|m| crate::bake::short_of_seams(m, set.unmet.as_ref()));
-            if automatic {
-                let mut baking = recipe.clone();
-                baking.rows[j].bake = Some(true);
-                let (hit, _) = build(&baking, &[j], cache.as_deref_mut())?;
-                set = hit.sets.into_iter().next().expect("one set per row");
-            }
-            // A row that asks for its own texture gets it baked from the model.
-            let baked = match (recipe.rows[j].bakes() || automatic, mesh) {
-                (true, Some(original)) if !set.mesh.triangles.is_empty() => {
+            // A row that asks for its own texture gets it baked from the
+            // model; a textured model's row that says neither is baked where
+            // its seams keep it short of its budget or where baked it
+            // measures closer to the model (`bake::choice`), unless the
+            // recipe keeps every seam.
+            let size = recipe.rows[j].texture;
+            let row_error = |e: String| ChainError::Row {
+                row: j,
+                rest: format!(": baking: {e}"),
+            };
+            let baked = match mesh {
+                Some(original) if recipe.rows[j].bakes() && !set.mesh.triangles.is_empty() => {
                     progress.stage("baking");
-                    let b = crate::bake::bake(original, &set.mesh, recipe.rows[j].texture_size())
-                        .map_err(|e| ChainError::Row {
-                        row: j,
-                        rest: format!(": baking: {e}"),
-                    })?;
+                    let size = size.unwrap_or_else(|| {
+                        crate::bake::default_size(original, set.mesh.triangles.len())
+                    });
+                    let b = crate::bake::bake(original, &set.mesh, size).map_err(row_error)?;
                     set.mesh = b.mesh;
-                    Some(crate::bake::BakeReport {
-                        automatic,
-                        ..b.report
-                    })
+                    Some(b.report)
+                }
+                Some(original) if recipe.rows[j].bake.is_none() && !recipe.keep_seams => {
+                    let mut baking = recipe.clone();
+                    baking.rows[j].bake = Some(true);
+                    let free = || build(&baking, &[j], cache.as_deref_mut());
+                    fn first((hit, _): &(Hit, bool)) -> &TriMesh {
+                        &hit.sets[0].mesh
+                    }
+                    let unmet = set.unmet.clone();
+                    match crate::bake::bake_unasked(
+                        original,
+                        &set.mesh,
+                        crate::bake::Asked {
+                            unmet: unmet.as_ref(),
+                            count: matches!(recipe.rows[j].tolerance, RowTolerance::Ratio(_))
+                                && recipe.rows[j].method == Method::EdgeCollapse,
+                            size,
+                        },
+                        free,
+                        first,
+                        row_error,
+                    )? {
+                        Some(((hit, _), b)) => {
+                            set = hit.sets.into_iter().next().expect("one set per row");
+                            set.mesh = b.mesh;
+                            Some(b.report)
+                        }
+                        None => None,
+                    }
                 }
                 _ => None,
             };

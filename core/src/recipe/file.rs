@@ -188,7 +188,7 @@ impl Row {
             }
             Params::Impostor(i) => {
                 i.views = self.views.unwrap_or(i.views);
-                i.texture = self.texture_size();
+                i.texture = self.impostor_texture();
             }
             Params::MergeTree(_) | Params::Amg(_) => {}
         }
@@ -208,8 +208,8 @@ impl Row {
         self.bake == Some(true)
     }
 
-    /// The baked texture's side (the default where the row gives none).
-    pub fn texture_size(&self) -> u32 {
+    /// The impostor's texture side (the default where the row gives none).
+    pub fn impostor_texture(&self) -> u32 {
         self.texture.unwrap_or(crate::bake::DEFAULT_TEXTURE_SIZE)
     }
 
@@ -565,16 +565,13 @@ impl Row {
                     .into(),
             ));
         }
-        if !crate::bake::TEXTURE_SIZE_RANGE.contains(&self.texture_size()) {
+        if let Some(size) = self.texture
+            && !crate::bake::TEXTURE_SIZE_RANGE.contains(&size)
+        {
             let r = crate::bake::TEXTURE_SIZE_RANGE;
             return Err((
                 "texture",
-                format!(
-                    "must be in {}..={}, got {}",
-                    r.start(),
-                    r.end(),
-                    self.texture_size()
-                ),
+                format!("must be in {}..={}, got {size}", r.start(), r.end()),
             ));
         }
         let value = match self.tolerance {
