@@ -1,8 +1,9 @@
 //! Issue 50's quality benchmark: textured LODs at 50 %, 25 %, 10 % and 5 % of
 //! the triangles, rendered through the studio's renderer (`lodstudio
 //! compare`, 8 views of 256²) against the original, for lodstudio (its
-//! default collapse at the 1-texel UV tolerance, and baked with a normal
-//! map at the default 1024² and at the original's own texture size) and for
+//! default: the 1-texel UV tolerance, baked where seams or the measure of
+//! `bake::choice` say so; `--bake` at its default size; `--bake` at the
+//! original's largest texture side) and for
 //! meshoptimizer's `simplifyWithAttributes` (normals and UVs weighted as in
 //! its demo, default and `Permissive`) on the same asset in the same run.
 //!
@@ -110,7 +111,7 @@ fn main() {
     };
     let dir = tempfile::tempdir().expect("temp dir");
     println!(
-        "| model | % | asked | ours (1 texel) | ours baked 1024² | ours baked, original's size | meshopt attributes | meshopt permissive |"
+        "| model | % | asked | ours (default) | ours --bake | ours --bake, original's side | meshopt attributes | meshopt permissive |"
     );
     println!("|---|---|---|---|---|---|---|---|");
     for model in models {
