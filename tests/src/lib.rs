@@ -121,8 +121,10 @@ pub fn glb_json(glb: &[u8]) -> serde_json::Value {
 
 /// The meshes a client shows at LOD `l` of an exported chain: walking the
 /// scene, each node's mesh at level 0, or for a node with `MSFT_lod` the
-/// mesh of its `l`-th LOD node (its coarsest where the chain is shorter);
-/// each mesh once. Holds for a flattened chain (node 0) and for a scene.
+/// mesh of its `l`-th LOD node (its coarsest where the chain is shorter),
+/// which replaces the node whole: the walk goes on into that node's
+/// children, not the head's (Babylon.js swaps the nodes); each mesh once.
+/// Holds for a flattened chain (node 0) and for a scene.
 pub fn lod_meshes(doc: &serde_json::Value, l: usize) -> Vec<usize> {
     let index = |v: &serde_json::Value| v.as_u64().map(|i| i as usize);
     let scene = index(&doc["scene"]).unwrap_or(0);
@@ -151,7 +153,7 @@ pub fn lod_meshes(doc: &serde_json::Value, l: usize) -> Vec<usize> {
         {
             out.push(m);
         }
-        let children: Vec<usize> = node["children"]
+        let children: Vec<usize> = doc["nodes"][shown]["children"]
             .as_array()
             .into_iter()
             .flatten()

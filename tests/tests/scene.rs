@@ -870,3 +870,30 @@ fn a_layout_for_one_mesh_is_refused() {
     assert!(String::from_utf8_lossy(&run.stderr).contains("--layout nodes"));
     assert!(!out.exists());
 }
+
+/// The truck's body node holds its wheels' nodes, and a lower LOD node
+/// replaces its head whole, children included: the body's mesh moves onto
+/// a child that heads its LODs, so the wheels are drawn at every level by
+/// a client walking `MSFT_lod` and by `FILE.glb#lodN` (they vanished from
+/// LOD1 on before).
+#[test]
+fn a_mesh_node_with_children_keeps_them_at_every_lod() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("truck.glb");
+    let truck = shared_model("CesiumMilkTruck.glb");
+    let j = export(
+        &truck,
+        "source,simplify:0.5,simplify:0.25",
+        "msft_lod",
+        &out,
+    );
+    let doc = doc_of(&out);
+    let lods = j["lods"].as_array().unwrap();
+    assert_eq!(lods.len(), 3);
+    for (l, lod) in lods.iter().enumerate() {
+        assert_eq!(lod_meshes(&doc, l).len(), 2, "LOD {l}: body and wheels");
+        let level = format!("{}#lod{l}", out.display());
+        let read = lodstudio_json(&["info", &level]);
+        assert_eq!(read["triangles"], lod["drawn_triangles"], "LOD {l}: {read}");
+    }
+}

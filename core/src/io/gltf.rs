@@ -112,38 +112,29 @@ pub fn read(data: &[u8], base: Option<&Path>) -> ParseResult<(TriMesh, AssetRepo
         .map(|s| s.index());
     let report = audit_gltf(&raw, scene, asset::Carried::Flat)?;
     let roots = scene_roots(&g.document);
-    Ok((read_nodes(&g, &raw, base, roots)?, report))
+    Ok((read_nodes(&g, &raw, base, roots, 0)?, report))
 }
 
-/// Level `lod` of the `MSFT_lod` chain that `export` writes: LOD 0 is the
-/// scene's first root (node 0), whose `extensions.MSFT_lod.ids` name the
-/// nodes of LOD 1, 2, … (which no scene lists, so [`read`] never sees them).
-/// Only that node and its children are read.
+/// Level `lod` of the `MSFT_lod` chains that `export` writes, as a client
+/// of the extension draws it: the scene walked from its roots, each node
+/// whose `extensions.MSFT_lod.ids` name lower LODs replaced whole (children
+/// included) by its `lod`-th (its coarsest where its chain is shorter).
+/// LOD nodes are in no scene, so [`read`] never sees them.
 ///
 /// # Errors
-/// As [`read`], and when the chain has no LOD `lod`.
+/// As [`read`], and when no chain has an LOD `lod`.
 pub fn read_lod(data: &[u8], base: Option<&Path>, lod: usize) -> ParseResult<TriMesh> {
     let (g, raw) = parse(data)?;
-    let Some(head) = scene_roots(&g.document).into_iter().next() else {
-        return Err(ParseError::file("expected a node to hold LOD 0"));
-    };
-    let ids = lod_ids(&raw, head.index())?;
-    let index = match lod {
-        0 => head.index(),
-        k => *ids.get(k - 1).ok_or_else(|| {
-            ParseError::file(format!(
-                "expected an LOD {k}, but the MSFT_lod chain has LODs 0 to {}",
-                ids.len()
-            ))
-        })?,
-    };
-    let node = g.document.nodes().nth(index).ok_or_else(|| {
-        ParseError::item(
-            format!("node {}", head.index()),
-            format!("expected MSFT_lod ids among the nodes, found {index}"),
-        )
-    })?;
-    read_nodes(&g, &raw, base, vec![node])
+    let mut levels = 0;
+    for n in g.document.nodes() {
+        levels = levels.max(lod_ids(&raw, n.index())?.len());
+    }
+    if lod > levels {
+        return Err(ParseError::file(format!(
+            "expected an LOD {lod}, but the MSFT_lod chains have LODs 0 to {levels}"
+        )));
+    }
+    read_nodes(&g, &raw, base, scene_roots(&g.document), lod)
 }
 
 pub(super) fn scene_roots(document: &gltf::Document) -> Vec<gltf::Node<'_>> {
@@ -195,6 +186,7 @@ fn read_nodes(
     root: &serde_json::Value,
     base: Option<&Path>,
     roots: Vec<gltf::Node>,
+    lod: usize,
 ) -> ParseResult<TriMesh> {
     let buffers = load_buffers(&g.document, root, base, g.blob.clone())?;
     let mut images = ImageCache::new(&g.document, base);
@@ -204,6 +196,20 @@ fn read_nodes(
     let mut stack: Vec<(gltf::Node, Mat4, usize)> =
         roots.into_iter().map(|n| (n, Mat4::IDENTITY, 0)).collect();
     while let Some((node, parent, depth)) = stack.pop() {
+        // At LOD `lod` a node with MSFT_lod ids is its LOD node.
+        let ids = match lod {
+            0 => Vec::new(),
+            _ => lod_ids(root, node.index())?,
+        };
+        let node = match ids.get(lod.wrapping_sub(1)).or(ids.last()) {
+            None => node,
+            Some(&i) => g.document.nodes().nth(i).ok_or_else(|| {
+                ParseError::item(
+                    format!("node {}", node.index()),
+                    format!("expected MSFT_lod ids among the nodes, found {i}"),
+                )
+            })?,
+        };
         // A node graph deeper than the node count has a cycle.
         if depth > g.document.nodes().len() {
             return Err(ParseError::item(

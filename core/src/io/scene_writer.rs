@@ -5,7 +5,9 @@
 //!
 //! - `msft_lod`: each node that draws a mesh names nodes of the lower LODs
 //!   in `extensions.MSFT_lod.ids` (copies of it, out of any scene), with
-//!   its switch coverages in `extras.MSFT_screencoverage` (Babylon.js);
+//!   its switch coverages in `extras.MSFT_screencoverage` (Babylon.js); a
+//!   node with children first hands its mesh to a child `NAME_LOD0`, as a
+//!   lower LOD replaces its head's children too;
 //! - `nodes`: under each such node, children `NAME_LOD0…NAME_LODn` (the
 //!   suffix Unity's LOD Group import, Unreal's and Godot's importers
 //!   recognise), the node's mesh, skin and weights moved onto them;
@@ -218,15 +220,40 @@ fn chain_file(scene: &Scene, lods: &[MeshLods], layout: Layout, points_as: Point
             };
             match layout {
                 Layout::MsftLod if ids.len() > 1 => {
-                    let lower: Vec<Value> = (1..ids.len()).map(|k| lod_node(k, true)).collect();
-                    let lower: Vec<usize> = lower.into_iter().map(|v| w.push_node(v)).collect();
-                    let head = &mut w.nodes_mut()[n];
-                    if head.get("extensions").is_none() {
-                        head["extensions"] = json!({});
+                    // A lower LOD node replaces its head whole, children
+                    // included (Babylon.js swaps the nodes): a node with
+                    // children keeps them and its placement, and its mesh
+                    // moves onto a child `NAME_LOD0` that heads the LODs.
+                    let parent = node["children"].as_array().is_some_and(|c| !c.is_empty());
+                    let lower: Vec<Value> = (1..ids.len()).map(|k| lod_node(k, !parent)).collect();
+                    let mut lower: Vec<usize> = lower.into_iter().map(|v| w.push_node(v)).collect();
+                    let head = match parent {
+                        false => n,
+                        true => {
+                            let head = w.push_node(lod_node(0, false));
+                            let holder = &mut w.nodes_mut()[n];
+                            if let Some(o) = holder.as_object_mut() {
+                                for key in ["mesh", "skin", "weights"] {
+                                    o.remove(key);
+                                }
+                            }
+                            let mut all: Vec<Value> =
+                                holder["children"].as_array().cloned().unwrap_or_default();
+                            all.push(json!(head));
+                            holder["children"] = Value::Array(all);
+                            head
+                        }
+                    };
+                    let node = &mut w.nodes_mut()[head];
+                    if node.get("extensions").is_none() {
+                        node["extensions"] = json!({});
                     }
-                    head["extensions"]["MSFT_lod"] = json!({"ids": lower});
-                    set_extra(head, "MSFT_screencoverage", json!(l.coverages));
-                    driven.push((n, lower, false));
+                    node["extensions"]["MSFT_lod"] = json!({"ids": lower});
+                    set_extra(node, "MSFT_screencoverage", json!(l.coverages));
+                    if parent {
+                        lower.insert(0, head);
+                    }
+                    driven.push((n, lower, parent));
                 }
                 Layout::Nodes => {
                     let children: Vec<Value> = (0..ids.len()).map(|k| lod_node(k, false)).collect();
