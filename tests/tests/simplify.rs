@@ -9,12 +9,20 @@ use lodstudio_core::{Progress, TriMesh};
 use lodstudio_tests::{lodstudio, lodstudio_json, shared_model};
 
 fn load(name: &str) -> TriMesh {
-    match io::load(&shared_model(name), &Default::default(), &Progress::new())
-        .unwrap()
-        .model
+    load_file(shared_model(name).to_str().unwrap())
+}
+
+fn load_file(path: &str) -> TriMesh {
+    match io::load(
+        std::path::Path::new(path),
+        &Default::default(),
+        &Progress::new(),
+    )
+    .unwrap()
+    .model
     {
         Model::Mesh(m) => m,
-        _ => panic!("{name} is a mesh"),
+        _ => panic!("{path} is a mesh"),
     }
 }
 
@@ -364,4 +372,87 @@ fn the_trucks_lods_show_no_texture_bleeding() {
     let cards = dir.path().join("impostor.glb").display().to_string();
     lodstudio_json(&["impostor", truck, "-o", &cards]);
     assert!(worst(&cards) > 0.1);
+}
+
+/// `--topology free` (issue 48, item 2): a speck beside a sphere is pruned
+/// where that is certified within the budget, the certificate holds
+/// against an independent dense measurement of the whole input, and the
+/// report gives components and genus before and after; `keep` (the
+/// default) keeps both; a saved progressive record, which could not hold a
+/// pruned component, is refused with it.
+#[test]
+fn topology_free_prunes_a_speck_within_the_certified_bound() {
+    let dir = tempfile::tempdir().unwrap();
+    let big = lodstudio_core::builtins::icosphere(glam::Vec3::ZERO, 1.0, 4);
+    let speck = lodstudio_core::builtins::icosphere(glam::Vec3::new(1.05, 0.0, 0.0), 0.03, 1);
+    let input = TriMesh::concat(&[big, speck]);
+    let file = dir.path().join("two.obj");
+    std::fs::write(&file, io::obj::write(&input)).unwrap();
+    let file = file.to_str().unwrap();
+    let out = |n: &str| dir.path().join(n).display().to_string();
+    // 60 triangles cost the sphere 0.1, more than the speck's 0.08 (its
+    // far side from the sphere); so does half of 10 % of the diagonal.
+    for (target, value) in [("--triangles", "60"), ("--error", "10%")] {
+        let free = out(&format!("free{value}.obj"));
+        let r = lodstudio_json(&[
+            "simplify",
+            file,
+            target,
+            value,
+            "--topology",
+            "free",
+            "-o",
+            &free,
+        ]);
+        let t = &r["topology"];
+        assert_eq!(
+            (
+                &t["components_before"],
+                &t["components_after"],
+                &t["pruned_components"]
+            ),
+            (&2.into(), &1.into(), &1.into()),
+            "{target} {value}: {r}"
+        );
+        assert_eq!(
+            (&t["genus_before"], &t["genus_after"]),
+            (&0.into(), &0.into())
+        );
+        let measured = lodstudio_json(&["measure", file, &free])["hausdorff"]
+            .as_f64()
+            .unwrap();
+        let bound = r["error_bound"].as_f64().unwrap();
+        assert!(
+            measured <= bound,
+            "{target} {value}: measured {measured} > {bound}"
+        );
+        let kept = lodstudio_json(&[
+            "simplify",
+            file,
+            target,
+            value,
+            "-o",
+            &out("kept.obj"),
+            "--force",
+        ]);
+        assert!(kept.get("topology").is_none(), "{kept}");
+        assert_eq!(
+            Topology::of(&load_file(&out("kept.obj"))).components.len(),
+            2
+        );
+    }
+    let save = out("x.lodh");
+    let refused = lodstudio(&[
+        "simplify",
+        file,
+        "--ratio",
+        "0.1",
+        "--topology",
+        "free",
+        "--save",
+        &save,
+        "-o",
+        &out("s.obj"),
+    ]);
+    assert_eq!(refused.status.code(), Some(2));
 }

@@ -40,6 +40,12 @@ pub struct SimplifyArgs {
     /// order is geometric). The certified bound stays geometric.
     #[arg(long, value_name = "WEIGHTS", value_parser = AttributeWeights::parse)]
     attribute_weights: Option<AttributeWeights>,
+    /// keep: every component and handle stays (the default). free: components
+    /// whose removal costs at most the error (half of it for --error) are
+    /// pruned where that lowers the certified bound (`topology` in the JSON:
+    /// components and genus before and after, what pruning took).
+    #[arg(long, value_enum, default_value_t = Topology::Keep, conflicts_with = "save")]
+    topology: Topology,
     #[command(flatten)]
     bake: BakeArgs,
     #[command(flatten)]
@@ -50,6 +56,13 @@ pub struct SimplifyArgs {
     save: SaveArgs,
     #[command(flatten)]
     input: InputArgs,
+}
+
+/// Whether a simplification may change the mesh's topology.
+#[derive(clap::ValueEnum, Debug, Clone, Copy, PartialEq, Eq)]
+enum Topology {
+    Keep,
+    Free,
 }
 
 pub(super) fn parse_error_target(e: &str) -> Result<Target, CliError> {
@@ -131,12 +144,19 @@ pub fn run(args: SimplifyArgs) -> Result<(), CliError> {
         collapse,
     };
     let run = |opts: &SimplifyOptions| {
-        simplify::simplify(&mesh, opts, &Progress::new()).map_err(|e| match e {
+        let progress = Progress::new();
+        match args.topology {
+            Topology::Keep => simplify::simplify(&mesh, opts, &progress).map(|r| (r, None)),
+            Topology::Free => {
+                simplify::prune::simplify_free(&mesh, opts, &progress).map(|(r, t)| (r, Some(t)))
+            }
+        }
+        .map_err(|e| match e {
             simplify::SimplifyError::BadTarget(m) => CliError::BadInput(m),
             simplify::SimplifyError::Cancelled => CliError::Failure(e.to_string()),
         })
     };
-    let mut result = run(&opts)?;
+    let (mut result, mut topology) = run(&opts)?;
     // Neither --bake nor --no-bake: a textured model's LOD bakes where its
     // seams keep it short of its count or where baked it measures closer
     // to the original (`bake::choice`).
@@ -163,10 +183,10 @@ pub fn run(args: SimplifyArgs) -> Result<(), CliError> {
                 size: args.bake.texture_size,
             },
             || run(&free),
-            |r| &r.mesh,
+            |r| &r.0.mesh,
             CliError::Failure,
         )? {
-            (result, baked, automatic) = (free, Some(b), true);
+            ((result, topology), baked, automatic) = (free, Some(b), true);
         }
     }
     let seconds = start.elapsed().as_secs_f64();
@@ -218,6 +238,9 @@ pub fn run(args: SimplifyArgs) -> Result<(), CliError> {
         }
         if let Some(b) = &baked {
             report["baked"] = serde_json::json!(b.report);
+        }
+        if let Some(t) = &topology {
+            report["topology"] = serde_json::json!(t);
         }
         println!("{report}");
     } else {

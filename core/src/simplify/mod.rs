@@ -26,6 +26,7 @@ mod history;
 mod limit;
 pub mod progressive;
 pub mod projection;
+pub mod prune;
 pub mod quadric;
 mod queue;
 pub mod recertify;
