@@ -122,11 +122,13 @@ pub struct Row {
     /// The LOD gets its own texture, baked from the model (`bake`; true):
     /// an edge-collapse row's seams then constrain nothing. Unset, a
     /// textured model's edge-collapse row bakes when its seams keep it
-    /// short of its triangle budget (`bake::short_of_seams`); false never.
+    /// short of its triangle budget, or when a count row measures closer to
+    /// the model baked (`bake::choice`); false never.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub bake: Option<bool>,
     /// The baked texture's (or the impostor's atlas's) side in texels
-    /// (unset: 1024).
+    /// (unset: `bake::default_size`, the model's texels per triangle kept;
+    /// an impostor's 1024).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub texture: Option<u32>,
     /// Impostor: frames per side of its octahedral map of views.
