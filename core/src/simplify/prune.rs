@@ -15,11 +15,11 @@
 //! and R within the collapse's of S.
 //!
 //! **Which components.** Never the largest (by area). The others are
-//! screened by the exact distance of their vertices to the rest of the mesh
-//! (a lower bound on their cost); those within the budget are certified
-//! against R₀, the mesh without all of them, and pruned if within. Pruning
-//! fewer only grows R, which only shortens distances to it, so the bounds
-//! against R₀ hold for the R that results.
+//! ranked by the exact distance of their farthest vertex from the rest of
+//! the mesh (a lower bound on their cost; over the budget, never pruned).
+//! The k cheapest are certified together against the mesh without them,
+//! and the largest k within the budget is found by bisection; what is
+//! pruned is certified as it is, whatever the search assumed.
 
 use rayon::prelude::*;
 
@@ -82,11 +82,15 @@ pub fn prune(mesh: &TriMesh, budget: f32, opts: &BoundOptions) -> Pruned {
             vertices_of[c as usize].push(v as u32);
         }
     }
-    let screened: Vec<bool> = (0..count)
+    // Each component's largest vertex distance to the others: a lower
+    // bound on what it costs.
+    let estimate: Vec<f32> = (0..count)
         .into_par_iter()
-        .map(|c| {
-            c != largest
-                && vertices_of[c].iter().all(|&v| {
+        .map(|c| match c == largest {
+            true => f32::INFINITY,
+            false => vertices_of[c]
+                .iter()
+                .map(|&v| {
                     let p = mesh.positions[v as usize];
                     let others = |t: u32| match component(t as usize) == c {
                         true => f32::INFINITY,
@@ -95,48 +99,64 @@ pub fn prune(mesh: &TriMesh, budget: f32, opts: &BoundOptions) -> Pruned {
                             closest_point_on_triangle(p, a, b, d).distance(p)
                         }
                     };
-                    bvh.nearest(p, others).is_some_and(|(d, _)| d <= budget)
+                    bvh.nearest(p, others).map_or(f32::INFINITY, |(d, _)| d)
                 })
+                .fold(0.0, f32::max),
         })
         .collect();
-    if !screened.iter().any(|&s| s) {
-        return unchanged();
-    }
-    // Certify each screened component against R₀.
-    let kept0: Vec<u32> = (0..mesh.triangles.len() as u32)
-        .filter(|&t| !screened[component(t as usize)])
-        .collect();
-    let rest = mesh.arrays().gather(kept0.iter().copied());
-    let target = MeshDistance::new(&rest);
+    let mut candidates: Vec<usize> = (0..count).filter(|&c| estimate[c] <= budget).collect();
+    candidates.sort_by(|&a, &b| estimate[a].total_cmp(&estimate[b]).then(a.cmp(&b)));
     let mut triangles_of: Vec<Vec<usize>> = vec![Vec::new(); count];
     for t in 0..mesh.triangles.len() {
         triangles_of[component(t)].push(t);
     }
-    let cost: Vec<f32> = (0..count)
-        .into_par_iter()
-        .map(|c| match screened[c] {
-            false => f32::INFINITY,
-            true => triangles_of[c]
-                .iter()
-                .map(|&t| {
-                    let tri = mesh.triangle(t);
-                    let at = tri.map(|p| target.nearest(p));
-                    max_distance_bound(tri, at, (&target, None), opts, 0.0, 0.0).0
-                })
-                .fold(0.0f32, f32::max),
-        })
-        .collect();
-    let pruned: Vec<bool> = (0..count).map(|c| cost[c] <= budget).collect();
+    // The k cheapest candidates, certified against the mesh without them:
+    // the largest cost among them.
+    let certified = |k: usize| -> f32 {
+        let mut out = vec![false; count];
+        for &c in &candidates[..k] {
+            out[c] = true;
+        }
+        let rest: Vec<u32> = (0..mesh.triangles.len() as u32)
+            .filter(|&t| !out[component(t as usize)])
+            .collect();
+        let rest = mesh.arrays().gather(rest);
+        let target = MeshDistance::new(&rest);
+        candidates[..k]
+            .par_iter()
+            .flat_map_iter(|&c| &triangles_of[c])
+            .map(|&t| {
+                let tri = mesh.triangle(t);
+                let at = tri.map(|p| target.nearest(p));
+                max_distance_bound(tri, at, (&target, None), opts, 0.0, 0.0).0
+            })
+            .reduce(|| 0.0, f32::max)
+    };
+    // The longest prefix within the budget, by bisection (cost mostly grows
+    // with the prefix; whatever is chosen is certified as it is).
+    let (mut lo, mut hi, mut bound) = (0, candidates.len(), 0.0);
+    while lo < hi {
+        let mid = (lo + hi).div_ceil(2);
+        let cost = certified(mid);
+        match cost <= budget {
+            true => (lo, bound) = (mid, cost),
+            false => hi = mid - 1,
+        }
+    }
+    if lo == 0 {
+        return unchanged();
+    }
+    let mut pruned = vec![false; count];
+    for &c in &candidates[..lo] {
+        pruned[c] = true;
+    }
     let (removed, kept): (Vec<u32>, Vec<u32>) =
         (0..mesh.triangles.len() as u32).partition(|&t| pruned[component(t as usize)]);
     Pruned {
-        mesh: mesh.arrays().gather(kept.iter().copied()),
-        components: pruned.iter().filter(|&&p| p).count(),
+        mesh: mesh.arrays().gather(kept),
+        components: lo,
         removed,
-        bound: (0..count)
-            .filter(|&c| pruned[c])
-            .map(|c| cost[c])
-            .fold(0.0, f32::max),
+        bound,
     }
 }
 
@@ -194,9 +214,9 @@ fn simplify_pruned(
 /// free`). For an error E, components costing at most E/2 are pruned and
 /// the rest simplified to E less what they cost. For a triangle count, the
 /// plain result's bound e is the yardstick: the mesh is pruned at a
-/// quarter, half and all of e and each simplified to the count; of these
-/// and the plain result the one nearest the count wins, then the one with
-/// the lowest certified bound.
+/// quarter, half and all of e, and at √2·e, 2e, … while the count is unmet,
+/// each simplified to the count; of these and the plain result the one
+/// nearest the count wins, then the one with the lowest certified bound.
 ///
 /// # Errors
 /// As [`simplify`](super::simplify).
@@ -237,8 +257,18 @@ pub fn simplify_free(
             let yardstick = plain.error_bound();
             let mut best = (Pruned::nothing(mesh), plain);
             let mut tried: Vec<Vec<u32>> = Vec::new();
-            for share in [0.25, 0.5, 1.0] {
+            // A quarter, half and all of the yardstick; then, while the
+            // count is still unmet, √2 times as much each time, up to the
+            // diagonal (a count past the pieces' floor is reached, at the
+            // certified price of what goes).
+            let mut share = 0.25;
+            while share <= 1.0 || (best.1.mesh.triangles.len() > asked && share * yardstick <= diag)
+            {
                 let pruned = prune(mesh, share * yardstick, &bound_opts);
+                share *= match share < 1.0 {
+                    true => 2.0,
+                    false => std::f32::consts::SQRT_2,
+                };
                 if pruned.components == 0 || tried.contains(&pruned.removed) {
                     continue;
                 }
