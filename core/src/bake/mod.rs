@@ -36,7 +36,7 @@ use crate::distance::{MeshDistance, barycentric, closest_point_on_triangle};
 use crate::geom::tangents::TangentFrame;
 use crate::geom::{Image, Material, Materials, TriMesh, VertexAttributes, Wedges};
 use crate::io::appearance::Appearance;
-use crate::io::image::{encode_png, encode_srgb};
+use crate::io::image::{CLAMP_TO_EDGE, encode_srgb};
 use crate::lod::Texture;
 
 /// A baked texture's least side where none is given, in texels (and an
@@ -287,9 +287,6 @@ pub fn bake(original: &TriMesh, lod: &TriMesh, size: u32) -> Result<Baked, Strin
     })
 }
 
-/// glTF's `CLAMP_TO_EDGE` wrap mode.
-const CLAMP_TO_EDGE: u32 = 33071;
-
 /// `base` wearing `texture` (PNG) with UVs and no vertex colours.
 fn textured(texture: &Texture, base: Material) -> Material {
     Material {
@@ -302,17 +299,10 @@ fn textured(texture: &Texture, base: Material) -> Material {
     }
 }
 
-/// `texture` as a PNG image on the atlas's UVs.
+/// `texture` as a PNG image on the atlas's UVs: clamped, as the atlas is
+/// padded and its edges never need the other side.
 fn png_image(texture: &Texture) -> Image {
-    Image {
-        mime_type: "image/png".into(),
-        bytes: encode_png(texture).into(),
-        mag_filter: None,
-        min_filter: None,
-        // The atlas is padded: its edges never need the other side.
-        wrap_s: CLAMP_TO_EDGE,
-        wrap_t: CLAMP_TO_EDGE,
-    }
+    crate::io::image::png_image(texture, CLAMP_TO_EDGE)
 }
 
 /// `n` in the tangent frame a client rebuilds at barycentric `b` of a
@@ -605,11 +595,7 @@ mod tests {
             height: 1,
             rgba: vec![texel(lean[0]), texel(lean[1])],
         };
-        let image = Image {
-            wrap_s: CLAMP_TO_EDGE,
-            wrap_t: CLAMP_TO_EDGE,
-            ..png_image(&map)
-        };
+        let image = png_image(&map);
         let mut original = textured_square(8);
         original.normals = Some(vec![Vec3::Z; original.positions.len()]);
         original.materials.as_mut().unwrap().table[0].normal_texture = Some((image, 1.0));

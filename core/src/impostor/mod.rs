@@ -27,9 +27,9 @@ use rayon::prelude::*;
 
 use crate::distance::{Hit, RayCaster};
 use crate::geom::normals::ShadingNormals;
-use crate::geom::{AlphaMode, Image, Material, Materials, TriMesh, VertexAttributes};
+use crate::geom::{AlphaMode, Material, Materials, TriMesh, VertexAttributes};
 use crate::io::base_color::SurfaceColor;
-use crate::io::image::{encode_png, encode_srgb};
+use crate::io::image::{CLAMP_TO_EDGE, encode_srgb, png_image};
 use crate::lod::{BoundKind, BuildError, DrawSet, Hierarchy, Method, Texture};
 use crate::progress::Progress;
 use crate::view::{Tolerance, View};
@@ -274,19 +274,14 @@ pub fn build(
     }
     mesh.normals = Some(normals);
     mesh.uvs = Some(uvs);
-    let png = |rgba: Vec<[u8; 4]>| Image {
-        mime_type: "image/png".into(),
-        bytes: encode_png(&Texture {
+    // Frames are padded by the sphere's empty corners: clamped.
+    let png = |rgba: Vec<[u8; 4]>| {
+        let texture = Texture {
             width: atlas,
             height: atlas,
             rgba,
-        })
-        .into(),
-        mag_filter: None,
-        min_filter: None,
-        // Frames are padded by the sphere's empty corners.
-        wrap_s: 33071,
-        wrap_t: 33071,
+        };
+        png_image(&texture, CLAMP_TO_EDGE)
     };
     mesh.materials = Some(Materials::single(Material {
         name: Some("impostor".into()),

@@ -102,7 +102,7 @@ impl<'a> Appearance<'a> {
 mod tests {
     use super::*;
     use crate::geom::{Material, Materials};
-    use crate::io::image::encode_png;
+    use crate::io::image::{REPEAT, png_image};
     use crate::lod::Texture;
 
     /// A flat square facing +z with UVs along x and y and a normal map of
@@ -118,14 +118,7 @@ mod tests {
             height: 1,
             rgba: vec![[encode(texel.x), encode(texel.y), encode(texel.z), 255]],
         };
-        let image = Image {
-            mime_type: "image/png".into(),
-            bytes: encode_png(&texture).into(),
-            mag_filter: None,
-            min_filter: None,
-            wrap_s: 10497,
-            wrap_t: 10497,
-        };
+        let image = png_image(&texture, REPEAT);
         let mut square = TriMesh::new(
             vec![Vec3::ZERO, Vec3::X, Vec3::new(1.0, 1.0, 0.0), Vec3::Y],
             vec![[0, 1, 2], [0, 2, 3]],

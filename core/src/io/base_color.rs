@@ -6,12 +6,8 @@
 
 use glam::{Vec2, Vec3};
 
-use super::image::{Rgba, decode_rgba, decode_srgb};
+use super::image::{CLAMP_TO_EDGE, MIRRORED_REPEAT, Rgba, decode_rgba, decode_srgb};
 use crate::geom::{Image, TriMesh};
-
-/// glTF sampler wrap modes.
-const CLAMP_TO_EDGE: u32 = 33071;
-const MIRRORED_REPEAT: u32 = 33648;
 
 /// A mesh's materials with their textures decoded: the colour the surface
 /// shows at any point of a triangle.
@@ -172,7 +168,7 @@ fn wrap(i: i64, n: i64, mode: u32) -> i64 {
 mod tests {
     use super::*;
     use crate::geom::{Material, Materials};
-    use crate::io::image::encode_png;
+    use crate::io::image::{REPEAT, png_image};
     use crate::lod::Texture;
 
     /// A quad whose corners sit on the four texel centres of a 2×2 texture:
@@ -191,14 +187,7 @@ mod tests {
             height: 2,
             rgba: texels.to_vec(),
         };
-        let image = Image {
-            mime_type: "image/png".into(),
-            bytes: encode_png(&texture).into(),
-            mag_filter: None,
-            min_filter: None,
-            wrap_s: 10497,
-            wrap_t: 10497,
-        };
+        let image = png_image(&texture, REPEAT);
         let material = Material {
             base_color: [0.5, 1.0, 1.0, 1.0],
             base_color_texture: Some(image),

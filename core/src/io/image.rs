@@ -45,6 +45,23 @@ pub fn decode_srgb(v: u8) -> f32 {
     TABLE[v as usize]
 }
 
+/// glTF sampler wrap modes (glTF 2.0 §5.26).
+pub const REPEAT: u32 = 10497;
+pub const CLAMP_TO_EDGE: u32 = 33071;
+pub const MIRRORED_REPEAT: u32 = 33648;
+
+/// `texture` as a material's PNG image, default filters, `wrap` both ways.
+pub fn png_image(texture: &Texture, wrap: u32) -> Image {
+    Image {
+        mime_type: "image/png".into(),
+        bytes: encode_png(texture).into(),
+        mag_filter: None,
+        min_filter: None,
+        wrap_s: wrap,
+        wrap_t: wrap,
+    }
+}
+
 /// An RGBA8 texture as PNG.
 pub fn encode_png(tex: &Texture) -> Vec<u8> {
     let (w, h) = (tex.width.max(1), tex.height.max(1));

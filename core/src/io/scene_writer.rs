@@ -231,16 +231,7 @@ fn chain_file(scene: &Scene, lods: &[MeshLods], layout: Layout, points_as: Point
                         false => n,
                         true => {
                             let head = w.push_node(lod_node(0, false));
-                            let holder = &mut w.nodes_mut()[n];
-                            if let Some(o) = holder.as_object_mut() {
-                                for key in ["mesh", "skin", "weights"] {
-                                    o.remove(key);
-                                }
-                            }
-                            let mut all: Vec<Value> =
-                                holder["children"].as_array().cloned().unwrap_or_default();
-                            all.push(json!(head));
-                            holder["children"] = Value::Array(all);
+                            hand_mesh_to(&mut w.nodes_mut()[n], &[head]);
                             head
                         }
                     };
@@ -260,15 +251,7 @@ fn chain_file(scene: &Scene, lods: &[MeshLods], layout: Layout, points_as: Point
                     let children: Vec<usize> =
                         children.into_iter().map(|v| w.push_node(v)).collect();
                     let parent = &mut w.nodes_mut()[n];
-                    if let Some(o) = parent.as_object_mut() {
-                        for key in ["mesh", "skin", "weights"] {
-                            o.remove(key);
-                        }
-                    }
-                    let mut all: Vec<Value> =
-                        parent["children"].as_array().cloned().unwrap_or_default();
-                    all.extend(children.iter().map(|c| json!(c)));
-                    parent["children"] = Value::Array(all);
+                    hand_mesh_to(parent, &children);
                     set_extra(parent, "lod_screencoverage", json!(l.coverages));
                     driven.push((n, children, true));
                 }
@@ -288,6 +271,19 @@ fn chain_file(scene: &Scene, lods: &[MeshLods], layout: Layout, points_as: Point
         json!(COVERAGE_NOTE),
     );
     glb(&doc, bin)
+}
+
+/// `node` without its mesh, skin and weights, with `children` (the nodes
+/// that now draw them) after its own.
+fn hand_mesh_to(node: &mut Value, children: &[usize]) {
+    if let Some(o) = node.as_object_mut() {
+        for key in ["mesh", "skin", "weights"] {
+            o.remove(key);
+        }
+    }
+    let mut all: Vec<Value> = node["children"].as_array().cloned().unwrap_or_default();
+    all.extend(children.iter().map(|c| json!(c)));
+    node["children"] = Value::Array(all);
 }
 
 /// Copies each animation channel that drives a node's morph weights to
