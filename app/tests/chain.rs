@@ -477,6 +477,9 @@ fn the_truck_chain_is_drawn_textured_row_by_row() {
     let far = &harness.state().built_chain().unwrap().chain.lods[1];
     assert!(far.set.unmet.is_none(), "{:?}", far.set.unmet);
     assert!(far.baked.as_ref().is_some_and(|b| b.automatic));
+    // The table says so (its hover says why).
+    harness.run();
+    assert!(harness.query_by_label("baked 1024²").is_some());
     recipe.rows[1].bake = Some(false);
     harness.state_mut().set_chain_recipe(recipe);
     built_chain(&mut harness);

@@ -33,6 +33,9 @@ pub struct RowFigures {
     /// Why the row does not earn its place (`recipe::Flag`): the words the
     /// table shows, and the hover's sentences.
     pub flags: Option<(String, String)>,
+    /// The LOD wears its own baked texture: the words the flags column
+    /// shows where it has no flag ("baked 2048²"), and why it was baked.
+    pub baked: Option<(String, String)>,
 }
 
 /// The flags column's head and hover.
@@ -144,12 +147,15 @@ impl ChainSettings {
                                     ui.monospace(cell);
                                 }
                             }
-                            match &f.flags {
-                                Some((words, why)) => {
+                            match (&f.flags, &f.baked) {
+                                (Some((words, why)), _) => {
                                     let warn = ui.visuals().warn_fg_color;
                                     ui.colored_label(warn, words).on_hover_text(why);
                                 }
-                                None => {
+                                (None, Some((words, why))) => {
+                                    ui.weak(words).on_hover_text(why);
+                                }
+                                (None, None) => {
                                     ui.label("");
                                 }
                             }

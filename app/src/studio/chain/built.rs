@@ -125,6 +125,26 @@ impl BuiltChain {
     }
 }
 
+/// What the table says of a baked LOD, and why it was baked.
+fn baked_words(b: &lodstudio_core::bake::BakeReport) -> (String, String) {
+    let why = match (b.automatic, &b.measured) {
+        (false, _) => "the row asks for it".to_string(),
+        (true, None) => "unasked: the seams kept it short of its budget".to_string(),
+        (true, Some(m)) => format!(
+            "unasked: baked, it measured closer to the model ({:.1} dB against {:.1} dB \
+             keeping the model's atlas)",
+            m.baked_db, m.kept_db
+        ),
+    };
+    (
+        format!("baked {}²", b.width.max(b.height)),
+        format!(
+            "Its own texture, {} × {} px, {} charts: {why}.",
+            b.width, b.height, b.charts
+        ),
+    )
+}
+
 /// The table's cells of every recipe row (rows met by one cut share its LOD).
 fn figures(chain: &Chain) -> Vec<RowFigures> {
     let mut out: Vec<Option<RowFigures>> = vec![None; chain.recipe.rows.len()];
@@ -174,6 +194,7 @@ fn figures(chain: &Chain) -> Vec<RowFigures> {
                 estimate,
                 unmet: unmet.clone(),
                 flags: (!words.is_empty()).then(|| (words.join(", "), why.join("\n"))),
+                baked: lod.baked.as_ref().map(baked_words),
             });
         }
     }
