@@ -441,6 +441,35 @@ fn topology_free_prunes_a_speck_within_the_certified_bound() {
             2
         );
     }
+    // Per export row: a free row prunes the speck, a kept one does not; the
+    // saved recipe says which.
+    for (topology, pieces) in [("free", 1), ("keep", 2)] {
+        let chain = out(&format!("chain-{topology}.glb"));
+        let recipe = out(&format!("recipe-{topology}.json"));
+        let args = [
+            "export",
+            file,
+            "--method",
+            "simplify",
+            "--lods",
+            "source,0.0115",
+            "--topology",
+            topology,
+            "--save-recipe",
+            &recipe,
+            "-o",
+            &chain,
+        ];
+        lodstudio_json(&args);
+        let lod1 = lodstudio_json(&["info", &format!("{chain}#lod1")]);
+        assert_eq!(lod1["components"], pieces, "{topology}: {lod1}");
+        let saved = std::fs::read_to_string(&recipe).unwrap();
+        assert_eq!(
+            saved.contains("\"topology\": \"free\""),
+            topology == "free",
+            "{saved}"
+        );
+    }
     let save = out("x.lodh");
     let refused = lodstudio(&[
         "simplify",

@@ -32,7 +32,7 @@ pub struct ExportArgs {
     /// rows, their methods and parameters, the switch tolerance.
     #[arg(long, value_name = "R.json", conflicts_with_all = [
         "method", "lods", "pixels", "viewport_height", "coverage", "lock_borders", "keep_seams",
-        "uv_tolerance", "attribute_weights", "bake", "no_bake", "texture_size", "kappa", "tau", "resolution", "points_as", "no_simplify", "post_error", "post_triangles",
+        "uv_tolerance", "attribute_weights", "topology", "bake", "no_bake", "texture_size", "kappa", "tau", "resolution", "points_as", "no_simplify", "post_error", "post_triangles",
         "weld_tolerance", "no_weld",
     ])]
     recipe: Option<PathBuf>,
@@ -106,6 +106,10 @@ pub struct ExportArgs {
     /// (as simplify's).
     #[arg(long, value_name = "WEIGHTS", value_parser = AttributeWeights::parse)]
     attribute_weights: Option<AttributeWeights>,
+    /// Edge collapse rows: keep (the default) or free, which may prune
+    /// components where that is certified (as simplify's --topology).
+    #[arg(long, value_name = "keep|free")]
+    topology: Option<lodstudio_core::simplify::prune::TopologyMode>,
     #[command(flatten)]
     bake: BakeArgs,
     /// Hybrid: points per triangle's rendering time (κ).
@@ -238,6 +242,9 @@ fn recipe_of(args: &ExportArgs) -> Result<Recipe, CliError> {
             Method::EdgeCollapse => {
                 row.uv_tolerance = args.uv_tolerance;
                 row.attribute_weights = args.attribute_weights;
+                if row.tolerance != lodstudio_core::recipe::RowTolerance::Source {
+                    row.topology = args.topology;
+                }
             }
             Method::Hybrid => {
                 row.kappa = args.kappa.or(row.kappa);
@@ -280,6 +287,7 @@ fn recipe_of(args: &ExportArgs) -> Result<Recipe, CliError> {
             "uv_tolerance" => "--uv-tolerance",
             "texture" => "--texture-size",
             "attribute_weights" => "--attribute-weights",
+            "topology" => "--topology",
             _ => "--lods",
         };
         CliError::BadInput(format!("{option}: {}", e.message))

@@ -3,6 +3,7 @@
 use super::*;
 use lodstudio_core::simplify;
 use lodstudio_core::simplify::collapse::AttributeWeights;
+use lodstudio_core::simplify::prune::TopologyMode;
 
 #[derive(Args, Debug)]
 #[command(group(clap::ArgGroup::new("target").required(true).args(["triangles", "ratio", "error"])))]
@@ -44,8 +45,13 @@ pub struct SimplifyArgs {
     /// whose removal costs at most the error (half of it for --error) are
     /// pruned where that lowers the certified bound (`topology` in the JSON:
     /// components and genus before and after, what pruning took).
-    #[arg(long, value_enum, default_value_t = Topology::Keep, conflicts_with = "save")]
-    topology: Topology,
+    #[arg(
+        long,
+        value_name = "keep|free",
+        default_value = "keep",
+        conflicts_with = "save"
+    )]
+    topology: TopologyMode,
     #[command(flatten)]
     bake: BakeArgs,
     #[command(flatten)]
@@ -56,13 +62,6 @@ pub struct SimplifyArgs {
     save: SaveArgs,
     #[command(flatten)]
     input: InputArgs,
-}
-
-/// Whether a simplification may change the mesh's topology.
-#[derive(clap::ValueEnum, Debug, Clone, Copy, PartialEq, Eq)]
-enum Topology {
-    Keep,
-    Free,
 }
 
 pub(super) fn parse_error_target(e: &str) -> Result<Target, CliError> {
@@ -146,8 +145,8 @@ pub fn run(args: SimplifyArgs) -> Result<(), CliError> {
     let run = |opts: &SimplifyOptions| {
         let progress = Progress::new();
         match args.topology {
-            Topology::Keep => simplify::simplify(&mesh, opts, &progress).map(|r| (r, None)),
-            Topology::Free => {
+            TopologyMode::Keep => simplify::simplify(&mesh, opts, &progress).map(|r| (r, None)),
+            TopologyMode::Free => {
                 simplify::prune::simplify_free(&mesh, opts, &progress).map(|(r, t)| (r, Some(t)))
             }
         }

@@ -377,6 +377,9 @@ fn build_group(
     let first = group[0];
     let start = Instant::now();
     let sets = match (recipe.row_params(first), mesh) {
+        (Params::EdgeCollapse(p), Some(mesh)) if recipe.rows[first].prunes() => {
+            pruned_rows(recipe, group, mesh, p.collapse, pixels_to_error, progress)?
+        }
         (Params::EdgeCollapse(p), Some(mesh)) => {
             simplify_rows(recipe, group, mesh, p.collapse, pixels_to_error, progress)?
         }
@@ -431,7 +434,47 @@ fn simplify_rows(
     pixels_to_error: impl Fn(f32) -> f32,
     progress: &Progress,
 ) -> Result<Vec<DrawSet>, ChainError> {
-    let targets: Vec<Target> = group
+    let targets = row_targets(recipe, group, pixels_to_error)?;
+    let results = simplify::simplify_chain(mesh, &targets, collapse, false, progress)
+        .map_err(|e| simplify_error(e, group[0]))?;
+    Ok(results.into_iter().map(simplified_set).collect())
+}
+
+/// Edge-collapse rows free to prune components (`"topology": "free"`):
+/// each its own `simplify::prune::simplify_free`, not one shared collapse
+/// (each row prunes what its own budget affords).
+fn pruned_rows(
+    recipe: &Recipe,
+    group: &[usize],
+    mesh: &TriMesh,
+    collapse: CollapseOptions,
+    pixels_to_error: impl Fn(f32) -> f32,
+    progress: &Progress,
+) -> Result<Vec<DrawSet>, ChainError> {
+    let targets = row_targets(recipe, group, pixels_to_error)?;
+    targets
+        .into_iter()
+        .zip(group)
+        .map(|(target, &j)| {
+            let opts = simplify::SimplifyOptions {
+                target,
+                collapse,
+                per_triangle_bounds: false,
+            };
+            simplify::prune::simplify_free(mesh, &opts, progress)
+                .map(|(r, _)| simplified_set(r))
+                .map_err(|e| simplify_error(e, j))
+        })
+        .collect()
+}
+
+/// Each row's simplification target.
+fn row_targets(
+    recipe: &Recipe,
+    group: &[usize],
+    pixels_to_error: impl Fn(f32) -> f32,
+) -> Result<Vec<Target>, ChainError> {
+    group
         .iter()
         .map(|&j| {
             let target = match recipe.rows[j].tolerance {
@@ -454,25 +497,26 @@ fn simplify_rows(
                 t => Ok(t),
             }
         })
-        .collect::<Result<_, _>>()?;
-    let results = simplify::simplify_chain(mesh, &targets, collapse, false, progress).map_err(
-        |e| match e {
-            SimplifyError::BadTarget(m) => ChainError::Row {
-                row: group[0],
-                rest: format!(": {m}"),
-            },
-            SimplifyError::Cancelled => ChainError::Cancelled,
+        .collect()
+}
+
+fn simplify_error(e: SimplifyError, row: usize) -> ChainError {
+    match e {
+        SimplifyError::BadTarget(m) => ChainError::Row {
+            row,
+            rest: format!(": {m}"),
         },
-    )?;
-    Ok(results
-        .into_iter()
-        .map(|r| DrawSet {
-            error_bound: r.error_bound(),
-            mesh: r.mesh,
-            unmet: r.unmet,
-            ..Default::default()
-        })
-        .collect())
+        SimplifyError::Cancelled => ChainError::Cancelled,
+    }
+}
+
+fn simplified_set(r: simplify::Simplified) -> DrawSet {
+    DrawSet {
+        error_bound: r.error_bound(),
+        mesh: r.mesh,
+        unmet: r.unmet,
+        ..Default::default()
+    }
 }
 
 /// Rows of one hierarchy: an LOD per row chosen from it in object space

@@ -188,6 +188,7 @@ pub(super) fn group_key(recipe: &Recipe, group: &[usize]) -> String {
         tolerances,
         recipe.viewport_height,
         recipe.coverage,
+        recipe.rows[group[0]].prunes(),
     );
     serde_json::to_string(&key).unwrap_or_default()
 }

@@ -19,6 +19,7 @@ use crate::io::meshopt_compression::Compression;
 use crate::io::scene_writer::Layout;
 use crate::lod::{Method, Params};
 use crate::simplify::collapse::AttributeWeights;
+use crate::simplify::prune::TopologyMode;
 
 use crate::voxel::PostSimplify;
 use crate::voxel::VoxelParams;
@@ -134,6 +135,10 @@ pub struct Row {
     /// Impostor: frames per side of its octahedral map of views.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub views: Option<u32>,
+    /// Edge collapse: "free" may prune components where that is certified
+    /// (`simplify::prune`); unset or "keep": every component stays.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub topology: Option<TopologyMode>,
 }
 
 impl Row {
@@ -152,6 +157,7 @@ impl Row {
             bake: None,
             texture: None,
             views: None,
+            topology: None,
         };
         match Params::default_for(method) {
             Params::Hybrid(h) => (row.kappa, row.tau) = (Some(h.kappa), Some(h.tau)),
@@ -229,7 +235,12 @@ impl Row {
 
     /// Rows that build the same hierarchy (same method, same parameters).
     pub fn same_hierarchy(&self, other: &Row) -> bool {
-        self.params(false) == other.params(false)
+        self.params(false) == other.params(false) && self.prunes() == other.prunes()
+    }
+
+    /// Whether the row may prune components (`"topology": "free"`).
+    pub fn prunes(&self) -> bool {
+        self.topology == Some(TopologyMode::Free)
     }
 }
 
@@ -560,6 +571,7 @@ impl Row {
             self.attribute_weights.is_some(),
             Method::EdgeCollapse,
         )?;
+        only("topology", self.topology.is_some(), Method::EdgeCollapse)?;
         if self.texture.is_some() && self.bake == Some(false) && m != Method::Impostor {
             return Err((
                 "texture",

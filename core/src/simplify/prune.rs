@@ -160,6 +160,28 @@ pub fn prune(mesh: &TriMesh, budget: f32, opts: &BoundOptions) -> Pruned {
     }
 }
 
+/// Whether a simplification may change the mesh's topology.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum TopologyMode {
+    /// Every component and handle stays.
+    #[default]
+    Keep,
+    /// Components may be pruned where that is certified ([`simplify_free`]).
+    Free,
+}
+
+impl std::str::FromStr for TopologyMode {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s {
+            "keep" => Ok(TopologyMode::Keep),
+            "free" => Ok(TopologyMode::Free),
+            _ => Err(format!("expected keep or free, got {s:?}")),
+        }
+    }
+}
+
 /// What a simplification free to change topology did.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
 pub struct TopologyReport {
