@@ -377,9 +377,6 @@ fn build_group(
     let first = group[0];
     let start = Instant::now();
     let sets = match (recipe.row_params(first), mesh) {
-        (Params::EdgeCollapse(p), Some(mesh)) if recipe.rows[first].prunes() => {
-            pruned_rows(recipe, group, mesh, p.collapse, pixels_to_error, progress)?
-        }
         (Params::EdgeCollapse(p), Some(mesh)) => {
             simplify_rows(recipe, group, mesh, p.collapse, pixels_to_error, progress)?
         }
@@ -435,37 +432,28 @@ fn simplify_rows(
     progress: &Progress,
 ) -> Result<Vec<DrawSet>, ChainError> {
     let targets = row_targets(recipe, group, pixels_to_error)?;
+    // Rows free to prune components (`"topology": "free"`) are each their
+    // own `simplify::prune::simplify_free`, not one shared collapse: each
+    // prunes what its own budget affords.
+    if recipe.rows[group[0]].prunes() {
+        return targets
+            .into_iter()
+            .zip(group)
+            .map(|(target, &j)| {
+                let opts = simplify::SimplifyOptions {
+                    target,
+                    collapse,
+                    per_triangle_bounds: false,
+                };
+                simplify::prune::simplify_free(mesh, &opts, progress)
+                    .map(|(r, _)| simplified_set(r))
+                    .map_err(|e| simplify_error(e, j))
+            })
+            .collect();
+    }
     let results = simplify::simplify_chain(mesh, &targets, collapse, false, progress)
         .map_err(|e| simplify_error(e, group[0]))?;
     Ok(results.into_iter().map(simplified_set).collect())
-}
-
-/// Edge-collapse rows free to prune components (`"topology": "free"`):
-/// each its own `simplify::prune::simplify_free`, not one shared collapse
-/// (each row prunes what its own budget affords).
-fn pruned_rows(
-    recipe: &Recipe,
-    group: &[usize],
-    mesh: &TriMesh,
-    collapse: CollapseOptions,
-    pixels_to_error: impl Fn(f32) -> f32,
-    progress: &Progress,
-) -> Result<Vec<DrawSet>, ChainError> {
-    let targets = row_targets(recipe, group, pixels_to_error)?;
-    targets
-        .into_iter()
-        .zip(group)
-        .map(|(target, &j)| {
-            let opts = simplify::SimplifyOptions {
-                target,
-                collapse,
-                per_triangle_bounds: false,
-            };
-            simplify::prune::simplify_free(mesh, &opts, progress)
-                .map(|(r, _)| simplified_set(r))
-                .map_err(|e| simplify_error(e, j))
-        })
-        .collect()
 }
 
 /// Each row's simplification target.
