@@ -47,7 +47,7 @@ pub struct Measured {
 }
 
 /// Whether the original wears a texture.
-fn textured(original: &TriMesh) -> bool {
+pub fn textured(original: &TriMesh) -> bool {
     original
         .materials
         .as_ref()

@@ -234,6 +234,11 @@ fn build(
                     Some(b.report)
                 }
                 Some(original) if recipe.rows[j].bake.is_none() && !recipe.keep_seams => {
+                    // A textured model's row may bake: the stage says so
+                    // (it builds a second candidate and bakes it).
+                    if crate::bake::choice::textured(original) {
+                        progress.stage("measuring whether to bake");
+                    }
                     let mut baking = recipe.clone();
                     baking.rows[j].bake = Some(true);
                     let free = || build(&baking, &[j], cache.as_deref_mut());
