@@ -81,6 +81,22 @@ fn export(input: &Path, out: &Path, extra: &[&str]) -> (Option<i32>, Value) {
     (run.status.code(), j)
 }
 
+/// `export` of `input` to `out` at [`LODS`], as a process to start.
+fn export_command(input: &Path, out: &Path) -> Command {
+    let mut command = Command::new(lodstudio_bin());
+    command
+        .args([
+            "export",
+            input.to_str().unwrap(),
+            "--lods",
+            LODS,
+            NO_BAKE,
+            "-o",
+        ])
+        .arg(out);
+    command
+}
+
 /// The outputs in a folder (name -> bytes), hidden files and reports aside.
 fn outputs(dir: &Path) -> std::collections::BTreeMap<String, Vec<u8>> {
     std::fs::read_dir(dir)
@@ -135,16 +151,7 @@ fn three_concurrent_shards_write_what_one_run_writes() {
     let sharded = folder(tmp.path(), "sharded");
     let children: Vec<_> = (0..3)
         .map(|i| {
-            Command::new(lodstudio_bin())
-                .args([
-                    "export",
-                    models.to_str().unwrap(),
-                    "--lods",
-                    LODS,
-                    NO_BAKE,
-                    "-o",
-                ])
-                .arg(&sharded)
+            export_command(&models, &sharded)
                 .args(["--shards", "3", "--threads", "1", "--json"])
                 .env("JOB_COMPLETION_INDEX", i.to_string())
                 .stdout(Stdio::piped())
@@ -211,16 +218,7 @@ fn a_killed_run_leaves_whole_files_and_the_next_completes_it() {
     let reference = folder(tmp.path(), "kill-ref");
     assert_eq!(export(&models, &reference, &[]).0, Some(0));
     let out = folder(tmp.path(), "kill-out");
-    let mut child = Command::new(lodstudio_bin())
-        .args([
-            "export",
-            models.to_str().unwrap(),
-            "--lods",
-            LODS,
-            NO_BAKE,
-            "-o",
-        ])
-        .arg(&out)
+    let mut child = export_command(&models, &out)
         .args(["--threads", "2"])
         .stdout(Stdio::null())
         .stderr(Stdio::null())
