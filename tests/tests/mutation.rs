@@ -4,7 +4,7 @@
 //! limit (a header count must never be trusted). Bounded in time per format.
 
 use std::alloc::{GlobalAlloc, Layout, System};
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::{Duration, Instant};
 
@@ -120,9 +120,8 @@ fn read(name: &str) -> Vec<u8> {
 fn random_corruptions_never_panic_or_over_allocate() {
     let budget = Duration::from_secs(4);
     let opts = LoadOptions::default();
-    let mut total = 0;
-    let mut per_format = Vec::new();
-    for (i, name) in [
+    // (label, the name the loader sees, bytes, seed)
+    let mut jobs: Vec<(String, PathBuf, Vec<u8>, u64)> = [
         "couplingdown.off",
         "fandisk.obj",
         "CesiumMilkTruck.glb",
@@ -130,15 +129,12 @@ fn random_corruptions_never_panic_or_over_allocate() {
         "ball.ply",
         "horse.ply",
         "skull_2.9.inr",
+        "ch2.nii.gz",
     ]
     .iter()
     .enumerate()
-    {
-        let path = shared_model(name);
-        let n = hammer(&path, &read(name), &opts, budget, i as u64);
-        per_format.push((name.to_string(), n));
-        total += n;
-    }
+    .map(|(i, name)| (name.to_string(), shared_model(name), read(name), i as u64))
+    .collect();
 
     // Formats without a real file here are made from real data.
     let skull = match io::load(&shared_model("skull_2.9.inr"), &opts, &Progress::new())
@@ -155,9 +151,12 @@ fn random_corruptions_never_panic_or_over_allocate() {
     .into_bytes();
     nrrd.extend(skull.data.iter().flat_map(|v| v.to_be_bytes()));
     let dir = std::env::temp_dir();
-    let n = hammer(&dir.join("skull.nrrd"), &nrrd, &opts, budget, 100);
-    per_format.push(("skull.nrrd (big-endian)".into(), n));
-    total += n;
+    jobs.push((
+        "skull.nrrd (big-endian)".into(),
+        dir.join("skull.nrrd"),
+        nrrd,
+        100,
+    ));
 
     let ball = match io::load(&shared_model("ball.ply"), &opts, &Progress::new())
         .unwrap()
@@ -167,9 +166,12 @@ fn random_corruptions_never_panic_or_over_allocate() {
         _ => unreachable!(),
     };
     let be = io::ply::write_points(&ball, io::ply::Encoding::BinaryBigEndian);
-    let n = hammer(&dir.join("ball_be.ply"), &be, &opts, budget, 101);
-    per_format.push(("ball.ply (binary big-endian)".into(), n));
-    total += n;
+    jobs.push((
+        "ball.ply (binary big-endian)".into(),
+        dir.join("ball_be.ply"),
+        be,
+        101,
+    ));
 
     // gzip: the NIfTI head is large, so mutate a smaller gzipped PLY.
     let gz = {
@@ -178,19 +180,32 @@ fn random_corruptions_never_panic_or_over_allocate() {
         enc.write_all(&read("couplingdown.off")).unwrap();
         enc.finish().unwrap()
     };
-    let n = hammer(&dir.join("couplingdown.off.gz"), &gz, &opts, budget, 102);
-    per_format.push(("couplingdown.off.gz".into(), n));
-    total += n;
-    let n = hammer(
-        &shared_model("ch2.nii.gz"),
-        &read("ch2.nii.gz"),
-        &opts,
-        budget,
-        103,
-    );
-    per_format.push(("ch2.nii.gz".into(), n));
-    total += n;
+    jobs.push((
+        "couplingdown.off.gz".into(),
+        dir.join("couplingdown.off.gz"),
+        gz,
+        102,
+    ));
 
+    // The formats are hammered two at a time (each for its own time budget),
+    // so the test takes half the wall time on two cores.
+    let next = AtomicUsize::new(0);
+    let per_format = std::sync::Mutex::new(Vec::new());
+    std::thread::scope(|scope| {
+        for _ in 0..2 {
+            scope.spawn(|| {
+                while let Some((label, path, data, seed)) =
+                    jobs.get(next.fetch_add(1, Ordering::Relaxed))
+                {
+                    let n = hammer(path, data, &opts, budget, *seed);
+                    per_format.lock().unwrap().push((label.clone(), n));
+                }
+            });
+        }
+    });
+    let per_format = per_format.into_inner().unwrap();
+    let total: usize = per_format.iter().map(|(_, n)| n).sum();
+    assert_eq!(per_format.len(), jobs.len());
     eprintln!("mutations per format: {per_format:?}");
     assert!(total >= 2000, "thousands of mutations: {total}");
     assert!(per_format.iter().all(|(_, n)| *n >= 20), "{per_format:?}");
