@@ -19,7 +19,7 @@ use lodstudio::render::camera::distance_at_coverage;
 use lodstudio::session::{Autosave, Session};
 use lodstudio::studio::StudioApp;
 use lodstudio_core::lod::Method;
-use lodstudio_core::recipe::{Recipe, build_chain, parse_lods};
+use lodstudio_core::recipe::{Recipe, RowTolerance, build_chain, parse_lods};
 use pixels::{colourful, viewport_image};
 
 fn shared(name: &str) -> PathBuf {
@@ -289,6 +289,29 @@ fn the_panel_edits_rows_and_refuses_bad_recipes() {
         .map(|r| r.bakes())
         .collect();
     assert_eq!(bakes.iter().filter(|b| **b).count(), 1, "{bakes:?}");
+    // An edge-collapse row's Edit menu lets it prune small pieces
+    // ("topology": "free"); other methods' menus do not offer it.
+    assert!(harness.query_by_label("Prune small pieces").is_none());
+    let collapse = harness
+        .state()
+        .chain_settings()
+        .recipe
+        .rows
+        .iter()
+        .position(|r| r.method == Method::EdgeCollapse && r.tolerance != RowTolerance::Source)
+        .expect("an edge-collapse row");
+    harness
+        .get_all_by_label("Edit")
+        .nth(collapse)
+        .expect("Edit")
+        .click();
+    harness.run();
+    click(&mut harness, "Prune small pieces");
+    harness.run();
+    let rows_now = &harness.state().chain_settings().recipe.rows;
+    assert!(rows_now[collapse].prunes());
+    assert_eq!(rows_now.iter().filter(|r| r.prunes()).count(), 1);
+    assert!(harness.state().chain_settings().recipe.check().is_ok());
     // Auto chain replaces the rows and builds them.
     click(&mut harness, "Auto chain");
     harness.step();

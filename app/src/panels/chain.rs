@@ -5,6 +5,7 @@
 use lodstudio_core::bake::{DEFAULT_TEXTURE_SIZE, TEXTURE_SIZE_RANGE};
 use lodstudio_core::hybrid::{KAPPA_RANGE, TAU_RANGE};
 use lodstudio_core::recipe::{Row, RowTolerance};
+use lodstudio_core::simplify::prune::TopologyMode;
 use lodstudio_core::voxel::RESOLUTION_RANGE;
 
 use crate::settings::Method;
@@ -130,9 +131,13 @@ impl ChainSettings {
                             }
                         }
                         bake_ui(ui, row);
+                        topology_ui(ui, row);
                     })
                     .response
-                    .on_hover_text("Move, duplicate or remove this row; bake its own texture.");
+                    .on_hover_text(
+                        "Move, duplicate or remove this row; bake its own texture; let it prune \
+                         small pieces.",
+                    );
                     match fig {
                         Some(f) => {
                             for (c, cell) in f.cells.iter().enumerate() {
@@ -351,6 +356,27 @@ const SHORT_HINT: &str = "Checked, a textured model's row bakes its own texture 
 const TEXTURE_HINT: &str = "The baked texture's side. auto: the model's texels per triangle \
     kept (its textures' texels × the share of its triangles this LOD keeps), 1024 to 4096 px; \
     drag to set one.";
+
+const TOPOLOGY_HINT: &str = "Checked, this edge-collapse row may remove whole small pieces \
+    (specks, loose parts) where its certified two-sided bound, which covers what was removed, \
+    stays within the row's budget: a count the pieces' own triangles kept out of reach is met. \
+    Unchecked, every piece is kept (\"topology\": \"keep\").";
+
+/// Whether an edge-collapse row may prune components (`"topology": "free"`).
+fn topology_ui(ui: &mut egui::Ui, row: &mut Row) {
+    if row.method != Method::EdgeCollapse || row.tolerance == RowTolerance::Source {
+        return;
+    }
+    ui.separator();
+    let mut free = row.prunes();
+    if ui
+        .checkbox(&mut free, "Prune small pieces")
+        .on_hover_text(TOPOLOGY_HINT)
+        .changed()
+    {
+        row.topology = free.then_some(TopologyMode::Free);
+    }
+}
 
 /// Whether the row bakes its own texture (always, when short of its budget,
 /// or never), and at what size (not a source row).
