@@ -363,10 +363,32 @@ impl TriMesh {
                 .map(|u| order.iter().map(|&v| u[v]).collect()),
             parts: None,
             materials: None,
-            wedges: self.wedges.as_ref().map(|w| Wedges {
-                corners: keep.iter().map(|&t| w.corners[t as usize]).collect(),
-                vertex: w.vertex.iter().map(|v| remap[*v as usize]).collect(),
-                ..w.clone()
+            // Only the wedges the kept corners use: a wedge of a vertex left
+            // out has no vertex to name.
+            wedges: self.wedges.as_ref().map(|w| {
+                let mut slot = vec![u32::MAX; w.len()];
+                let mut used = Vec::new();
+                let corners = keep
+                    .iter()
+                    .map(|&t| {
+                        w.corners[t as usize].map(|x| {
+                            if slot[x as usize] == u32::MAX {
+                                slot[x as usize] = used.len() as u32;
+                                used.push(x as usize);
+                            }
+                            slot[x as usize]
+                        })
+                    })
+                    .collect();
+                let pick = |a: &[_]| used.iter().map(|&x| a[x]).collect::<Vec<_>>();
+                Wedges {
+                    corners,
+                    vertex: used.iter().map(|&x| remap[w.vertex[x] as usize]).collect(),
+                    normals: w.normals.as_deref().map(pick),
+                    colors: w.colors.as_deref().map(pick),
+                    uvs: w.uvs.as_ref().map(|u| used.iter().map(|&x| u[x]).collect()),
+                    payload: w.payload.as_ref().map(|p| p.pick(used.iter().copied())),
+                }
             }),
             payload: self.payload.as_ref().map(|p| p.pick(order.iter().copied())),
         }
@@ -451,5 +473,38 @@ impl Volume {
             .fold((f32::INFINITY, f32::NEG_INFINITY), |(lo, hi), v| {
                 (lo.min(*v), hi.max(*v))
             })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A subset keeps only the wedges its corners use, naming its own
+    /// vertices (it kept every wedge, those of vertices left out naming
+    /// u32::MAX, and joining two subsets overflowed).
+    #[test]
+    fn a_subset_keeps_the_wedges_it_uses() {
+        let mut mesh = TriMesh::new(
+            vec![Vec3::ZERO, Vec3::X, Vec3::ONE, Vec3::Y],
+            vec![[0, 1, 2], [0, 2, 3]],
+        );
+        mesh.wedges = Some(Wedges {
+            corners: vec![[0, 1, 2], [3, 4, 5]],
+            vertex: vec![0, 1, 2, 0, 2, 3],
+            normals: None,
+            colors: None,
+            uvs: Some((0..6).map(|i| Vec2::splat(i as f32)).collect()),
+            payload: None,
+        });
+        let second = mesh.subset(&[1]);
+        second.check().unwrap();
+        let w = second.wedges.as_ref().unwrap();
+        assert_eq!(w.corners, vec![[0, 1, 2]]);
+        assert_eq!(w.vertex, vec![0, 1, 2]);
+        assert_eq!(w.uvs.as_ref().unwrap()[0], Vec2::splat(3.0));
+        let both = TriMesh::concat(&[mesh.subset(&[0]), second]);
+        both.check().unwrap();
+        assert_eq!(both.unwelded().uvs, mesh.unwelded().uvs);
     }
 }
