@@ -30,6 +30,7 @@ pub mod scene;
 mod simd;
 pub mod simplify;
 pub mod stats;
+pub mod tiles;
 pub mod view;
 pub mod voxel;
 

@@ -23,6 +23,7 @@ mod measure;
 mod mergetree;
 mod outputs;
 mod simplify;
+mod tiles;
 mod voxel;
 
 #[derive(Parser, Debug)]
@@ -141,6 +142,10 @@ enum Command {
     /// AMG extreme simplification of a point set: quasi-flat domains drawn as
     /// textured, alpha-blended quads (domain primitives).
     Amg(amg::AmgArgs),
+    /// An OGC 3D Tiles 1.1 tileset: a hierarchical LOD of spatial tiles
+    /// (parents simplified with their borders locked, so every cut is
+    /// crack-free), each tile's geometricError a certified bound.
+    Tiles(tiles::TilesArgs),
 }
 
 /// Where a built hierarchy is saved (reopen it with `cut`, or in the studio).
@@ -420,6 +425,7 @@ fn dispatch(command: Option<Command>) -> Result<(), CliError> {
         Some(Command::Hybrid(args)) => hybrid::run(args),
         Some(Command::Flythrough(args)) => flythrough::run(args),
         Some(Command::Amg(args)) => amg::run(args),
+        Some(Command::Tiles(args)) => tiles::run(args),
     }
 }
 

@@ -1,0 +1,27 @@
+//! OGC 3D Tiles 1.1 as a hierarchical LOD with certified geometric errors
+//! (issue 47, item 1).
+//!
+//! The mesh is split into cells of at most `tile_triangles` triangles
+//! ([`partition`]); leaves hold the original triangles, and each parent is
+//! its children's union simplified to half its triangles with every border
+//! locked ([`hlod`]). A cell's border is where the surface goes on into
+//! another cell, so it stays the original polyline in every tile until an
+//! ancestor holds both sides: any cut of the tree is watertight where the
+//! input was (the locked group borders of Nanite and meshoptimizer's
+//! clusterlod, on a k-d tree).
+//!
+//! A tile's `geometricError` is a certified two-sided Hausdorff bound of its
+//! content against the original triangles it stands for, composed by the
+//! triangle inequality: `H(P, O_P) ≤ H(P, U) + max_i H(C_i, O_i)`, where
+//! `U = ∪ C_i` is the children's union the collapse certified `P` against
+//! (`simplify::bound`), `O_P = ∪ O_i`, and the union of pairs within `e_i`
+//! of each other is within `max e_i` (every point of `C_i` is within `e_i`
+//! of `O_i ⊂ O_P`, and the reverse). Leaves are the original: 0. So errors
+//! never decrease upwards, as the 3D Tiles specification asks of them.
+//! [`tileset`] writes `tileset.json` and the tiles' GLB contents.
+
+pub mod hlod;
+pub mod partition;
+pub mod tileset;
+
+pub use hlod::{Tile, TileTree, build};

@@ -1,0 +1,172 @@
+//! `lodstudio tiles` (issue 47, item 1): a 3D Tiles 1.1 tileset whose every
+//! geometricError holds against an independent dense measurement of the
+//! tile against the original triangles below it, whose cuts are crack-free,
+//! and whose bytes do not depend on the thread count.
+
+use std::collections::HashMap;
+use std::path::Path;
+
+use lodstudio_core::TriMesh;
+use lodstudio_core::distance::{SamplingOptions, hausdorff_mesh_mesh};
+use lodstudio_core::geom::repair::repair_mesh;
+use lodstudio_core::geom::{RepairOptions, Weld};
+use lodstudio_tests::{load_mesh, lodstudio, lodstudio_json, shared_model};
+use serde_json::Value;
+
+/// Every tile of `tileset.json`, depth first: (tile, its children's indices).
+fn flatten(tile: &Value, out: &mut Vec<(Value, Vec<usize>)>) -> usize {
+    let me = out.len();
+    out.push((tile.clone(), Vec::new()));
+    let kids: Vec<usize> = tile["children"]
+        .as_array()
+        .map(|c| c.iter().map(|k| flatten(k, out)).collect())
+        .unwrap_or_default();
+    out[me].1 = kids;
+    me
+}
+
+/// The original triangles below tile `i`: its leaves' contents.
+fn leaves_below(tiles: &[(Value, Vec<usize>)], meshes: &[TriMesh], i: usize) -> Vec<TriMesh> {
+    if tiles[i].1.is_empty() {
+        return vec![meshes[i].clone()];
+    }
+    tiles[i]
+        .1
+        .iter()
+        .flat_map(|k| leaves_below(tiles, meshes, *k))
+        .collect()
+}
+
+/// Edges used by one triangle only, after welding equal positions.
+fn border_edges(pieces: &[TriMesh]) -> usize {
+    let (mesh, _) = repair_mesh(
+        TriMesh::concat(pieces),
+        &RepairOptions { weld: Weld::Exact },
+    );
+    let mut uses: HashMap<(u32, u32), u32> = HashMap::new();
+    for t in &mesh.triangles {
+        for k in 0..3 {
+            let (a, b) = (t[k], t[(k + 1) % 3]);
+            *uses.entry((a.min(b), a.max(b))).or_default() += 1;
+        }
+    }
+    uses.values().filter(|u| **u == 1).count()
+}
+
+fn tiles(out: &Path, threads: &str) -> Value {
+    lodstudio_json(&[
+        "tiles",
+        shared_model("bones.off").to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+        "--tile-triangles",
+        "512",
+        "--threads",
+        threads,
+    ])
+}
+
+#[test]
+fn every_tile_is_within_its_geometric_error_and_every_cut_is_closed() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("bones");
+    let report = tiles(&out, "2");
+    let original = load_mesh(&shared_model("bones.off"));
+    let doc: Value =
+        serde_json::from_slice(&std::fs::read(out.join("tileset.json")).unwrap()).unwrap();
+    assert_eq!(doc["asset"]["version"], "1.1");
+    assert_eq!(doc["root"]["refine"], "REPLACE");
+    let mut all = Vec::new();
+    flatten(&doc["root"], &mut all);
+    assert_eq!(report["tiles"].as_u64(), Some(all.len() as u64));
+    assert!(report["levels"].as_u64().unwrap() >= 4, "{report}");
+    let meshes: Vec<TriMesh> = all
+        .iter()
+        .map(|(t, _)| load_mesh(&out.join(t["content"]["uri"].as_str().unwrap())))
+        .collect();
+    // Leaves: the original triangles, each once.
+    let leaves: usize = all
+        .iter()
+        .zip(&meshes)
+        .filter(|((_, kids), _)| kids.is_empty())
+        .map(|(_, m)| m.triangles.len())
+        .sum();
+    assert_eq!(leaves, original.triangles.len());
+    let sampling = SamplingOptions {
+        samples: 20_000,
+        seed: 9,
+    };
+    for (i, (tile, kids)) in all.iter().enumerate() {
+        let error = tile["geometricError"].as_f64().unwrap() as f32;
+        let b: Vec<f64> = serde_json::from_value(tile["boundingVolume"]["box"].clone()).unwrap();
+        assert_eq!(b.len(), 12);
+        // The box (z-up) holds the content (y-up, turned z-up).
+        for p in &meshes[i].positions {
+            let z_up = [p.x as f64, -p.z as f64, p.y as f64];
+            for (axis, (c, h)) in [(b[0], b[3]), (b[1], b[7]), (b[2], b[11])]
+                .iter()
+                .enumerate()
+            {
+                assert!((z_up[axis] - c).abs() <= h.abs() * (1.0 + 1e-5) + 1e-6);
+            }
+        }
+        if kids.is_empty() {
+            assert_eq!(error, 0.0, "a leaf is the original");
+            continue;
+        }
+        for k in kids {
+            assert!(all[*k].0["geometricError"].as_f64().unwrap() as f32 <= error);
+        }
+        let below = TriMesh::concat(&leaves_below(&all, &meshes, i));
+        let measured = hausdorff_mesh_mesh(&below, &meshes[i], &sampling).two_sided();
+        assert!(measured <= error, "tile {i}: measured {measured} > {error}");
+        assert!(measured > 0.0 && meshes[i].triangles.len() < below.triangles.len());
+    }
+    assert_eq!(
+        report["root_geometric_error"].as_f64(),
+        all[0].0["geometricError"].as_f64()
+    );
+    // Cuts mixing levels are closed, as the original is: the root's first
+    // child refined to its leaves beside its second child whole, and every
+    // level whole.
+    assert_eq!(border_edges(std::slice::from_ref(&original)), 0);
+    let [first, second] = [all[0].1[0], all[0].1[1]];
+    let mut cut = leaves_below(&all, &meshes, first);
+    cut.push(meshes[second].clone());
+    assert_eq!(border_edges(&cut), 0, "a mixed cut");
+    let mut level = vec![0usize];
+    while !level.is_empty() {
+        let cut: Vec<TriMesh> = level.iter().map(|i| meshes[*i].clone()).collect();
+        assert_eq!(border_edges(&cut), 0, "level {level:?}");
+        level = level.iter().flat_map(|i| all[*i].1.clone()).collect();
+    }
+    // One thread writes the same bytes; an existing tileset needs --force.
+    let one = tmp.path().join("one");
+    tiles(&one, "1");
+    for (tile, _) in &all {
+        let uri = tile["content"]["uri"].as_str().unwrap();
+        assert_eq!(
+            std::fs::read(one.join(uri)).unwrap(),
+            std::fs::read(out.join(uri)).unwrap()
+        );
+    }
+    assert_eq!(
+        std::fs::read(one.join("tileset.json")).unwrap(),
+        std::fs::read(out.join("tileset.json")).unwrap()
+    );
+    let again = lodstudio(&["tiles", "builtin:torus", "-o", one.to_str().unwrap()]);
+    assert_eq!(again.status.code(), Some(2));
+    let bad = lodstudio(&[
+        "tiles",
+        "builtin:torus",
+        "-o",
+        tmp.path().join("x").to_str().unwrap(),
+        "--tile-triangles",
+        "0",
+    ]);
+    assert_eq!(bad.status.code(), Some(2));
+    assert!(
+        !tmp.path().join("x").exists(),
+        "nothing written for a bad budget"
+    );
+}
