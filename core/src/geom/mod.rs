@@ -334,63 +334,13 @@ impl TriMesh {
             .extend(other.triangles.iter().map(|t| t.map(|v| v + base)));
     }
 
-    /// The triangles `keep` (in that order) with only the vertices they use, and
-    /// their attributes and wedges; a single part, no materials.
+    /// The triangles `keep` (in that order) with only the vertices and
+    /// wedges they use, and their attributes; a single part, no materials.
     pub fn subset(&self, keep: &[u32]) -> TriMesh {
-        let mut remap = vec![u32::MAX; self.positions.len()];
-        let mut order = Vec::new();
-        let triangles = keep
-            .iter()
-            .map(|&t| {
-                self.triangles[t as usize].map(|v| {
-                    if remap[v as usize] == u32::MAX {
-                        remap[v as usize] = order.len() as u32;
-                        order.push(v as usize);
-                    }
-                    remap[v as usize]
-                })
-            })
-            .collect();
-        let gather = |a: &[_]| order.iter().map(|&v| a[v]).collect::<Vec<_>>();
         TriMesh {
-            positions: gather(&self.positions),
-            triangles,
-            normals: self.normals.as_deref().map(gather),
-            colors: self.colors.as_deref().map(gather),
-            uvs: self
-                .uvs
-                .as_ref()
-                .map(|u| order.iter().map(|&v| u[v]).collect()),
             parts: None,
             materials: None,
-            // Only the wedges the kept corners use: a wedge of a vertex left
-            // out has no vertex to name.
-            wedges: self.wedges.as_ref().map(|w| {
-                let mut slot = vec![u32::MAX; w.len()];
-                let mut used = Vec::new();
-                let corners = keep
-                    .iter()
-                    .map(|&t| {
-                        w.corners[t as usize].map(|x| {
-                            if slot[x as usize] == u32::MAX {
-                                slot[x as usize] = used.len() as u32;
-                                used.push(x as usize);
-                            }
-                            slot[x as usize]
-                        })
-                    })
-                    .collect();
-                let pick = |a: &[_]| used.iter().map(|&x| a[x]).collect::<Vec<_>>();
-                Wedges {
-                    corners,
-                    vertex: used.iter().map(|&x| remap[w.vertex[x] as usize]).collect(),
-                    normals: w.normals.as_deref().map(pick),
-                    colors: w.colors.as_deref().map(pick),
-                    uvs: w.uvs.as_ref().map(|u| used.iter().map(|&x| u[x]).collect()),
-                    payload: w.payload.as_ref().map(|p| p.pick(used.iter().copied())),
-                }
-            }),
-            payload: self.payload.as_ref().map(|p| p.pick(order.iter().copied())),
+            ..self.arrays().gather(keep.iter().copied())
         }
     }
 
