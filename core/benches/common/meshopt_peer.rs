@@ -6,6 +6,11 @@ use lodstudio_core::geom::{RepairOptions, repair::repair_mesh};
 
 /// meshoptimizer's simplification of `mesh` to `target` triangles (indices).
 pub fn meshopt_to(mesh: &TriMesh, target: usize) -> Vec<u32> {
+    meshopt_with(mesh, target, meshopt::SimplifyOptions::None)
+}
+
+/// [`meshopt_to`] with meshoptimizer's `options` (e.g. `LockBorder`).
+pub fn meshopt_with(mesh: &TriMesh, target: usize, options: meshopt::SimplifyOptions) -> Vec<u32> {
     let bytes: Vec<u8> = mesh
         .positions
         .iter()
@@ -14,14 +19,7 @@ pub fn meshopt_to(mesh: &TriMesh, target: usize) -> Vec<u32> {
         .collect();
     let vertices = meshopt::VertexDataAdapter::new(&bytes, 12, 0).expect("vertex adapter");
     let indices: Vec<u32> = mesh.triangles.iter().flatten().copied().collect();
-    meshopt::simplify(
-        &indices,
-        &vertices,
-        3 * target,
-        1.0,
-        meshopt::SimplifyOptions::None,
-        None,
-    )
+    meshopt::simplify(&indices, &vertices, 3 * target, 1.0, options, None)
 }
 
 /// `mesh` itself for `quarters` = 4, else reduced by meshopt to that many

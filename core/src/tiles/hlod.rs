@@ -119,11 +119,16 @@ pub fn build(
     })
 }
 
-/// A parent: the union of `kids` welded (their shared border is the same
-/// original vertices in both), simplified to half with borders locked.
+/// Two children's contents as one mesh, welded along their shared border
+/// (the same original vertices on both sides): what their parent simplifies.
+pub fn union(a: &TriMesh, b: &TriMesh) -> TriMesh {
+    let both = TriMesh::concat(&[a.clone(), b.clone()]);
+    repair_mesh(both, &RepairOptions { weld: Weld::Exact }).0
+}
+
+/// A parent: its children's [`union`] simplified to half with borders locked.
 fn parent(kids: &[&Tile; 2], depth: usize) -> Tile {
-    let union = TriMesh::concat(&[kids[0].mesh.clone(), kids[1].mesh.clone()]);
-    let (union, _) = repair_mesh(union, &RepairOptions { weld: Weld::Exact });
+    let union = union(&kids[0].mesh, &kids[1].mesh);
     let below = kids[0].error.max(kids[1].error);
     let opts = SimplifyOptions {
         target: Target::Triangles(union.triangles.len() / 2),
