@@ -68,20 +68,19 @@ const LODS: &str = "simplify:0.5,simplify:2%";
 const NO_BAKE: &str = "--no-bake";
 
 fn export(input: &Path, out: &Path, extra: &[&str]) -> (Option<i32>, Value) {
-    let mut args = vec![
-        "export",
-        input.to_str().unwrap(),
-        "--lods",
-        LODS,
-        NO_BAKE,
-        "-o",
-        out.to_str().unwrap(),
-        "--json",
-    ];
-    args.extend_from_slice(extra);
-    let run = lodstudio(&args);
-    let j = serde_json::from_slice(&run.stdout)
-        .unwrap_or_else(|e| panic!("{args:?}: {e}: {}", String::from_utf8_lossy(&run.stderr)));
+    let run = export_command(input, out)
+        .arg("--json")
+        .args(extra)
+        .env_remove("DISPLAY")
+        .env_remove("WAYLAND_DISPLAY")
+        .output()
+        .expect("run lodstudio");
+    let j = serde_json::from_slice(&run.stdout).unwrap_or_else(|e| {
+        panic!(
+            "{input:?} {extra:?}: {e}: {}",
+            String::from_utf8_lossy(&run.stderr)
+        )
+    });
     (run.status.code(), j)
 }
 
