@@ -170,3 +170,27 @@ fn every_tile_is_within_its_geometric_error_and_every_cut_is_closed() {
         "nothing written for a bad budget"
     );
 }
+
+/// The truck's tiles wear its materials and textures, at every level.
+#[test]
+fn tiles_carry_materials_and_textures() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("truck");
+    let report = lodstudio_json(&[
+        "tiles",
+        shared_model("CesiumMilkTruck.glb").to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+        "--tile-triangles",
+        "1024",
+    ]);
+    let tiles = report["tiles"].as_u64().unwrap();
+    assert!(tiles >= 7, "{report}");
+    for i in 0..tiles {
+        let info = lodstudio_json(&["info", out.join(format!("tiles/{i}.glb")).to_str().unwrap()]);
+        assert!(
+            info["textured_materials"].as_u64().unwrap() >= 1,
+            "tile {i}: {info}"
+        );
+    }
+}

@@ -66,21 +66,6 @@ pub fn run(args: TilesArgs) -> Result<(), CliError> {
             args.file.display()
         )));
     }
-    // Tiles are one primitive without material: what that leaves out is said.
-    let dropped: Vec<String> = mesh
-        .materials
-        .as_ref()
-        .map(|m| {
-            format!(
-                "materials ({}): a tile is one primitive without material (positions, normals, colours and UVs are carried)",
-                m.table.len()
-            )
-        })
-        .into_iter()
-        .collect();
-    for d in &dropped {
-        eprintln!("lodstudio: {}: not carried: {d}", args.file.display());
-    }
     let start = Instant::now();
     let tree = tiles::build(&mesh, args.tile_triangles, threads, &Progress::new())
         .map_err(|e| CliError::Failure(e.to_string()))?;
@@ -107,7 +92,6 @@ pub fn run(args: TilesArgs) -> Result<(), CliError> {
             "output": tileset.display().to_string(),
             "seconds": seconds,
             "peak_memory_bytes": peak_memory_bytes(),
-            "dropped": dropped,
         });
         println!("{json}");
     } else {

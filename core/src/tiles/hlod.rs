@@ -1,5 +1,5 @@
 //! The tile tree as named steps: partition, leaves (the original
-//! triangles of each cell), then level by level from the deepest, each
+//! triangles of each cell, with their materials and attributes), then level by level from the deepest, each
 //! parent as its children's union welded along their shared border and
 //! simplified to half with every border locked, its error composed (module
 //! doc of `tiles`). The tiles of one level are independent: they run on
@@ -84,7 +84,7 @@ pub fn build(
                         }
                         let tile = match &cells[i] {
                             Cell::Leaf(tris) => Tile {
-                                mesh: mesh.subset(tris),
+                                mesh: mesh.arrays().gather(tris.iter().copied()),
                                 children: Vec::new(),
                                 depth: level,
                                 error: 0.0,
