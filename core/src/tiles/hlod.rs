@@ -1,7 +1,8 @@
 //! The tile tree as named steps: partition, leaves (the original
-//! triangles of each cell, with their materials and attributes), then level by level from the deepest, each
-//! parent as its children's union welded along their shared border and
-//! simplified to half with every border locked, its error composed (module
+//! triangles of each cell, with their materials and attributes), then
+//! level by level from the deepest, each parent as its children's union
+//! welded along their shared border and simplified to half (and to the
+//! tile budget) with every border locked, its error composed (module
 //! doc of `tiles`). The tiles of one level are independent: they run on
 //! worker threads of their own, not as rayon tasks (the collapse waits for
 //! its bound worker, which needs rayon's pool: tiles as tasks deadlock once
@@ -13,7 +14,7 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 
 use super::partition::{Cell, partition};
 use crate::geom::repair::repair_mesh;
-use crate::geom::{RepairOptions, TriMesh, Weld};
+use crate::geom::{Materials, RepairOptions, TriMesh, Weld};
 use crate::progress::{Cancelled, Progress};
 use crate::simplify::{self, CollapseOptions, SimplifyOptions, Target};
 
@@ -95,7 +96,7 @@ pub fn build(
                                     kids.map(|k| made_so_far[k].as_ref().expect("children first"));
                                 Tile {
                                     children: kids.to_vec(),
-                                    ..parent(&tiles, level)
+                                    ..parent(&tiles, tile_triangles, level)
                                 }
                             }
                         };
@@ -121,17 +122,39 @@ pub fn build(
 
 /// Two children's contents as one mesh, welded along their shared border
 /// (the same original vertices on both sides): what their parent simplifies.
+///
+/// A part here is a material: `concat` numbers each piece's parts apart,
+/// and part borders are seams the locked collapse keeps, so every old cell
+/// border would stay at full resolution up to the root.
 pub fn union(a: &TriMesh, b: &TriMesh) -> TriMesh {
-    let both = TriMesh::concat(&[a.clone(), b.clone()]);
+    let mut both = TriMesh::concat(&[a.clone(), b.clone()]);
+    match both.materials.take() {
+        None => both.parts = None,
+        Some(m) => {
+            let n = both.triangles.len();
+            let parts: Vec<u32> = match &both.parts {
+                Some(p) => p.iter().map(|p| m.of(*p)).collect(),
+                None => vec![m.of(0); n],
+            };
+            both.parts = parts.iter().any(|p| *p != 0).then_some(parts);
+            both.materials = Some(Materials {
+                of_part: (0..m.table.len() as u32).collect(),
+                table: m.table,
+            });
+        }
+    }
     repair_mesh(both, &RepairOptions { weld: Weld::Exact }).0
 }
 
-/// A parent: its children's [`union`] simplified to half with borders locked.
-fn parent(kids: &[&Tile; 2], depth: usize) -> Tile {
+/// A parent: its children's [`union`] simplified with borders locked to
+/// half, and to at most `budget` triangles: children whose locked borders
+/// kept them over the budget (a split plane across the whole model) give
+/// it back where the border is theirs no longer.
+fn parent(kids: &[&Tile; 2], budget: usize, depth: usize) -> Tile {
     let union = union(&kids[0].mesh, &kids[1].mesh);
     let below = kids[0].error.max(kids[1].error);
     let opts = SimplifyOptions {
-        target: Target::Triangles(union.triangles.len() / 2),
+        target: Target::Triangles((union.triangles.len() / 2).min(budget)),
         collapse: CollapseOptions {
             lock_borders: true,
             ..CollapseOptions::default()
@@ -168,12 +191,15 @@ mod tests {
 
     /// Errors grow upwards and hold against a dense measurement of each
     /// tile against the original triangles below it; each parent has at
-    /// most the triangles of its children.
+    /// most the triangles of its children, and the root the tile budget.
     #[test]
     fn every_tile_is_within_its_error_of_the_original_below_it() {
         let mesh = torus(1.0, 0.35, 64, 32);
         let tree = build(&mesh, 512, 2, &Progress::new()).unwrap();
         assert!(tree.levels() >= 3, "{}", tree.levels());
+        // The root has no cell border left to keep: the old cells' borders
+        // are no seams (parts), so it reaches the tile budget.
+        assert!(tree.tiles[0].mesh.triangles.len() <= 512);
         let cells = partition(&mesh, 512);
         // The original triangles below each tile.
         fn below(cells: &[Cell], i: usize, out: &mut Vec<u32>) {
