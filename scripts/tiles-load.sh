@@ -13,7 +13,7 @@ set -euo pipefail
 here="$(cd "$(dirname "$0")" && pwd)"
 work="$(mktemp -d)"
 trap 'kill "${server:-0}" 2>/dev/null || true; rm -rf "$work"' EXIT
-cp "$here/threejs/tiles.html" "$here/threejs/tiles-run.js" "$work/"
+cp "$here/threejs/tiles.html" "$here/threejs/run.js" "$work/"
 names=()
 for d in "$@"; do
   name="$(basename "$d")"
@@ -21,7 +21,7 @@ for d in "$@"; do
   names+=("$name/tileset.json")
 done
 (cd "$work" && npm install --silent three@0.170.0 3d-tiles-renderer@0.5.3 playwright-core@1.49.0 >/dev/null)
-(cd "$work" && exec python3 -m http.server 8767 --bind 127.0.0.1 >/dev/null 2>&1) &
+(cd "$work" && exec python3 -m http.server 8765 --bind 127.0.0.1 >/dev/null 2>&1) &
 server=$!
 sleep 1
-(cd "$work" && node tiles-run.js "${names[@]}")
+(cd "$work" && PAGE=tiles.html node run.js "${names[@]}")

@@ -5,7 +5,8 @@ const { chromium } = require('playwright-core');
     const page = await browser.newPage();
     page.on('console', m => console.error('console:', m.text()));
     page.on('pageerror', e => console.error('pageerror:', e.message));
-    await page.goto(`http://127.0.0.1:8765/load.html?f=${f}`);
+    // PAGE: load.html (one GLB) or tiles.html (a tileset.json).
+    await page.goto(`http://127.0.0.1:8765/${process.env.PAGE || 'load.html'}?f=${f}`);
     await page.waitForFunction(() => window.result, null, { timeout: 300000, polling: 200 });
     console.log(JSON.stringify(await page.evaluate(() => window.result)));
     await page.close();
