@@ -2,7 +2,8 @@
 //! n/2 and n (meshoptimizer reduces it beforehand, untimed) against
 //! meshoptimizer simplifying the very same parents in the same run: each
 //! parent's children welded (`tiles::hlod::union`, untimed), to half,
-//! borders locked (`LockBorder`). One thread each (rayon's pool is one
+//! borders locked (`LockBorder`). Ours includes writing each tile to its
+//! work folder (a temporary folder). One thread each (rayon's pool is one
 //! thread, one tile worker), so the ratio is per thread.
 //!
 //! Run with `cargo bench -p lodstudio-core --bench tiles`; it prints a
@@ -15,7 +16,7 @@ mod meshopt_peer;
 use std::time::Instant;
 
 use lodstudio_core::Progress;
-use lodstudio_core::tiles::{self, hlod::union};
+use lodstudio_core::tiles::{self, Store, hlod::union};
 use meshopt_peer::{meshopt_with, quarters_of};
 
 /// Leaf tiles of this many triangles at most (the CLI's default).
@@ -41,13 +42,15 @@ fn main() {
     println!("|---:|---:|---:|---:|---:|---:|---:|---:|");
     for quarters in [1, 2, 4] {
         let mesh = quarters_of(&full, quarters);
+        let dir = tempfile::tempdir().expect("a scratch folder");
+        let store = Store::open(dir.path()).expect("a work folder");
         let start = Instant::now();
-        let tree = tiles::build(&mesh, TILE_TRIANGLES, 1, &Progress::new()).unwrap();
+        let plan = tiles::build(&store, &mesh, TILE_TRIANGLES, 1, &Progress::new()).unwrap();
         let ours = start.elapsed().as_secs_f64();
         let mut peer = 0.0;
-        for tile in tree.tiles.iter().filter(|t| !t.children.is_empty()) {
-            let [a, b] = [tile.children[0], tile.children[1]].map(|k| &tree.tiles[k].mesh);
-            let joined = union(a, b);
+        for kids in plan.children.iter().filter(|k| !k.is_empty()) {
+            let [a, b] = [kids[0], kids[1]].map(|k| store.mesh(k).expect("a made tile"));
+            let joined = union(&a, &b);
             let start = Instant::now();
             let out = meshopt_with(
                 &joined,
@@ -60,11 +63,11 @@ fn main() {
         let n = mesh.triangles.len();
         println!(
             "| {n} | {} | {} | {ours:.2} | {:.0} | {peer:.2} | {:.1}× | {} |",
-            tree.tiles.len(),
-            tree.levels(),
+            plan.children.len(),
+            plan.levels(),
             n as f64 / ours,
             ours / peer.max(1e-9),
-            tree.tiles[0].mesh.triangles.len()
+            store.made(0).expect("the root").triangles
         );
     }
 }

@@ -22,6 +22,7 @@ mod info;
 mod measure;
 mod mergetree;
 mod outputs;
+mod shard;
 mod simplify;
 mod tiles;
 mod voxel;

@@ -218,6 +218,17 @@ pub fn key(files: &[(PathBuf, Vec<u8>)], recipe: &[u8], tool: &str) -> String {
     hex(&h.finalize())
 }
 
+/// [`key`] of an input read as a stream (with the files a `.gltf` names),
+/// each file standing in by its SHA-256: for inputs too large to hold.
+pub fn streamed_key(input: &Path, recipe: &[u8], tool: &str) -> std::io::Result<String> {
+    let named = named_files(input).map_err(|e| std::io::Error::other(e.to_string()))?;
+    let files = std::iter::once(input.to_path_buf())
+        .chain(named)
+        .map(|p| Ok((p.clone(), hash_file(&p)?.into_bytes())))
+        .collect::<std::io::Result<Vec<_>>>()?;
+    Ok(key(&files, recipe, tool))
+}
+
 /// What the cache knows of one output.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Record {

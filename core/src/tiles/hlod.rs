@@ -1,123 +1,238 @@
-//! The tile tree as named steps: partition, leaves (the original
-//! triangles of each cell, with their materials and attributes), then
-//! level by level from the deepest, each parent as its children's union
-//! welded along their shared border and simplified to half (and to the
-//! tile budget) with every border locked, its error composed (module
-//! doc of `tiles`). The tiles of one level are independent: they run on
-//! worker threads of their own, not as rayon tasks (the collapse waits for
-//! its bound worker, which needs rayon's pool: tiles as tasks deadlock once
-//! every pool thread waits), and the tree depends on nothing but the mesh
-//! and budget.
+//! The tile tree as named steps, each a function of files in the work
+//! folder ([`Store`]): [`plan`] partitions the mesh and makes the leaves
+//! (the original triangles of each cell, with their materials and
+//! attributes); [`make_level`] makes the parents of one level, each its
+//! children's union welded along their shared border and simplified to
+//! half (and to the tile budget) with every border locked, its error
+//! composed (module doc of `tiles`). A tile depends on nothing but its
+//! children, so the tiles of a level are independent jobs for threads,
+//! shards and later runs alike, and the bytes depend on nothing but the
+//! mesh and the budget.
+//!
+//! A level's tiles run on worker threads of their own, not as rayon tasks:
+//! the collapse waits for its bound worker, which needs rayon's pool, so
+//! tiles as tasks deadlock once every pool thread waits.
 
 use std::sync::Mutex;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
+use rayon::prelude::*;
+
 use super::partition::{Cell, partition};
+use super::store::{Made, Plan, Store};
+use crate::batch::Shard;
 use crate::geom::repair::repair_mesh;
 use crate::geom::{Materials, RepairOptions, TriMesh, Weld};
 use crate::progress::{Cancelled, Progress};
 use crate::simplify::{self, CollapseOptions, SimplifyOptions, Target};
 
-/// One tile: its content, its children (indices into [`TileTree::tiles`])
-/// and its certified error against the original triangles it stands for.
-#[derive(Debug, Clone)]
-pub struct Tile {
-    pub mesh: TriMesh,
-    pub children: Vec<usize>,
-    /// Depth in the tree (the root is 0).
-    pub depth: usize,
-    /// Two-sided Hausdorff bound against the original triangles below
-    /// (0 for a leaf: it is the original).
-    pub error: f32,
-    /// How many original triangles it stands for.
-    pub covers: usize,
+#[derive(Debug, thiserror::Error)]
+pub enum TilesError {
+    #[error(transparent)]
+    Cancelled(#[from] Cancelled),
+    #[error("the tileset's work folder: {0}")]
+    Io(#[from] std::io::Error),
+    /// `--level` asked for a level whose children are not all made.
+    #[error("level {level} needs level {} first: tile {tile} is not made yet", level + 1)]
+    NotReady { level: usize, tile: usize },
 }
 
-/// A tileset's tree; tile 0 is the root.
-#[derive(Debug, Clone)]
-pub struct TileTree {
-    pub tiles: Vec<Tile>,
+/// What one step did: tiles it made, tiles it found made (by an earlier
+/// run, another shard or another thread).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct Counts {
+    pub built: usize,
+    pub reused: usize,
 }
 
-impl TileTree {
-    /// Levels from the root to the deepest leaf.
-    pub fn levels(&self) -> usize {
-        self.tiles.iter().map(|t| t.depth + 1).max().unwrap_or(0)
+impl std::ops::AddAssign for Counts {
+    fn add_assign(&mut self, o: Counts) {
+        self.built += o.built;
+        self.reused += o.reused;
     }
 }
 
-/// The tile tree of `mesh` with leaves of at most `tile_triangles`, the
-/// tiles of a level made by `workers` threads at a time.
+/// Plans the tileset of `mesh` with leaves of at most `tile_triangles`:
+/// forgets what `store` held, makes every leaf, then writes the plan (the
+/// sign that planning finished). The caller holds the plan lock.
+pub fn plan(
+    store: &Store,
+    mesh: &TriMesh,
+    tile_triangles: usize,
+    key: &str,
+    progress: &Progress,
+) -> Result<Plan, TilesError> {
+    progress.stage("tiles: planning");
+    store.clear()?;
+    let cells = partition(mesh, tile_triangles);
+    let leaves: Vec<(usize, &Vec<u32>)> = cells
+        .iter()
+        .enumerate()
+        .filter_map(|(i, c)| match c {
+            Cell::Leaf(tris) => Some((i, tris)),
+            Cell::Split(_) => None,
+        })
+        .collect();
+    let done = AtomicUsize::new(0);
+    leaves.par_iter().try_for_each(|(i, tris)| {
+        progress.check()?;
+        let leaf = mesh.arrays().gather(tris.iter().copied());
+        let made = Made {
+            error: 0.0,
+            covers: tris.len(),
+            triangles: tris.len(),
+            bounds: leaf.bounds(),
+        };
+        store.put(*i, &leaf, &made)?;
+        let n = done.fetch_add(1, Ordering::Relaxed) + 1;
+        progress.set_fraction(n as f32 / leaves.len() as f32);
+        Ok::<(), TilesError>(())
+    })?;
+    let plan = Plan {
+        key: key.to_string(),
+        tile_triangles,
+        input_triangles: mesh.triangles.len(),
+        bbox_diagonal: mesh.bounds().diagonal(),
+        children: cells
+            .iter()
+            .map(|c| match c {
+                Cell::Leaf(_) => Vec::new(),
+                Cell::Split(kids) => kids.to_vec(),
+            })
+            .collect(),
+    };
+    store.put_plan(&plan)?;
+    Ok(plan)
+}
+
+/// Makes the parents at depth `level` that are not made yet, `workers` at
+/// a time: this shard's share first, then any other shard's not yet begun,
+/// then waiting for those another process is making (so every tile of the
+/// level is made when it returns: the barrier between levels).
 ///
 /// # Errors
-/// `Cancelled` when `progress` is cancelled (checked between tiles).
+/// `NotReady` when a child is not made; `Cancelled`, checked between
+/// tiles; the work folder's I/O errors.
+pub fn make_level(
+    store: &Store,
+    plan: &Plan,
+    level: usize,
+    shard: Shard,
+    workers: usize,
+    progress: &Progress,
+) -> Result<Counts, TilesError> {
+    let at = plan.parents_at(level);
+    for i in &at {
+        if let Some(k) = plan.children[*i].iter().find(|k| store.made(**k).is_none()) {
+            return Err(TilesError::NotReady { level, tile: *k });
+        }
+    }
+    let (mine, others): (Vec<_>, Vec<_>) = at
+        .iter()
+        .enumerate()
+        .partition(|(n, _)| n % shard.count == shard.index);
+    let queue: Vec<usize> = mine.into_iter().chain(others).map(|(_, i)| *i).collect();
+    let next = AtomicUsize::new(0);
+    let busy = Mutex::new(Vec::new());
+    let counts = Mutex::new(Counts::default());
+    let failed = Mutex::new(None);
+    std::thread::scope(|scope| {
+        for _ in 0..workers.clamp(1, queue.len().max(1)) {
+            scope.spawn(|| {
+                loop {
+                    if progress.is_cancelled() || locked(&failed).is_some() {
+                        return;
+                    }
+                    let (i, wait) = match queue.get(next.fetch_add(1, Ordering::Relaxed)) {
+                        Some(i) => (*i, false),
+                        None => match locked(&busy).pop() {
+                            Some(i) => (i, true),
+                            None => return,
+                        },
+                    };
+                    match make_tile(store, plan, i, wait) {
+                        Ok(Some(c)) => {
+                            let mut all = locked(&counts);
+                            *all += c;
+                            let n = all.built + all.reused;
+                            progress.set_fraction(n as f32 / queue.len() as f32);
+                        }
+                        Ok(None) => locked(&busy).push(i),
+                        Err(e) => *locked(&failed) = Some(e),
+                    }
+                }
+            });
+        }
+    });
+    if let Some(e) = failed.into_inner().unwrap_or_else(|e| e.into_inner()) {
+        return Err(e);
+    }
+    progress.check()?;
+    Ok(counts.into_inner().unwrap_or_else(|e| e.into_inner()))
+}
+
+/// A mutex's value, whether or not a thread panicked holding it.
+fn locked<T>(m: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
+    m.lock().unwrap_or_else(|e| e.into_inner())
+}
+
+/// Makes tile `i` from its children unless it is made; `None` when another
+/// process holds it and `wait` is false.
+fn make_tile(
+    store: &Store,
+    plan: &Plan,
+    i: usize,
+    wait: bool,
+) -> Result<Option<Counts>, TilesError> {
+    let reused = Counts {
+        built: 0,
+        reused: 1,
+    };
+    if store.made(i).is_some() {
+        return Ok(Some(reused));
+    }
+    let Some(_held) = store.lock(&i.to_string(), wait)? else {
+        return Ok(None);
+    };
+    if store.made(i).is_some() {
+        return Ok(Some(reused));
+    }
+    let kids = &plan.children[i];
+    let mut made = Vec::with_capacity(kids.len());
+    let mut meshes = Vec::with_capacity(kids.len());
+    let level = plan.depths()[i];
+    for k in kids {
+        made.push(
+            store
+                .made(*k)
+                .ok_or(TilesError::NotReady { level, tile: *k })?,
+        );
+        meshes.push(store.mesh(*k)?);
+    }
+    let (mesh, record) = parent(&meshes, &made, plan.tile_triangles);
+    store.put(i, &mesh, &record)?;
+    Ok(Some(Counts {
+        built: 1,
+        reused: 0,
+    }))
+}
+
+/// The whole tree of `mesh` in a fresh `store`, `workers` tiles at a time
+/// (one process; the command line runs the steps itself for shards).
 pub fn build(
+    store: &Store,
     mesh: &TriMesh,
     tile_triangles: usize,
     workers: usize,
     progress: &Progress,
-) -> Result<TileTree, Cancelled> {
-    progress.stage("tiles: partitioning");
-    let cells = partition(mesh, tile_triangles);
-    let mut depth = vec![0usize; cells.len()];
-    for (i, c) in cells.iter().enumerate() {
-        if let Cell::Split(kids) = c {
-            for k in kids {
-                depth[*k] = depth[i] + 1;
-            }
-        }
-    }
-    let deepest = depth.iter().copied().max().unwrap_or(0);
-    let mut made: Vec<Option<Tile>> = vec![None; cells.len()];
+) -> Result<Plan, TilesError> {
+    let plan = plan(store, mesh, tile_triangles, "", progress)?;
+    let deepest = plan.levels().saturating_sub(1);
     for level in (0..=deepest).rev() {
         progress.stage(&format!("tiles: level {level} of {deepest}"));
-        progress.set_fraction((deepest - level) as f32 / (deepest + 1) as f32);
-        let at: Vec<usize> = (0..cells.len()).filter(|i| depth[*i] == level).collect();
-        let next = AtomicUsize::new(0);
-        let done = Mutex::new(Vec::with_capacity(at.len()));
-        let made_so_far = &made;
-        std::thread::scope(|scope| {
-            for _ in 0..workers.clamp(1, at.len().max(1)) {
-                scope.spawn(|| {
-                    while let Some(&i) = at.get(next.fetch_add(1, Ordering::Relaxed)) {
-                        if progress.is_cancelled() {
-                            return;
-                        }
-                        let tile = match &cells[i] {
-                            Cell::Leaf(tris) => Tile {
-                                mesh: mesh.arrays().gather(tris.iter().copied()),
-                                children: Vec::new(),
-                                depth: level,
-                                error: 0.0,
-                                covers: tris.len(),
-                            },
-                            Cell::Split(kids) => {
-                                let tiles =
-                                    kids.map(|k| made_so_far[k].as_ref().expect("children first"));
-                                Tile {
-                                    children: kids.to_vec(),
-                                    ..parent(&tiles, tile_triangles, level)
-                                }
-                            }
-                        };
-                        done.lock()
-                            .unwrap_or_else(|e| e.into_inner())
-                            .push((i, tile));
-                    }
-                });
-            }
-        });
-        progress.check()?;
-        for (i, tile) in done.into_inner().unwrap_or_else(|e| e.into_inner()) {
-            made[i] = Some(tile);
-        }
+        make_level(store, &plan, level, Shard::ALL, workers, progress)?;
     }
-    Ok(TileTree {
-        tiles: made
-            .into_iter()
-            .map(|t| t.expect("every cell is made"))
-            .collect(),
-    })
+    Ok(plan)
 }
 
 /// Two children's contents as one mesh, welded along their shared border
@@ -150,9 +265,9 @@ pub fn union(a: &TriMesh, b: &TriMesh) -> TriMesh {
 /// half, and to at most `budget` triangles: children whose locked borders
 /// kept them over the budget (a split plane across the whole model) give
 /// it back where the border is theirs no longer.
-fn parent(kids: &[&Tile; 2], budget: usize, depth: usize) -> Tile {
-    let union = union(&kids[0].mesh, &kids[1].mesh);
-    let below = kids[0].error.max(kids[1].error);
+fn parent(kids: &[TriMesh], made: &[Made], budget: usize) -> (TriMesh, Made) {
+    let union = kids[1..].iter().fold(kids[0].clone(), |u, k| union(&u, k));
+    let below = made.iter().map(|m| m.error).fold(0.0, f32::max);
     let opts = SimplifyOptions {
         target: Target::Triangles((union.triangles.len() / 2).min(budget)),
         collapse: CollapseOptions {
@@ -172,15 +287,15 @@ fn parent(kids: &[&Tile; 2], budget: usize, depth: usize) -> Tile {
         // the union itself is then the honest parent.
         Err(_) => (union, 0.0),
     };
-    Tile {
-        mesh,
-        children: Vec::new(),
-        depth,
+    let record = Made {
         // The triangle inequality (module doc), rounded up past f32's
         // round-off of the sum.
         error: (step + below) * (1.0 + 4.0 * f32::EPSILON),
-        covers: kids[0].covers + kids[1].covers,
-    }
+        covers: made.iter().map(|m| m.covers).sum(),
+        triangles: mesh.triangles.len(),
+        bounds: mesh.bounds(),
+    };
+    (mesh, record)
 }
 
 #[cfg(test)]
@@ -195,11 +310,16 @@ mod tests {
     #[test]
     fn every_tile_is_within_its_error_of_the_original_below_it() {
         let mesh = torus(1.0, 0.35, 64, 32);
-        let tree = build(&mesh, 512, 2, &Progress::new()).unwrap();
-        assert!(tree.levels() >= 3, "{}", tree.levels());
+        let dir = tempfile::tempdir().unwrap();
+        let store = Store::open(dir.path()).unwrap();
+        let plan = build(&store, &mesh, 512, 2, &Progress::new()).unwrap();
+        assert!(plan.levels() >= 3, "{}", plan.levels());
+        let made: Vec<Made> = (0..plan.children.len())
+            .map(|i| store.made(i).unwrap())
+            .collect();
         // The root has no cell border left to keep: the old cells' borders
         // are no seams (parts), so it reaches the tile budget.
-        assert!(tree.tiles[0].mesh.triangles.len() <= 512);
+        assert!(made[0].triangles <= 512);
         let cells = partition(&mesh, 512);
         // The original triangles below each tile.
         fn below(cells: &[Cell], i: usize, out: &mut Vec<u32>) {
@@ -212,25 +332,23 @@ mod tests {
             samples: 20_000,
             seed: 3,
         };
-        for (i, tile) in tree.tiles.iter().enumerate() {
+        for (i, tile) in made.iter().enumerate() {
+            let content = store.mesh(i).unwrap();
+            assert_eq!(content.triangles.len(), tile.triangles);
             let mut tris = Vec::new();
             below(&cells, i, &mut tris);
             assert_eq!(tile.covers, tris.len());
-            for k in &tile.children {
-                assert!(tree.tiles[*k].error <= tile.error);
+            let kids = &plan.children[i];
+            for k in kids {
+                assert!(made[*k].error <= tile.error);
             }
-            if tile.children.is_empty() {
+            if kids.is_empty() {
                 assert_eq!(tile.error, 0.0);
                 continue;
             }
-            let kids: usize = tile
-                .children
-                .iter()
-                .map(|k| tree.tiles[*k].mesh.triangles.len())
-                .sum();
-            assert!(tile.mesh.triangles.len() <= kids);
+            assert!(tile.triangles <= kids.iter().map(|k| made[*k].triangles).sum::<usize>());
             let original = mesh.subset(&tris);
-            let measured = hausdorff_mesh_mesh(&original, &tile.mesh, &sampling).two_sided();
+            let measured = hausdorff_mesh_mesh(&original, &content, &sampling).two_sided();
             assert!(
                 measured <= tile.error,
                 "tile {i}: {measured} > {}",

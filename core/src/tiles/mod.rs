@@ -18,10 +18,14 @@
 //! of each other is within `max e_i` (every point of `C_i` is within `e_i`
 //! of `O_i ⊂ O_P`, and the reverse). Leaves are the original: 0. So errors
 //! never decrease upwards, as the 3D Tiles specification asks of them.
-//! [`tileset`] writes `tileset.json` and the tiles' GLB contents.
+//! [`store`] keeps each made tile (its GLB, its mesh, its record) in the
+//! tileset's folder, so builds resume and shards share the work (issue 47,
+//! item 3); [`tileset`] writes `tileset.json`.
 
 pub mod hlod;
 pub mod partition;
+pub mod store;
 pub mod tileset;
 
-pub use hlod::{Tile, TileTree, build};
+pub use hlod::{Counts, TilesError, build, make_level, plan};
+pub use store::{Made, Plan, Store};

@@ -9,76 +9,51 @@
 //! A tile's box holds its content and its descendants' boxes, as the
 //! specification asks of bounding volumes.
 
-use glam::Vec3;
 use serde_json::{Value, json};
 
-use super::TileTree;
+use super::store::{Made, Plan, content_path};
 use crate::geom::Aabb;
-use crate::io::gltf_writer::write_glb;
 
-/// The path, inside the tileset's folder, of tile `i`'s content.
-pub fn content_path(i: usize) -> String {
-    format!("tiles/{i}.glb")
-}
-
-/// `tileset.json` and every tile's content, as (relative path, bytes);
-/// `tileset.json` first.
-pub fn encode(tree: &TileTree) -> Vec<(String, Vec<u8>)> {
-    let boxes = enclosing_boxes(tree);
-    let root_box = boxes.first().copied().unwrap_or(Aabb {
-        min: Vec3::ZERO,
-        max: Vec3::ZERO,
-    });
+/// `tileset.json` of a planned tree whose every tile is made.
+pub fn encode(plan: &Plan, made: &[Made]) -> Vec<u8> {
+    let boxes = enclosing_boxes(plan, made);
     let tileset = json!({
         "asset": {"version": "1.1", "generator": concat!("lodstudio ", env!("CARGO_PKG_VERSION"))},
         // With nothing drawn, every point of the model is missing: the
         // root's box diagonal is the error that asks for the root at once
         // when the model covers more than a few pixels.
-        "geometricError": root_box.diagonal().max(tree.tiles.first().map_or(0.0, |t| t.error)),
-        "root": tile_json(tree, &boxes, 0),
+        "geometricError": boxes[0].diagonal().max(made[0].error),
+        "root": tile_json(plan, made, &boxes, 0),
     });
-    let mut files = vec![(
-        "tileset.json".to_string(),
-        serde_json::to_vec_pretty(&tileset).expect("JSON of numbers and strings"),
-    )];
-    files.extend(
-        tree.tiles
-            .iter()
-            .enumerate()
-            .map(|(i, t)| (content_path(i), write_glb(&t.mesh))),
-    );
-    files
+    serde_json::to_vec_pretty(&tileset).expect("JSON of numbers and strings")
 }
 
-fn tile_json(tree: &TileTree, boxes: &[Aabb], i: usize) -> Value {
-    let tile = &tree.tiles[i];
+fn tile_json(plan: &Plan, made: &[Made], boxes: &[Aabb], i: usize) -> Value {
     let mut j = json!({
         "boundingVolume": {"box": z_up_box(&boxes[i])},
-        "geometricError": tile.error,
+        "geometricError": made[i].error,
         "content": {"uri": content_path(i)},
     });
     if i == 0 {
         j["refine"] = json!("REPLACE");
     }
-    if !tile.children.is_empty() {
-        j["children"] = tile
-            .children
+    let kids = &plan.children[i];
+    if !kids.is_empty() {
+        j["children"] = kids
             .iter()
-            .map(|k| tile_json(tree, boxes, *k))
+            .map(|k| tile_json(plan, made, boxes, *k))
             .collect();
     }
     j
 }
 
 /// Each tile's box around its content and its descendants' boxes
-/// (children come after their parent in the tree's order).
-fn enclosing_boxes(tree: &TileTree) -> Vec<Aabb> {
-    let mut boxes: Vec<Aabb> = tree.tiles.iter().map(|t| t.mesh.bounds()).collect();
-    for i in (0..tree.tiles.len()).rev() {
-        for k in &tree.tiles[i].children {
-            let (lo, hi) = (boxes[*k].min, boxes[*k].max);
-            boxes[i].min = boxes[i].min.min(lo);
-            boxes[i].max = boxes[i].max.max(hi);
+/// (children come after their parent in the plan's order).
+fn enclosing_boxes(plan: &Plan, made: &[Made]) -> Vec<Aabb> {
+    let mut boxes: Vec<Aabb> = made.iter().map(|m| m.bounds).collect();
+    for i in (0..boxes.len()).rev() {
+        for k in &plan.children[i] {
+            boxes[i] = boxes[i].union(boxes[*k]);
         }
     }
     boxes

@@ -22,29 +22,21 @@
 use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::process::Command;
-use std::sync::{Mutex, OnceLock};
+use std::sync::Mutex;
 use std::time::Duration;
 
 use super::*;
+use crate::cli::shard::{ShardArgs, tool_id};
 use lodstudio_core::batch::{
-    Cache, Entry, Lookup, Record, Shard, assign, cache, estimate_peak, manifest, run_within_budget,
-    schedule, shard,
+    Cache, Entry, Lookup, Record, assign, cache, estimate_peak, manifest, run_within_budget,
+    schedule,
 };
 use lodstudio_core::io::confine::{self, Refused};
 
 #[derive(Args, Debug)]
 pub struct BatchArgs {
-    /// Batch: run shard I of N (0-based) of the inputs, e.g. 2/8.
-    #[arg(long, value_name = "I/N", value_parser = Shard::parse, conflicts_with = "shards")]
-    shard: Option<Shard>,
-    /// Batch: N shards, this one's index read from JOB_COMPLETION_INDEX (a
-    /// Kubernetes Indexed Job) or the variable --shard-index-env names.
-    #[arg(long, value_name = "N")]
-    shards: Option<usize>,
-    /// Batch: the variable holding the 0-based shard index with --shards
-    /// (a Slurm array: SLURM_ARRAY_TASK_ID; a CI matrix: its index variable).
-    #[arg(long, value_name = "VAR", default_value = shard::INDEX_ENV, requires = "shards")]
-    shard_index_env: String,
+    #[command(flatten)]
+    shard: ShardArgs,
     /// Batch: models built at once [default: the machine's cores].
     #[arg(long, value_name = "T")]
     threads: Option<usize>,
@@ -68,18 +60,6 @@ fn parse_timeout(text: &str) -> Result<f64, String> {
         Ok(seconds)
     } else {
         Err(bad())
-    }
-}
-
-impl BatchArgs {
-    fn shard(&self) -> Result<Shard, CliError> {
-        match (self.shard, self.shards) {
-            (Some(s), _) => Ok(s),
-            (None, Some(n)) => {
-                Shard::from_env(&self.shard_index_env, n).map_err(CliError::BadInput)
-            }
-            (None, None) => Ok(Shard::ALL),
-        }
     }
 }
 
@@ -140,7 +120,7 @@ impl Ran {
 /// the run ended.
 pub fn run(args: &ExportArgs, recipe: &Recipe, entries: Vec<Entry>) -> Result<Ran, CliError> {
     let b = &args.shards;
-    let shard = b.shard()?;
+    let shard = b.shard.shard()?;
     let threads = b
         .threads
         .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
@@ -525,19 +505,6 @@ fn entry_recipe(recipe: &Recipe, entry: &Entry) -> Result<Recipe, CliError> {
             .map_err(|e| CliError::BadInput(format!("lods={lods}: {e}")))?;
     }
     Ok(r)
-}
-
-/// The tool's identity in cache keys: its version and the hash of its own
-/// executable, so a rebuilt lodstudio never reuses another build's outputs.
-fn tool_id() -> &'static str {
-    static ID: OnceLock<String> = OnceLock::new();
-    ID.get_or_init(|| {
-        let exe = std::env::current_exe()
-            .ok()
-            .and_then(|p| std::fs::read(p).ok())
-            .map_or_else(|| "unknown".into(), |b| cache::sha256_hex(&b));
-        format!("lodstudio {} {exe}", env!("CARGO_PKG_VERSION"))
-    })
 }
 
 /// Removes a folder when dropped (a build's scratch, whatever became of it).
