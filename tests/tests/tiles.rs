@@ -380,3 +380,76 @@ fn shards_at_once_a_killed_run_and_single_levels_write_one_runs_bytes() {
         "level by level, one run's bytes"
     );
 }
+
+/// The shipped Kubernetes manifest's command line, as written (the scan and
+/// the shared volume swapped for bones and a scratch folder, with small
+/// tiles), run as every
+/// index of the job one after another: the first makes everything, the
+/// others find it made, and the tileset is one plain run's.
+#[test]
+fn the_kubernetes_manifest_runs_as_written() {
+    let manifest = std::fs::read_to_string(
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../deploy/kubernetes/tiles-job.yaml"),
+    )
+    .unwrap();
+    let lines: Vec<&str> = manifest.lines().map(str::trim).collect();
+    let first = lines.iter().position(|l| *l == "args:").unwrap() + 1;
+    let args: Vec<String> = lines[first..]
+        .iter()
+        .filter(|l| !l.starts_with('#'))
+        .map_while(|l| l.strip_prefix("- "))
+        .map(|a| a.trim_matches('"').to_string())
+        .collect();
+    let completions: usize = lines
+        .iter()
+        .find_map(|l| l.strip_prefix("completions: "))
+        .unwrap()
+        .parse()
+        .unwrap();
+    let shards = args.iter().position(|a| a == "--shards").unwrap() + 1;
+    assert_eq!(
+        args[shards],
+        completions.to_string(),
+        "completions = --shards"
+    );
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("scan");
+    let bones = shared_model("bones.off");
+    // Small tiles, so that bones has levels to share.
+    let swapped: Vec<&str> = args
+        .iter()
+        .map(|a| match a.as_str() {
+            "/assets/scan.ply" => bones.to_str().unwrap(),
+            "/assets/tiles/scan" => out.to_str().unwrap(),
+            a => a,
+        })
+        .chain(["--tile-triangles", "512"])
+        .collect();
+    let mut built = 0;
+    for index in 0..completions {
+        let run = Command::new(lodstudio_bin())
+            .args(&swapped)
+            .env("JOB_COMPLETION_INDEX", index.to_string())
+            .output()
+            .unwrap();
+        assert!(
+            run.status.success(),
+            "{}",
+            String::from_utf8_lossy(&run.stderr)
+        );
+        let r: Value = serde_json::from_slice(&run.stdout).unwrap();
+        built += r["built"].as_u64().unwrap();
+    }
+    let plain = tmp.path().join("plain");
+    let r = lodstudio_json(&[
+        "tiles",
+        bones.to_str().unwrap(),
+        "-o",
+        plain.to_str().unwrap(),
+        "--tile-triangles",
+        "512",
+    ]);
+    assert!(r["tiles"].as_u64() >= Some(31), "{r}");
+    assert_eq!(Some(built), r["tiles"].as_u64(), "each tile made once");
+    assert_eq!(files(&out, false), files(&plain, false));
+}
