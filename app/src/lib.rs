@@ -12,6 +12,7 @@ pub mod render;
 pub mod session;
 pub mod settings;
 pub mod studio;
+pub mod tileset_view;
 
 use std::path::PathBuf;
 

@@ -14,6 +14,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::settings::MethodSettings;
 use crate::settings::chain::ChainSettings;
+use crate::settings::tiles::TilesSettings;
 
 /// At most this much tuning is lost when the studio dies.
 pub const INTERVAL: Duration = Duration::from_secs(2);
@@ -38,6 +39,8 @@ pub struct Session {
     /// volume's value units, so it only applies when the same volume reopens.
     #[serde(deserialize_with = "threshold_of")]
     pub volume_threshold: Option<(PathBuf, f32)>,
+    /// The tileset view's screen-space error and the studio's tile budget.
+    pub tiles: TilesSettings,
 }
 
 /// A threshold beyond f32 reads as infinite (then dropped by
@@ -56,6 +59,7 @@ impl Session {
         let mut session: Session = serde_json::from_str(json).ok()?;
         session.methods = session.methods.sanitized();
         session.chain = session.chain.sanitized();
+        session.tiles = session.tiles.sanitized();
         session.volume_threshold = session.volume_threshold.filter(|(_, t)| t.is_finite());
         Some(session)
     }

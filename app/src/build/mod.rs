@@ -225,6 +225,14 @@ pub fn length(x: f32) -> String {
     format!("{x:.decimals$}")
 }
 
+/// A bound and its share of the diagonal ("unbounded" alone when infinite).
+pub fn bound_text(bound: f32, diagonal: f32) -> String {
+    match bound.is_finite() {
+        true => format!("{} ({:.3} %)", length(bound), 100.0 * bound / diagonal),
+        false => length(bound),
+    }
+}
+
 #[cfg(test)]
 pub(crate) mod tests {
     use super::*;

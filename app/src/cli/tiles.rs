@@ -8,10 +8,6 @@ use crate::cli::shard::{ShardArgs, tool_id};
 use lodstudio_core::batch::cache;
 use lodstudio_core::tiles::{self, Made, Store, TilesError};
 
-/// Tile budgets the command accepts: below 64 triangles a tile costs more
-/// in its file than in its triangles; above 2²⁴ a leaf is a whole scan.
-const TILE_TRIANGLES: std::ops::RangeInclusive<usize> = 64..=1 << 24;
-
 #[derive(Args, Debug)]
 pub struct TilesArgs {
     /// A mesh file, or builtin:NAME.
@@ -20,7 +16,7 @@ pub struct TilesArgs {
     #[arg(short = 'o', long = "output", value_name = "DIR")]
     output: PathBuf,
     /// Most triangles of a leaf tile (the original triangles of its cell).
-    #[arg(long, value_name = "N", default_value_t = 65_536)]
+    #[arg(long, value_name = "N", default_value_t = tiles::DEFAULT_TILE_TRIANGLES)]
     tile_triangles: usize,
     /// Tiles of a level made at once [default: every core].
     #[arg(long, value_name = "T")]
@@ -40,11 +36,11 @@ pub struct TilesArgs {
 }
 
 pub fn run(args: TilesArgs) -> Result<(), CliError> {
-    if !TILE_TRIANGLES.contains(&args.tile_triangles) {
+    if !tiles::TILE_TRIANGLES.contains(&args.tile_triangles) {
         return Err(CliError::BadInput(format!(
             "--tile-triangles must be in {}..={}, got {}",
-            TILE_TRIANGLES.start(),
-            TILE_TRIANGLES.end(),
+            tiles::TILE_TRIANGLES.start(),
+            tiles::TILE_TRIANGLES.end(),
             args.tile_triangles
         )));
     }

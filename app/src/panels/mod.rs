@@ -1,5 +1,5 @@
 //! The left panel's "Method" section: the list of methods and each one's
-//! controls (`*_ui`-style: each takes its settings by `&mut`). What the
+//! controls, and the 3D Tiles section (`tiles`) (`*_ui`-style: each takes its settings by `&mut`). What the
 //! controls set lives in `settings`, which builds use without any UI.
 
 pub mod amg;
@@ -8,6 +8,7 @@ pub mod hybrid;
 pub mod mergetree;
 pub mod simplify;
 pub mod threshold;
+pub mod tiles;
 pub mod voxel;
 
 use crate::settings::{Method, MethodSettings};

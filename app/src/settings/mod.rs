@@ -11,6 +11,7 @@ pub mod hybrid;
 pub mod mergetree;
 pub mod simplify;
 pub mod threshold;
+pub mod tiles;
 pub mod voxel;
 
 use std::ops::RangeInclusive;

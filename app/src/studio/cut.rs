@@ -55,6 +55,9 @@ impl StudioApp {
 
     /// Shows the scene the view toggles ask for (uploads only on a change).
     pub(super) fn sync_view(&mut self) {
+        if self.sync_tileset() {
+            return;
+        }
         if let Some(preview) = &self.preview {
             // Watching the build: its intermediate state.
             self.viewport.swap_scene(preview);

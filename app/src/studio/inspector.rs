@@ -7,6 +7,10 @@ use crate::{build, heatmap};
 impl StudioApp {
     pub(super) fn inspector(&self, ui: &mut egui::Ui) {
         ui.heading("Inspector");
+        if let Some(view) = &self.tileset {
+            crate::panels::tiles::tileset_inspector_ui(ui, view, self.tiles.max_sse_px);
+            return;
+        }
         let Some(current) = &self.current else {
             ui.label("No model loaded");
             return;
@@ -87,7 +91,7 @@ impl StudioApp {
                         ("cut points", st.points.to_string(), "Point primitives (discs) on the current cut."),
                         ("cut splats", st.splats.to_string(), "Textured domain primitives on the current cut."),
                         ("layer triangles", st.layer_triangles.to_string(), "Triangles of the translucent voxel layers."),
-                        ("cut bound", bound_text(st.error_bound, diagonal), "The cut's object-space error bound (max over its elements); unbounded where there is no input surface to certify against (an implicit solid, a volume)."),
+                        ("cut bound", build::bound_text(st.error_bound, diagonal), "The cut's object-space error bound (max over its elements); unbounded where there is no input surface to certify against (an implicit solid, a volume)."),
                         ("bound is", st.error_bound_kind.name().to_string(), "Certified: no point of the cut or of the original lies farther than the bound from the other (a dense measurement never exceeds it). Estimate: a measure of the method's own (AMG: the largest distance of a domain's points to its splat's plane), not a bound on the distance to the original."),
                         (projected.0, format!("{:.2} px", projected.1), projected.2),
                         ("cut time", format!("{:.2} ms", st.cut_ms), "Time of the last re-selection of the cut and its scene."),
@@ -107,17 +111,5 @@ impl StudioApp {
             }
             chain::ui::inspector_ui(&self.chain, ui, self.viewport.camera.distance);
         });
-    }
-}
-
-/// A bound and its share of the diagonal ("unbounded" alone when infinite).
-fn bound_text(bound: f32, diagonal: f32) -> String {
-    match bound.is_finite() {
-        true => format!(
-            "{} ({:.3} %)",
-            build::length(bound),
-            100.0 * bound / diagonal
-        ),
-        false => build::length(bound),
     }
 }

@@ -5,6 +5,7 @@ use lodstudio_core::builtins;
 
 use lodstudio_core::lod::{Controls, Knob};
 
+use super::loading::display_name;
 use super::{Current, StudioApp};
 use crate::settings::Method;
 
@@ -31,6 +32,17 @@ impl StudioApp {
                 }
             }
             ui.separator();
+            let can_build = self.current.as_ref().and_then(Current::mesh).is_some();
+            let tiles = egui::CollapsingHeader::new("3D Tiles")
+                .default_open(self.tileset.is_some())
+                .show(ui, |ui| {
+                    crate::panels::tiles::tiles_ui(ui, &mut self.tiles, can_build)
+                })
+                .body_returned;
+            if tiles == Some(true) {
+                self.build_tileset(None, ui.ctx());
+            }
+            ui.separator();
             self.method_section(ui);
         });
     }
@@ -42,9 +54,15 @@ impl StudioApp {
                 ui.label(egui::RichText::new(&c.name).strong())
                     .on_hover_text(c.path.display().to_string());
             }
-            None => {
-                ui.label("No model loaded");
-            }
+            None => match &self.tileset {
+                Some(t) => {
+                    ui.label(egui::RichText::new(display_name(&t.path)).strong())
+                        .on_hover_text(t.path.display().to_string());
+                }
+                None => {
+                    ui.label("No model loaded");
+                }
+            },
         }
         if ui.button("Open…").clicked() {
             self.open_dialog(ui.ctx());

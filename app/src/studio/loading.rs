@@ -18,8 +18,9 @@ use crate::settings::voxel::VolumeGrid;
 pub(super) const MAX_RECENT: usize = 10;
 
 /// Extensions offered by the file dialog (the loader detects formats by content).
+/// `json`: a 3D Tiles `tileset.json`.
 const MODEL_EXTENSIONS: &[&str] = &[
-    "obj", "gltf", "glb", "ply", "off", "nrrd", "nhdr", "nii", "inr", "gz",
+    "obj", "gltf", "glb", "ply", "off", "nrrd", "nhdr", "nii", "inr", "gz", "json",
 ];
 
 /// The bundled default model, when the binary runs from its source tree.
@@ -125,6 +126,10 @@ impl StudioApp {
     pub(super) fn start_load(&mut self, path: PathBuf, ctx: &egui::Context) {
         if let Some(old) = self.job.take() {
             self.info(format!("Stopped loading {}", old.job.label()));
+        }
+        if let Some(tileset) = crate::tileset_view::tileset_file(&path) {
+            self.start_tileset_load(tileset, ctx);
+            return;
         }
         let name = display_name(&path);
         let worker_path = path.clone();
@@ -251,6 +256,7 @@ impl StudioApp {
                     .and_then(|p| p.strip_prefix("builtin:"))
                     .and_then(lodstudio_core::builtins::implicit)
                     .map(Arc::from);
+                self.tileset = None;
                 self.current = Some(Current {
                     rows: summary.lines(),
                     name,
@@ -290,7 +296,7 @@ impl StudioApp {
     }
 
     /// Puts `path` first in the recent list.
-    fn remember(&mut self, path: &Path) {
+    pub(super) fn remember(&mut self, path: &Path) {
         let path = path
             .canonicalize()
             .or_else(|_| std::path::absolute(path))

@@ -18,6 +18,7 @@ mod loading;
 mod menu;
 mod saving;
 mod status;
+mod tileset;
 mod view_bar;
 
 use std::path::{Path, PathBuf};
@@ -40,6 +41,7 @@ use crate::job::Job;
 use crate::render::{Scene, Viewport};
 use crate::session::{Autosave, Session};
 use crate::settings::MethodSettings;
+use crate::settings::tiles::TilesSettings;
 use crate::settings::voxel::VolumeGrid;
 
 /// How often the UI refreshes the progress bar while a worker runs (input
@@ -154,6 +156,11 @@ pub struct StudioApp {
     file_dialog: crate::file_dialog::InApp,
     /// A glTF scene's nodes, meshes, chains and animations.
     asset: Option<asset::AssetState>,
+    /// A 3D Tiles tileset on screen (instead of a model).
+    tileset: Option<crate::tileset_view::TilesetView>,
+    /// Its load, or a tileset's build.
+    tileset_job: Option<Job<Result<tileset::TilesetDone, String>>>,
+    tiles: TilesSettings,
 }
 
 impl StudioApp {
@@ -176,6 +183,7 @@ impl StudioApp {
                 self.methods = session.methods;
                 self.chain.settings = session.chain;
                 self.chain.recent_recipes = session.recent_recipes;
+                self.tiles = session.tiles;
                 if let Some((volume, threshold)) = session.volume_threshold {
                     self.methods.voxel.threshold = Some(threshold);
                     self.threshold_volume = Some(volume);
@@ -207,7 +215,11 @@ impl StudioApp {
     /// What the autosave keeps.
     fn session(&self) -> Session {
         Session {
-            model: self.current.as_ref().map(|c| absolute(&c.path)),
+            model: self
+                .current
+                .as_ref()
+                .map(|c| absolute(&c.path))
+                .or_else(|| self.tileset.as_ref().map(|t| absolute(&t.path))),
             recent: self.recent.clone(),
             methods: self.methods,
             chain: self.chain.settings.clone(),
@@ -217,6 +229,7 @@ impl StudioApp {
                 .as_deref()
                 .map(absolute)
                 .zip(self.methods.voxel.threshold.filter(|t| t.is_finite())),
+            tiles: self.tiles,
         }
     }
 
@@ -273,6 +286,9 @@ impl StudioApp {
             autosave: Autosave::off(),
             file_dialog: Default::default(),
             asset: None,
+            tileset: None,
+            tileset_job: None,
+            tiles: TilesSettings::default(),
         }
     }
 
@@ -282,8 +298,9 @@ impl StudioApp {
         self.pending = Some(path.into());
     }
 
+    /// Whether a model or a tileset is being read (or a tileset built).
     pub fn is_loading(&self) -> bool {
-        self.pending.is_some() || self.job.is_some()
+        self.pending.is_some() || self.job.is_some() || self.tileset_job.is_some()
     }
 
     /// Summary of the model on screen.
@@ -350,6 +367,7 @@ impl StudioApp {
             return Some(ASSET_FRAME);
         }
         let quick = self.job.is_some()
+            || self.tileset_job.is_some()
             || self.picker.is_some()
             || self.export.is_some()
             || self.is_measuring_difference();
@@ -425,6 +443,7 @@ impl StudioApp {
         self.poll_export();
         self.poll_chain(&ctx);
         self.poll_asset(&ctx);
+        self.poll_tileset();
         self.start_build_when_due(&ctx);
         self.autosave(&ctx);
 

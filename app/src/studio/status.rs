@@ -43,6 +43,15 @@ impl StudioApp {
         if self.build.as_ref().is_some_and(|b| b.progress_row(ui)) {
             self.cancel_build();
         }
+        if self
+            .tileset_job
+            .as_ref()
+            .is_some_and(|j| j.progress_row(ui))
+        {
+            // Dropping the job cancels it.
+            self.tileset_job = None;
+            self.info("Stopped the tileset".into());
+        }
         if self.build.is_some() {
             // The UI keeps its frame rate while the worker builds: show it.
             ui.weak(format!("frame {}", self.frame_summary()))

@@ -20,8 +20,10 @@
 //! never decrease upwards, as the 3D Tiles specification asks of them.
 //! [`store`] keeps each made tile (its GLB, its mesh, its record) in the
 //! tileset's folder, so builds resume and shards share the work (issue 47,
-//! item 3); [`tileset`] writes `tileset.json`.
+//! item 3); [`tileset`] writes `tileset.json` and reads one back, and
+//! [`cut`] selects the tiles a viewer draws (item 4).
 
+pub mod cut;
 pub mod hlod;
 pub mod partition;
 pub mod store;
@@ -29,3 +31,11 @@ pub mod tileset;
 
 pub use hlod::{Counts, TilesError, build, make_level, plan};
 pub use store::{Made, Plan, Store};
+
+/// Tile budgets (most original triangles of a leaf) a tileset is built
+/// with: below 64 triangles a tile costs more in its file than in its
+/// triangles; above 2²⁴ a leaf is a whole scan.
+pub const TILE_TRIANGLES: std::ops::RangeInclusive<usize> = 64..=1 << 24;
+
+/// The default tile budget: 64k triangles, as 3D Tiles viewers stream well.
+pub const DEFAULT_TILE_TRIANGLES: usize = 65_536;
