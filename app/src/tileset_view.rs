@@ -2,10 +2,14 @@
 //! on a worker, and the cut a viewer draws at the camera and the maximum
 //! screen-space error (`lodstudio_core::tiles::cut`), re-selected only when
 //! the view or the threshold changes and turned into a scene only when the
-//! cut changes, its tiles coloured by level.
+//! cut changes, on a worker thread (a cut of a large tileset is hundreds of
+//! thousands of triangles: the frame keeps the last scene meanwhile), its
+//! tiles coloured by level (the studio's level ramp, the root at one end
+//! and the deepest leaves at the other).
 
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
+use std::sync::mpsc::Receiver;
 
 use glam::Vec3;
 use lodstudio_core::io::{LoadError, confine};
@@ -23,13 +27,15 @@ pub struct TilesetView {
     pub path: PathBuf,
     pub set: Tileset,
     /// Each tile's content (none for a tile without one).
-    meshes: Vec<Option<TriMesh>>,
+    meshes: Arc<Vec<Option<TriMesh>>>,
     /// The view, threshold and colouring the cut was last taken for.
     last: Option<(View, f32, bool)>,
     drawn: Vec<Drawn>,
-    /// The tiles of the scene on screen, to tell a new cut from the same.
+    /// The tiles of the latest scene asked for, to tell a new cut from the same.
     shown: Vec<usize>,
     scene: Arc<Scene>,
+    /// The scene of `shown`, being made.
+    making: Option<Receiver<Scene>>,
     /// The largest box diagonal: errors are also shown as a fraction of it.
     pub diagonal: f32,
 }
@@ -89,21 +95,27 @@ impl TilesetView {
         Ok(Ok(TilesetView {
             path: path.to_path_buf(),
             set,
-            meshes,
+            meshes: Arc::new(meshes),
             last: None,
             drawn: Vec::new(),
             shown: Vec::new(),
             scene: Arc::new(Scene::from_mesh(&TriMesh::default())),
+            making: None,
             diagonal,
         }))
     }
 
-    /// Re-selects the cut for `view` at `max_sse_px`; a new scene only when
-    /// the drawn tiles (or their colouring) change. True when it did.
-    pub fn update(&mut self, view: &View, max_sse_px: f32, by_level: bool) -> bool {
+    /// Re-selects the cut for `view` at `max_sse_px`, and starts making its
+    /// scene when the drawn tiles (or their colouring) changed; takes a
+    /// scene made since. Nothing is allocated while the view stays put.
+    pub fn update(&mut self, view: &View, max_sse_px: f32, by_level: bool) {
+        if let Some(made) = self.making.as_ref().and_then(|rx| rx.try_recv().ok()) {
+            self.scene = Arc::new(made);
+            self.making = None;
+        }
         let now = (*view, max_sse_px, by_level);
         if self.last == Some(now) {
-            return false;
+            return;
         }
         let recolour = self.last.is_none_or(|l| l.2 != by_level);
         self.last = Some(now);
@@ -115,33 +127,32 @@ impl TilesetView {
                 .zip(&self.shown)
                 .all(|(d, s)| d.tile == *s);
         if same && !recolour {
-            return false;
+            return;
         }
         self.shown.clear();
         self.shown.extend(self.drawn.iter().map(|d| d.tile));
-        self.scene = Arc::new(self.cut_scene(by_level));
-        true
+        // A scene still being made for an older cut is dropped with its
+        // receiver (its thread's send then fails).
+        let (tx, rx) = std::sync::mpsc::channel();
+        let (tiles, meshes) = (self.shown.clone(), Arc::clone(&self.meshes));
+        let levels: Vec<usize> = tiles.iter().map(|i| self.set.tiles[*i].depth).collect();
+        let top = self.set.levels().saturating_sub(1).max(1) as f32;
+        let spawned = std::thread::Builder::new()
+            .name("tileset cut".into())
+            .spawn(move || {
+                let _ = tx.send(cut_scene(&meshes, &tiles, &levels, top, by_level));
+            });
+        self.making = spawned.is_ok().then_some(rx);
     }
 
-    fn cut_scene(&self, by_level: bool) -> Scene {
-        let mut mesh = TriMesh::default();
-        for m in self.shown.iter().filter_map(|i| self.meshes[*i].as_ref()) {
-            mesh.append(m);
-        }
-        if !by_level {
-            return Scene::from_mesh(&mesh);
-        }
-        let top = self.set.levels().saturating_sub(1).max(1) as f32;
-        let colors: Vec<Vec3> = self
-            .shown
-            .iter()
-            .filter_map(|i| {
-                let m = self.meshes[*i].as_ref()?;
-                Some((self.set.tiles[*i].depth, m.triangles.len()))
-            })
-            .flat_map(|(depth, n)| std::iter::repeat_n(heatmap::linear(depth as f32 / top), n))
-            .collect();
-        Scene::from_mesh_with_triangle_colors(&mesh, &colors)
+    /// Whether a cut's scene is being made (the studio polls for it).
+    pub fn is_making(&self) -> bool {
+        self.making.is_some()
+    }
+
+    /// The root tile alone, to frame the camera on.
+    pub fn root_scene(&self) -> Scene {
+        cut_scene(&self.meshes, &[0], &[0], 1.0, false)
     }
 
     pub fn scene(&self) -> &Arc<Scene> {
@@ -156,5 +167,29 @@ impl TilesetView {
     /// Triangles of tile `i`'s content.
     pub fn triangles(&self, i: usize) -> usize {
         self.meshes[i].as_ref().map_or(0, |m| m.triangles.len())
+    }
+}
+
+/// The scene of the cut `tiles` (at `levels`), coloured by level on a ramp
+/// up to `top`, or in their materials.
+fn cut_scene(
+    meshes: &[Option<TriMesh>],
+    tiles: &[usize],
+    levels: &[usize],
+    top: f32,
+    by_level: bool,
+) -> Scene {
+    let mut mesh = TriMesh::default();
+    let mut colors: Vec<Vec3> = Vec::new();
+    for (i, level) in tiles.iter().zip(levels) {
+        if let Some(m) = &meshes[*i] {
+            mesh.append(m);
+            let colour = heatmap::linear(*level as f32 / top);
+            colors.extend(std::iter::repeat_n(colour, m.triangles.len()));
+        }
+    }
+    match by_level {
+        true => Scene::from_mesh_with_triangle_colors(&mesh, &colors),
+        false => Scene::from_mesh(&mesh),
     }
 }

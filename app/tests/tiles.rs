@@ -1,8 +1,8 @@
 //! 3D Tiles in the studio (issue 47, item 4), driven headlessly through
 //! egui_kittest: a tileset built from the model on screen opens and draws
 //! the cut a viewer draws (the root alone from afar, finer tiles near, every
-//! drawn tile within the screen-space error unless it is a leaf), coloured
-//! by level, with each drawn tile's certified bound in the inspector; a
+//! drawn tile within the screen-space error unless it is a leaf; its scene
+//! made on a worker), coloured by level, with each drawn tile's certified bound in the inspector; a
 //! tileset naming content outside its folder is refused with a message.
 
 use std::path::PathBuf;
@@ -19,6 +19,14 @@ use pixels::{colourful, viewport_image};
 
 fn bones() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../shared/models/bones.off")
+}
+
+/// Frames until the cut's scene (made on a worker) is on screen.
+fn settle(h: &mut Harness<'_, StudioApp>) {
+    h.run();
+    wait_while(h, "making the cut's scene", |s| {
+        s.tileset().is_some_and(|t| t.is_making())
+    });
 }
 
 /// The drawn tiles and the triangles the viewport draws.
@@ -63,14 +71,14 @@ fn a_tileset_built_in_the_studio_draws_the_viewers_cut_by_level() {
     // Far away: the root alone.
     let framed = h.state().viewport().camera.distance;
     h.state_mut().viewport_mut().camera.distance = framed * 200.0;
-    h.run();
+    settle(&mut h);
     assert_eq!(cut(&h), (vec![0], root_triangles));
 
     // Near: finer tiles, several levels, each within the threshold unless
     // a leaf, and the viewport draws exactly their triangles.
     h.state_mut().viewport_mut().camera.distance = framed * 0.5;
     h.state_mut().tiles_mut().max_sse_px = 16.0;
-    h.run();
+    settle(&mut h);
     let view = h.state().tileset().unwrap();
     let drawn = view.drawn().to_vec();
     let levels: std::collections::BTreeSet<usize> =
@@ -90,7 +98,7 @@ fn a_tileset_built_in_the_studio_draws_the_viewers_cut_by_level() {
     let shot = save_ppm(image.width(), image.height(), image.as_raw(), "tileset-cut");
     println!("studio screenshot: {}", shot.display());
     h.state_mut().tiles_mut().by_level = false;
-    h.run();
+    settle(&mut h);
     let plain = colourful(&viewport_image(&mut h, "tileset-cut-plain"));
     assert!(by_level > 2.0 * plain.max(0.01), "{by_level} vs {plain}");
 }

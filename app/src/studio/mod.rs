@@ -368,6 +368,7 @@ impl StudioApp {
         }
         let quick = self.job.is_some()
             || self.tileset_job.is_some()
+            || self.tileset.as_ref().is_some_and(|t| t.is_making())
             || self.picker.is_some()
             || self.export.is_some()
             || self.is_measuring_difference();

@@ -119,12 +119,9 @@ impl StudioApp {
                 self.asset = None;
                 self.current = None;
                 self.remember(&view.path);
-                let mut view = *view;
-                let camera_view = self.viewport.core_view();
-                view.update(&camera_view, self.tiles.max_sse_px, self.tiles.by_level);
-                // Framed on the root's box (the scene drawn may be any cut).
-                self.viewport.frame_scene(Arc::clone(view.scene()));
-                self.tileset = Some(view);
+                // Framed on the root alone (the scene drawn is any cut of it).
+                self.viewport.frame_scene(Arc::new(view.root_scene()));
+                self.tileset = Some(*view);
             }
             Ok(TilesetDone::Built(path)) => {
                 self.info(format!(
@@ -151,7 +148,8 @@ impl StudioApp {
     }
 
     /// Re-selects the tileset's cut for the camera (only when it moved or
-    /// the threshold changed) and shows it; false when no tileset is open.
+    /// the threshold changed) and shows its latest scene; false when no
+    /// tileset is open.
     pub(super) fn sync_tileset(&mut self) -> bool {
         let Some(view) = &mut self.tileset else {
             return false;
