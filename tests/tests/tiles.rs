@@ -2,7 +2,8 @@
 //! geometricError holds against an independent dense measurement of the
 //! tile against the original triangles below it, whose cuts are crack-free,
 //! and whose bytes do not depend on the thread count, the shard count, a
-//! kill in the middle or the levels being run one at a time (item 3).
+//! kill in the middle or the levels being run one at a time (item 3), nor
+//! on the input being streamed and partitioned out of core (item 2).
 
 use std::collections::{BTreeMap, HashMap};
 use std::path::{Path, PathBuf};
@@ -452,4 +453,84 @@ fn the_kubernetes_manifest_runs_as_written() {
     assert!(r["tiles"].as_u64() >= Some(31), "{r}");
     assert_eq!(Some(built), r["tiles"].as_u64(), "each tile made once");
     assert_eq!(files(&out, false), files(&plain, false));
+}
+
+/// Item 2: a PLY larger than `--memory` is streamed and partitioned out of
+/// core (its cells split on disk), and the tileset is the in-memory one,
+/// byte for byte: the horse as it is (binary, with normals) and as gzipped
+/// ascii; a truncated one is refused and leaves nothing; another format
+/// over the memory asked for is refused, not read.
+#[test]
+fn out_of_core_tiles_are_the_in_memory_tiles() {
+    use std::io::Write as _;
+    let tmp = tempfile::tempdir().unwrap();
+    let horse = shared_model("horse.ply");
+    let ascii_gz = tmp.path().join("horse-ascii.ply.gz");
+    let mesh = load_mesh(&horse);
+    let text = lodstudio_core::io::ply::write_mesh(&mesh, lodstudio_core::io::ply::Encoding::Ascii);
+    let mut gz = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::fast());
+    gz.write_all(&text).unwrap();
+    std::fs::write(&ascii_gz, gz.finish().unwrap()).unwrap();
+    for (name, input) in [("binary", &horse), ("ascii-gz", &ascii_gz)] {
+        let run = |dir: &str, memory: Option<&str>| {
+            let out = tmp.path().join(format!("{name}-{dir}"));
+            let mut args = vec![
+                "tiles",
+                input.to_str().unwrap(),
+                "-o",
+                out.to_str().unwrap(),
+                "--tile-triangles",
+                "2048",
+            ];
+            args.extend(memory.map(|m| ["--memory", m]).into_iter().flatten());
+            (lodstudio_json(&args), out)
+        };
+        let (memory, in_memory) = run("memory", None);
+        let (streamed, out_of_core) = run("streamed", Some("1M"));
+        assert_eq!(memory["out_of_core"], false, "{memory}");
+        assert_eq!(streamed["out_of_core"], true, "{streamed}");
+        assert!(streamed["tiles"].as_u64() >= Some(63), "{streamed}");
+        assert_eq!(memory["input_triangles"], streamed["input_triangles"]);
+        assert_eq!(
+            files(&in_memory, false),
+            files(&out_of_core, false),
+            "{name}"
+        );
+        let spill = out_of_core.join(".lodstudio-tiles/spill");
+        assert_eq!(
+            std::fs::read_dir(spill).unwrap().count(),
+            0,
+            "spill emptied"
+        );
+    }
+    // Cut short: refused (exit 2), and the folder it would have made is gone.
+    let bytes = std::fs::read(&horse).unwrap();
+    let cut = tmp.path().join("cut.ply");
+    std::fs::write(&cut, &bytes[..bytes.len() * 2 / 3]).unwrap();
+    let out = tmp.path().join("cut");
+    let run = lodstudio(&[
+        "tiles",
+        cut.to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+        "--memory",
+        "1M",
+    ]);
+    assert_eq!(
+        run.status.code(),
+        Some(2),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    assert!(!out.exists());
+    let off = lodstudio(&[
+        "tiles",
+        shared_model("bones.off").to_str().unwrap(),
+        "-o",
+        tmp.path().join("off").to_str().unwrap(),
+        "--memory",
+        "10K",
+    ]);
+    assert_eq!(off.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&off.stderr).contains("out of core reads PLY"));
 }

@@ -29,6 +29,11 @@ pub struct TilesArgs {
     level: Option<usize>,
     #[command(flatten)]
     shard: ShardArgs,
+    /// Memory the build may use, e.g. 1G: a PLY input larger than it is
+    /// streamed and partitioned out of core; the tileset's bytes are the
+    /// same either way [default: a quarter of the machine's memory].
+    #[arg(long, value_name = "SIZE", value_parser = io::limits::parse_size)]
+    memory: Option<u64>,
     #[command(flatten)]
     report: ReportArgs,
     #[command(flatten)]
@@ -71,7 +76,11 @@ pub fn run(args: TilesArgs) -> Result<(), CliError> {
     let tileset = args.output.join("tileset.json");
     check_output(&tileset, args.report.force || planned.is_some())?;
     let progress = Progress::new();
+    let memory = args
+        .memory
+        .unwrap_or_else(|| io::limits::machine_total() / 4);
     let mut counts = tiles::Counts::default();
+    let mut streamed = false;
     let leaves = |p: &tiles::Plan| p.children.iter().filter(|k| k.is_empty()).count();
     let plan = match planned {
         Some(plan) => {
@@ -79,14 +88,19 @@ pub fn run(args: TilesArgs) -> Result<(), CliError> {
             plan
         }
         None => {
-            // Read (and refused) before anything is written.
-            let mesh = load_mesh(&args.file, &args.input)?;
-            if mesh.triangles.is_empty() {
+            let out_of_core = out_of_core(&args, memory)?;
+            // In memory, the input is read (and refused) before anything is written.
+            let mesh = match out_of_core {
+                true => None,
+                false => Some(load_mesh(&args.file, &args.input)?),
+            };
+            if mesh.as_ref().is_some_and(|m| m.triangles.is_empty()) {
                 return Err(CliError::BadInput(format!(
                     "{}: no triangles to tile",
                     args.file.display()
                 )));
             }
+            let made_here = !args.output.exists();
             let store = open_store(&args.output)?;
             let _planning = store
                 .lock("plan", true)
@@ -103,8 +117,22 @@ pub fn run(args: TilesArgs) -> Result<(), CliError> {
                     )));
                 }
                 _ => {
-                    let plan = tiles::plan(&store, &mesh, args.tile_triangles, &key, &progress)
-                        .map_err(|e| tiles_error(&args.output, e))?;
+                    let plan = match &mesh {
+                        Some(mesh) => {
+                            tiles::plan(&store, mesh, args.tile_triangles, &key, &progress)
+                                .map_err(|e| tiles_error(&args.output, e))
+                        }
+                        None => {
+                            streamed = true;
+                            plan_streamed(&args, &store, &key, memory, &progress)
+                        }
+                    };
+                    let plan = plan.inspect_err(|_| {
+                        // A refused input leaves nothing behind.
+                        if made_here {
+                            let _ = std::fs::remove_dir_all(&args.output);
+                        }
+                    })?;
                     counts.built += leaves(&plan);
                     plan
                 }
@@ -147,6 +175,8 @@ pub fn run(args: TilesArgs) -> Result<(), CliError> {
             "built": counts.built,
             "reused": counts.reused,
             "shard": format!("{}/{}", shard.index, shard.count),
+            "memory_limit_bytes": memory,
+            "out_of_core": streamed,
             "level": args.level,
             "seconds": seconds,
             "peak_memory_bytes": peak_memory_bytes(),
@@ -173,6 +203,79 @@ pub fn run(args: TilesArgs) -> Result<(), CliError> {
         }
     }
     Ok(())
+}
+
+/// Bytes a mesh file of `bytes` takes to tile in memory: its bytes, the
+/// mesh, its repair and its partition (twelve dragons, a 199 MB binary
+/// PLY: 1.28 GB), four times that for gzip.
+fn in_memory_bytes(file: &std::path::Path) -> u64 {
+    let bytes = std::fs::metadata(file).map_or(0, |m| m.len());
+    let gz = std::fs::File::open(file)
+        .and_then(|mut f| {
+            let mut magic = [0u8; 2];
+            std::io::Read::read_exact(&mut f, &mut magic).map(|_| magic == [0x1f, 0x8b])
+        })
+        .unwrap_or(false);
+    bytes.saturating_mul(if gz { 28 } else { 7 })
+}
+
+/// Whether the input is streamed out of core: a PLY that would not fit
+/// `memory` in memory. Another format over it is refused when the memory
+/// was asked for, and said otherwise.
+fn out_of_core(args: &TilesArgs, memory: u64) -> Result<bool, CliError> {
+    let need = in_memory_bytes(&args.file);
+    if need <= memory {
+        return Ok(false);
+    }
+    let ply = io::extension(&args.file) == "ply"
+        || args
+            .file
+            .to_string_lossy()
+            .to_ascii_lowercase()
+            .ends_with(".ply.gz");
+    let shown = args.file.display();
+    let gib = |b: u64| b as f64 / (1u64 << 30) as f64;
+    match (ply, args.memory) {
+        (true, _) => Ok(true),
+        (false, Some(_)) => Err(CliError::BadInput(format!(
+            "{shown}: tiling it in memory takes about {:.1} GiB, over --memory {:.1} GiB; out of core reads PLY (binary or ascii, gzip too)",
+            gib(need),
+            gib(memory)
+        ))),
+        (false, None) => {
+            eprintln!(
+                "lodstudio: {shown}: tiling it in memory takes about {:.1} GiB, over a quarter of this machine; out of core reads PLY",
+                gib(need)
+            );
+            Ok(false)
+        }
+    }
+}
+
+/// Plans the tileset of a PLY streamed out of core, its cells split on disk
+/// while over a quarter of `memory`.
+fn plan_streamed(
+    args: &TilesArgs,
+    store: &Store,
+    key: &str,
+    memory: u64,
+    progress: &Progress,
+) -> Result<tiles::Plan, CliError> {
+    let dir = args.output.as_path();
+    let spill = store.spill_dir().map_err(|e| store_error(dir, e))?;
+    let weld = args.input.load_options()?.repair.weld;
+    outputs::input(&args.file)?;
+    let streamed =
+        tiles::stream::stream_ply(&args.file, &spill, weld, progress).map_err(|e| match e {
+            tiles::stream::StreamError::Input(m) => CliError::BadInput(m),
+            tiles::stream::StreamError::Io(e) => outputs::io_error(&args.file, "read", &e),
+        })?;
+    let cells = tiles::partition::Spill {
+        dir: Some(spill),
+        in_memory: (memory / 4 / tiles::partition::REC_BYTES as u64) as usize,
+    };
+    tiles::plan_streamed(store, streamed, args.tile_triangles, key, &cells, progress)
+        .map_err(|e| tiles_error(dir, e))
 }
 
 /// What the tiles are built from: the input's bytes (a built-in's name),

@@ -42,13 +42,14 @@ impl MeshArrays<'_> {
     /// The triangles `ids` in that order, with the vertices (and wedges) they
     /// use numbered in order of first use; parts only where one is not 0.
     pub fn gather(&self, ids: impl IntoIterator<Item = u32>) -> TriMesh {
-        let mut remap = vec![u32::MAX; self.positions.len()];
+        let ids = ids.into_iter();
+        let mut remap = Remap::for_subset(ids.size_hint().0, self.positions.len());
         let mut out = TriMesh::default();
         let mut kept = Vec::new();
         let mut order = Vec::new();
         for t in ids {
             let tri = self.triangles[t as usize].map(|v| {
-                let slot = &mut remap[v as usize];
+                let slot = remap.slot(v);
                 if *slot == u32::MAX {
                     *slot = order.len() as u32;
                     order.push(v);
@@ -88,9 +89,43 @@ impl MeshArrays<'_> {
                     })
                 })
                 .collect();
-            Wedges::gathered(w, &worder, corners, |v| remap[v as usize])
+            Wedges::gathered(w, &worder, corners, |v| remap.get(v))
         });
         out
+    }
+}
+
+/// Old vertex index to new: an array over every vertex, or a map where the
+/// subset is small beside the mesh (a tile of a scan of 10⁸ triangles must
+/// not clear 200 MB to gather its 64k).
+enum Remap {
+    Dense(Vec<u32>),
+    Sparse(std::collections::HashMap<u32, u32>),
+}
+
+impl Remap {
+    fn for_subset(triangles: usize, vertices: usize) -> Remap {
+        if triangles.saturating_mul(16) < vertices {
+            Remap::Sparse(std::collections::HashMap::with_capacity(triangles * 3))
+        } else {
+            Remap::Dense(vec![u32::MAX; vertices])
+        }
+    }
+
+    /// Vertex `v`'s new index (`u32::MAX`: not in the subset).
+    fn get(&self, v: u32) -> u32 {
+        match self {
+            Remap::Dense(r) => r[v as usize],
+            Remap::Sparse(m) => m.get(&v).copied().unwrap_or(u32::MAX),
+        }
+    }
+
+    /// Vertex `v`'s new index, `u32::MAX` until set.
+    fn slot(&mut self, v: u32) -> &mut u32 {
+        match self {
+            Remap::Dense(r) => &mut r[v as usize],
+            Remap::Sparse(m) => m.entry(v).or_insert(u32::MAX),
+        }
     }
 }
 

@@ -168,7 +168,7 @@ fn filter_by<T: Copy>(v: &mut Vec<T>, keep: &[bool]) {
 }
 
 /// Zero area in f64: the cross product of two edges is exactly the zero vector.
-fn is_zero_area(pos: &[Vec3], t: &[u32; 3]) -> bool {
+pub(crate) fn is_zero_area(pos: &[Vec3], t: &[u32; 3]) -> bool {
     let [a, b, c] = t.map(|v| pos[v as usize].as_dvec3());
     (b - a).cross(c - a) == glam::DVec3::ZERO
 }
@@ -193,7 +193,7 @@ fn position_key(p: Vec3) -> [u32; 3] {
 }
 
 /// Each vertex maps to the first vertex with identical coordinates.
-fn weld_exact(pos: &[Vec3], bad: &[bool]) -> Vec<u32> {
+pub(crate) fn weld_exact(pos: &[Vec3], bad: &[bool]) -> Vec<u32> {
     let mut first: HashMap<[u32; 3], u32> = HashMap::with_capacity(pos.len());
     (0..pos.len())
         .map(|i| {

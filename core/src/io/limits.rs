@@ -43,7 +43,7 @@ impl Limits {
     /// decompression cap (the inflated bytes and what is parsed from them
     /// must both fit).
     pub fn machine() -> Limits {
-        let total = machine_memory().unwrap_or(FALLBACK_MEMORY);
+        let total = machine_total();
         Limits {
             max_decompressed: total / 4,
             memory_budget: total / 2,
@@ -70,6 +70,11 @@ fn env_size(name: &str) -> Result<Option<u64>, String> {
         Ok(v) => parse_size(&v).map(Some).map_err(|e| format!("{name}: {e}")),
         Err(_) => Ok(None),
     }
+}
+
+/// The machine's memory (or a guess where it cannot be read), in bytes.
+pub fn machine_total() -> u64 {
+    machine_memory().unwrap_or(FALLBACK_MEMORY)
 }
 
 /// Total memory from /proc/meminfo (Linux), in bytes.

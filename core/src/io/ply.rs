@@ -8,7 +8,7 @@
 //!
 //! The line and token helpers here are shared with the other text readers.
 
-use std::io::Write as _;
+use std::io::{BufRead as _, Read as _, Write as _};
 
 use glam::Vec3;
 
@@ -493,6 +493,215 @@ impl Source for Binary<'_> {
     }
 }
 
+/// A binary body read from a stream.
+struct StreamBinary<R> {
+    reader: R,
+    pos: usize,
+    total: usize,
+    big_endian: bool,
+}
+
+impl<R: std::io::Read> Source for StreamBinary<R> {
+    const END: &'static str = "the end of the data";
+
+    fn begin(&mut self) -> bool {
+        true
+    }
+
+    fn value(&mut self, t: ScalarType) -> Result<f64, Miss> {
+        let mut b = [0u8; 8];
+        let b = &mut b[..t.size()];
+        self.reader.read_exact(b).map_err(|_| Miss::End)?;
+        self.pos += b.len();
+        Ok(t.decode(b, self.big_endian))
+    }
+
+    fn skip(&mut self, t: ScalarType) -> Result<(), Miss> {
+        self.value(t).map(|_| ())
+    }
+
+    fn finish(&mut self) -> Result<(), Miss> {
+        Ok(())
+    }
+
+    fn min_bytes(&self, _: Kind, _: bool) -> usize {
+        // The stream's length is not known up front: a count it cannot hold
+        // runs into its end, one element at a time.
+        0
+    }
+
+    fn pos(&self) -> usize {
+        self.pos
+    }
+
+    fn total(&self) -> usize {
+        self.total
+    }
+
+    fn location(&self, start: usize) -> Location {
+        Location::Byte(start as u64)
+    }
+}
+
+/// An ascii body read from a stream, a line at a time.
+struct StreamText<R> {
+    reader: R,
+    line: Vec<u8>,
+    /// Where the next token of `line` starts.
+    at: usize,
+    number: usize,
+    pos: usize,
+    total: usize,
+}
+
+impl<R: std::io::BufRead> StreamText<R> {
+    fn token<T>(&mut self, parse: impl Fn(&[u8]) -> T) -> Option<T> {
+        let mut toks = Tokens(&self.line[self.at..]);
+        let value = parse(toks.next()?);
+        self.at = self.line.len() - toks.0.len();
+        Some(value)
+    }
+}
+
+impl<R: std::io::BufRead> Source for StreamText<R> {
+    const END: &'static str = "the end of the line";
+
+    fn begin(&mut self) -> bool {
+        loop {
+            self.line.clear();
+            match self.reader.read_until(b'\n', &mut self.line) {
+                Ok(0) | Err(_) => return false,
+                Ok(n) => {
+                    self.pos += n;
+                    self.number += 1;
+                    self.at = 0;
+                    if self.line.iter().any(|b| !b.is_ascii_whitespace()) {
+                        return true;
+                    }
+                }
+            }
+        }
+    }
+
+    fn value(&mut self, t: ScalarType) -> Result<f64, Miss> {
+        let parsed = self
+            .token(|tok| {
+                let v = match t {
+                    ScalarType::F32 => parse_f32(tok).map(f64::from),
+                    ScalarType::F64 => parse_f64(tok),
+                    _ => parse_int(tok).map(|v| v as f64),
+                };
+                v.ok_or_else(|| shown(tok))
+            })
+            .ok_or(Miss::End)?;
+        parsed.map_err(|tok| {
+            let what = if t.is_float() {
+                "a number"
+            } else {
+                "an integer"
+            };
+            Miss::Bad(what, tok)
+        })
+    }
+
+    fn skip(&mut self, _: ScalarType) -> Result<(), Miss> {
+        self.token(|_| ()).ok_or(Miss::End)
+    }
+
+    fn finish(&mut self) -> Result<(), Miss> {
+        match self.token(shown) {
+            Some(tok) => Err(Miss::Extra(tok)),
+            None => Ok(()),
+        }
+    }
+
+    fn min_bytes(&self, _: Kind, _: bool) -> usize {
+        0
+    }
+
+    fn pos(&self) -> usize {
+        self.pos
+    }
+
+    fn total(&self) -> usize {
+        self.total
+    }
+
+    fn location(&self, _: usize) -> Location {
+        Location::Line(self.number)
+    }
+}
+
+/// A PLY mesh read as a stream of `total` bytes (for progress; any when not
+/// known), out of core: its vertices are returned (positions, and normals
+/// or colours where it has them), its faces handed to `sink` one polygon's
+/// triangles at a time, in file order, each index checked against the
+/// vertex count. The vertex element must come before the faces.
+pub fn stream_mesh(
+    mut reader: impl std::io::BufRead,
+    total: usize,
+    progress: &Progress,
+    sink: FaceSink<'_>,
+) -> ParseResult<TriMesh> {
+    // The header: lines up to `end_header`, at most 64 KiB of them.
+    let mut head = Vec::new();
+    loop {
+        let before = head.len();
+        let n = (&mut reader)
+            .take(65_536 - head.len() as u64)
+            .read_until(b'\n', &mut head)
+            .map_err(|e| ParseError::line(0, format!("cannot read: {e}")))?;
+        let line = head[before..].trim_ascii();
+        if line == b"end_header" {
+            break;
+        }
+        if n == 0 || head.len() >= 65_536 {
+            return Err(ParseError::line(
+                0,
+                "expected `end_header` within the first 64 KiB",
+            ));
+        }
+    }
+    let header = parse_header(&head)?;
+    let plan = plan(&header.elements)?;
+    let first = |role: Role| plan.roles.iter().position(|r| *r == role);
+    if first(Role::Face).is_none() {
+        return Err(ParseError::line(0, "expected a face element (a mesh)"));
+    }
+    if first(Role::Face) < first(Role::Vertex) {
+        return Err(ParseError::line(
+            0,
+            "faces come before the vertices: this PLY cannot be read as a stream",
+        ));
+    }
+    let model = match header.encoding {
+        Encoding::Ascii => {
+            let mut src = StreamText {
+                reader,
+                line: Vec::new(),
+                at: 0,
+                number: header.body.line(),
+                pos: head.len(),
+                total,
+            };
+            read_body(&mut src, &header.elements, &plan, progress, Some(sink))
+        }
+        enc => {
+            let mut src = StreamBinary {
+                reader,
+                pos: head.len(),
+                total,
+                big_endian: enc == Encoding::BinaryBigEndian,
+            };
+            read_body(&mut src, &header.elements, &plan, progress, Some(sink))
+        }
+    }?;
+    match model {
+        Model::Mesh(m) => Ok(m),
+        _ => Err(ParseError::line(0, "expected a mesh")),
+    }
+}
+
 // ---------------------------------------------------------------------------
 // Reading
 // ---------------------------------------------------------------------------
@@ -507,7 +716,7 @@ pub fn read(data: &[u8], progress: &Progress) -> ParseResult<Model> {
                 lines: header.body,
                 toks: Tokens::default(),
             };
-            read_body(&mut src, &header.elements, &plan, progress)
+            read_body(&mut src, &header.elements, &plan, progress, None)
         }
         enc => {
             let mut src = Binary {
@@ -515,16 +724,22 @@ pub fn read(data: &[u8], progress: &Progress) -> ParseResult<Model> {
                 pos: header.body.pos(),
                 big_endian: enc == Encoding::BinaryBigEndian,
             };
-            read_body(&mut src, &header.elements, &plan, progress)
+            read_body(&mut src, &header.elements, &plan, progress, None)
         }
     }
 }
 
+/// Where a streamed body's triangles go, one face's at a time.
+type FaceSink<'s> = &'s mut dyn FnMut(&[[u32; 3]]) -> Result<(), String>;
+
+/// Reads a body; with `sink`, faces go there instead of into the mesh
+/// (which then holds the vertices alone).
 fn read_body<S: Source>(
     src: &mut S,
     elements: &[Element],
     plan: &Plan,
     progress: &Progress,
+    mut sink: Option<FaceSink<'_>>,
 ) -> ParseResult<Model> {
     let vp = &plan.vertex;
     let mut positions = Vec::new();
@@ -571,6 +786,15 @@ fn read_body<S: Source>(
                         format!("expected at most {} vertices in a mesh", u32::MAX),
                     ));
                 }
+                if let Some(sink) = sink.as_mut() {
+                    let mut one = Vec::with_capacity(8);
+                    read_element(src, elem, uses, progress, |i, _, list| {
+                        one.clear();
+                        triangulate(i, list, plan.vertex_count, &mut one)?;
+                        sink(&one)
+                    })?;
+                    continue;
+                }
                 super::limits::check_items("faces", elem.count, 12)
                     .map_err(|e| ParseError::line(elem.line, e.expected))?;
                 triangles.reserve(elem.count);
@@ -582,7 +806,7 @@ fn read_body<S: Source>(
         }
     }
     progress.set_fraction(1.0);
-    if plan.face_count.unwrap_or(0) == 0 {
+    if plan.face_count.unwrap_or(0) == 0 && sink.is_none() {
         Ok(Model::Points(PointSet {
             positions,
             normals,

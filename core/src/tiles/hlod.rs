@@ -16,13 +16,14 @@
 use std::sync::Mutex;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
-use rayon::prelude::*;
+use glam::Vec3;
 
-use super::partition::{Cell, partition};
+use super::partition::{Items, Rec, Spill, SplitError, split};
 use super::store::{Made, Plan, Store};
+use super::stream::Streamed;
 use crate::batch::Shard;
 use crate::geom::repair::repair_mesh;
-use crate::geom::{Materials, RepairOptions, TriMesh, Weld};
+use crate::geom::{Aabb, Materials, MeshArrays, RepairOptions, TriMesh, Weld};
 use crate::progress::{Cancelled, Progress};
 use crate::simplify::{self, CollapseOptions, SimplifyOptions, Target};
 
@@ -62,43 +63,117 @@ pub fn plan(
     key: &str,
     progress: &Progress,
 ) -> Result<Plan, TilesError> {
-    progress.stage("tiles: planning");
-    store.clear()?;
-    let cells = partition(mesh, tile_triangles);
-    let leaves: Vec<(usize, &Vec<u32>)> = cells
+    let recs = mesh
+        .triangles
         .iter()
         .enumerate()
-        .filter_map(|(i, c)| match c {
-            Cell::Leaf(tris) => Some((i, tris)),
-            Cell::Split(_) => None,
+        .map(|(i, t)| Rec {
+            index: i as u32,
+            vertices: *t,
         })
         .collect();
-    let done = AtomicUsize::new(0);
-    leaves.par_iter().try_for_each(|(i, tris)| {
-        progress.check()?;
-        let leaf = mesh.arrays().gather(tris.iter().copied());
-        let made = Made {
-            error: 0.0,
-            covers: tris.len(),
-            triangles: tris.len(),
-            bounds: leaf.bounds(),
+    let arrays = mesh.arrays();
+    let input = Input {
+        positions: &mesh.positions,
+        root: Items::Memory(recs),
+        triangles: mesh.triangles.len(),
+        bounds: mesh.bounds(),
+    };
+    plan_with(
+        store,
+        input,
+        tile_triangles,
+        key,
+        &Spill::none(),
+        progress,
+        |recs| arrays.gather(recs.iter().map(|r| r.index)),
+    )
+}
+
+/// [`plan`] for a mesh streamed out of core (`stream`): its cells split on
+/// disk while larger than `spill` allows, each leaf gathered from its cell
+/// with what streaming reads of its vertices.
+pub fn plan_streamed(
+    store: &Store,
+    streamed: Streamed,
+    tile_triangles: usize,
+    key: &str,
+    spill: &Spill,
+    progress: &Progress,
+) -> Result<Plan, TilesError> {
+    let positions = &streamed.positions;
+    let (normals, colors) = (streamed.normals.as_deref(), streamed.colors.as_deref());
+    let input = Input {
+        positions,
+        root: streamed.root,
+        triangles: streamed.triangles,
+        bounds: streamed.bounds,
+    };
+    plan_with(store, input, tile_triangles, key, spill, progress, |recs| {
+        let local: Vec<[u32; 3]> = recs.iter().map(|r| r.vertices).collect();
+        let arrays = MeshArrays {
+            positions,
+            triangles: &local,
+            normals,
+            colors,
+            uvs: None,
+            parts: None,
+            materials: None,
+            wedges: None,
+            payload: None,
         };
-        store.put(*i, &leaf, &made)?;
-        let n = done.fetch_add(1, Ordering::Relaxed) + 1;
-        progress.set_fraction(n as f32 / leaves.len() as f32);
-        Ok::<(), TilesError>(())
+        arrays.gather(0..local.len() as u32)
+    })
+}
+
+/// What planning splits: the vertices, the triangles as the root cell.
+struct Input<'a> {
+    positions: &'a [Vec3],
+    root: Items,
+    triangles: usize,
+    bounds: Aabb,
+}
+
+fn plan_with(
+    store: &Store,
+    input: Input<'_>,
+    tile_triangles: usize,
+    key: &str,
+    spill: &Spill,
+    progress: &Progress,
+    gather: impl Fn(&[Rec]) -> TriMesh,
+) -> Result<Plan, TilesError> {
+    progress.stage("tiles: planning");
+    store.clear()?;
+    let tree = split(
+        input.positions,
+        input.root,
+        tile_triangles,
+        spill,
+        progress,
+        |at, recs| {
+            let leaf = gather(recs);
+            let made = Made {
+                error: 0.0,
+                covers: recs.len(),
+                triangles: recs.len(),
+                bounds: leaf.bounds(),
+            };
+            store.put(at, &leaf, &made)
+        },
+    )
+    .map_err(|e| match e {
+        SplitError::Cancelled(c) => TilesError::Cancelled(c),
+        SplitError::Io(e) => TilesError::Io(e),
     })?;
     let plan = Plan {
         key: key.to_string(),
         tile_triangles,
-        input_triangles: mesh.triangles.len(),
-        bbox_diagonal: mesh.bounds().diagonal(),
-        children: cells
+        input_triangles: input.triangles,
+        bbox_diagonal: input.bounds.diagonal(),
+        children: tree
             .iter()
-            .map(|c| match c {
-                Cell::Leaf(_) => Vec::new(),
-                Cell::Split(kids) => kids.to_vec(),
-            })
+            .map(|kids| kids.map_or_else(Vec::new, |k| k.to_vec()))
             .collect(),
     };
     store.put_plan(&plan)?;
@@ -303,6 +378,7 @@ mod tests {
     use super::*;
     use crate::builtins::torus;
     use crate::distance::{SamplingOptions, hausdorff_mesh_mesh};
+    use crate::tiles::partition::{Cell, partition};
 
     /// Errors grow upwards and hold against a dense measurement of each
     /// tile against the original triangles below it; each parent has at

@@ -27,9 +27,10 @@ pub mod cut;
 pub mod hlod;
 pub mod partition;
 pub mod store;
+pub mod stream;
 pub mod tileset;
 
-pub use hlod::{Counts, TilesError, build, make_level, plan};
+pub use hlod::{Counts, TilesError, build, make_level, plan, plan_streamed};
 pub use store::{Made, Plan, Store};
 
 /// Tile budgets (most original triangles of a leaf) a tileset is built

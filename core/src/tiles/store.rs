@@ -10,6 +10,8 @@
 //! - `made/N.json`: tile N's [`Made`] record, written after its GLB and its
 //!   mesh: its presence says the tile is done. Every write is whole or
 //!   none (a rename), so a killed build leaves whole files.
+//! - `spill/`: the input's triangles and the partition's cells while
+//!   planning out of core (empty once planned).
 //! - `locks/`: advisory locks (`flock`, which the kernel releases when a
 //!   process dies, on local disks and NFSv4 alike): `plan.lock` while one
 //!   process plans, `N.lock` while one builds tile N. A process that finds
@@ -141,6 +143,17 @@ impl Store {
             }
         }
         Ok(())
+    }
+
+    /// An empty folder for the cells planning spills to disk (what a
+    /// killed run left there is removed).
+    pub fn spill_dir(&self) -> std::io::Result<PathBuf> {
+        let dir = self.work.join("spill");
+        if dir.exists() {
+            std::fs::remove_dir_all(&dir)?;
+        }
+        std::fs::create_dir_all(&dir)?;
+        Ok(dir)
     }
 
     /// Tile `i`'s record, once it is made.
