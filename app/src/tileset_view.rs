@@ -7,9 +7,10 @@
 //! tiles coloured by level (the studio's level ramp, the root at one end
 //! and the deepest leaves at the other).
 
+use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
-use std::sync::mpsc::Receiver;
+use std::sync::mpsc::{Receiver, TryRecvError};
 
 use glam::Vec3;
 use lodstudio_core::io::{LoadError, confine};
@@ -26,19 +27,25 @@ pub struct TilesetView {
     /// Its `tileset.json`.
     pub path: PathBuf,
     pub set: Tileset,
-    /// Each tile's content (none for a tile without one).
-    meshes: Arc<Vec<Option<TriMesh>>>,
+    /// Each tile's content (none for a tile without one; tiles naming one
+    /// file share it).
+    meshes: Arc<Vec<Option<Arc<TriMesh>>>>,
     /// The view, threshold and colouring the cut was last taken for.
     last: Option<(View, f32, bool)>,
     drawn: Vec<Drawn>,
-    /// The tiles of the latest scene asked for, to tell a new cut from the same.
-    shown: Vec<usize>,
+    /// The cut's tiles and colouring as last selected.
+    wanted: CutOf,
     scene: Arc<Scene>,
-    /// The scene of `shown`, being made.
-    making: Option<Receiver<Scene>>,
+    /// What `scene` shows.
+    scene_of: CutOf,
+    /// One scene being made at a time, and what it is of.
+    making: Option<(Receiver<Scene>, CutOf)>,
     /// The largest box diagonal: errors are also shown as a fraction of it.
     pub diagonal: f32,
 }
+
+/// A cut's tiles, and whether they are coloured by level.
+type CutOf = (Vec<usize>, bool);
 
 /// Whether `path` is a tileset the studio opens as one: a `tileset.json`,
 /// or a folder holding one.
@@ -68,6 +75,9 @@ impl TilesetView {
         };
         let folder = path.parent().unwrap_or(Path::new("."));
         let mut meshes = Vec::with_capacity(set.tiles.len());
+        // Each file read once, and all of them within the memory budget.
+        let mut read_before: HashMap<PathBuf, Arc<TriMesh>> = HashMap::new();
+        let mut bytes_read = 0u64;
         for (i, tile) in set.tiles.iter().enumerate() {
             progress.check()?;
             progress.stage(&format!("reading tile {i} of {}", set.tiles.len()));
@@ -77,82 +87,114 @@ impl TilesetView {
                 continue;
             };
             let what = format!("{shown}: tile {i}");
-            let read = confine::resolve_path(folder, Path::new(uri), &what)
-                .map_err(|e| e.message().to_string())
-                .and_then(|file| {
-                    let bytes = confine::read_regular(&file, budget)
-                        .map_err(|e| e.message().to_string())?;
+            let file = match confine::resolve_path(folder, Path::new(uri), &what) {
+                Ok(f) => f,
+                Err(e) => return Ok(Err(e.message().to_string())),
+            };
+            if let Some(mesh) = read_before.get(&file) {
+                meshes.push(Some(Arc::clone(mesh)));
+                continue;
+            }
+            let read = confine::read_regular(&file, budget.saturating_sub(bytes_read))
+                .map_err(|e| {
+                    format!(
+                        "{}{}",
+                        e.message(),
+                        " (the tileset's files together are over the memory budget)"
+                    )
+                })
+                .and_then(|bytes| {
+                    bytes_read += bytes.len() as u64;
                     lodstudio_core::io::gltf::read(&bytes, file.parent())
-                        .map(|(mesh, _)| mesh)
+                        .map(|(mesh, _)| Arc::new(mesh))
                         .map_err(|e| LoadError::malformed(&file, e).to_string())
                 });
             match read {
-                Ok(mesh) => meshes.push(Some(mesh)),
+                Ok(mesh) => {
+                    read_before.insert(file, Arc::clone(&mesh));
+                    meshes.push(Some(mesh));
+                }
                 Err(e) => return Ok(Err(e)),
             }
         }
         let diagonal = set.tiles.first().map_or(0.0, |t| t.bounds.diagonal());
+        progress.stage("preparing the view");
+        // The root alone, to frame the camera on (made here, off the UI thread).
+        let root = (vec![0], false);
+        let scene = Arc::new(cut_scene(&meshes, &set, &root));
         Ok(Ok(TilesetView {
             path: path.to_path_buf(),
             set,
             meshes: Arc::new(meshes),
             last: None,
             drawn: Vec::new(),
-            shown: Vec::new(),
-            scene: Arc::new(Scene::from_mesh(&TriMesh::default())),
+            wanted: root.clone(),
+            scene,
+            scene_of: root,
             making: None,
             diagonal,
         }))
     }
 
-    /// Re-selects the cut for `view` at `max_sse_px`, and starts making its
-    /// scene when the drawn tiles (or their colouring) changed; takes a
-    /// scene made since. Nothing is allocated while the view stays put.
+    /// Re-selects the cut for `view` at `max_sse_px`; takes a scene made
+    /// since, and starts making the one the latest cut wants when none is
+    /// being made (one worker at a time: a camera in motion never piles
+    /// them up). Nothing is allocated while the view stays put.
     pub fn update(&mut self, view: &View, max_sse_px: f32, by_level: bool) {
-        if let Some(made) = self.making.as_ref().and_then(|rx| rx.try_recv().ok()) {
-            self.scene = Arc::new(made);
-            self.making = None;
+        if let Some((rx, of)) = &self.making {
+            match rx.try_recv() {
+                Ok(made) => {
+                    self.scene = Arc::new(made);
+                    self.scene_of = of.clone();
+                    self.making = None;
+                }
+                Err(TryRecvError::Empty) => {}
+                // A worker that died: its cut is not asked for again.
+                Err(TryRecvError::Disconnected) => {
+                    self.scene_of = of.clone();
+                    self.making = None;
+                }
+            }
         }
         let now = (*view, max_sse_px, by_level);
-        if self.last == Some(now) {
+        if self.last != Some(now) {
+            self.last = Some(now);
+            cut(&self.set, view, max_sse_px, &mut self.drawn);
+            let same = self.drawn.len() == self.wanted.0.len()
+                && self
+                    .drawn
+                    .iter()
+                    .zip(&self.wanted.0)
+                    .all(|(d, s)| d.tile == *s);
+            if !same || self.wanted.1 != by_level {
+                self.wanted.0.clear();
+                self.wanted.0.extend(self.drawn.iter().map(|d| d.tile));
+                self.wanted.1 = by_level;
+            }
+        }
+        if self.making.is_some() || self.scene_of == self.wanted {
             return;
         }
-        let recolour = self.last.is_none_or(|l| l.2 != by_level);
-        self.last = Some(now);
-        cut(&self.set, view, max_sse_px, &mut self.drawn);
-        let same = self.drawn.len() == self.shown.len()
-            && self
-                .drawn
-                .iter()
-                .zip(&self.shown)
-                .all(|(d, s)| d.tile == *s);
-        if same && !recolour {
-            return;
-        }
-        self.shown.clear();
-        self.shown.extend(self.drawn.iter().map(|d| d.tile));
-        // A scene still being made for an older cut is dropped with its
-        // receiver (its thread's send then fails).
         let (tx, rx) = std::sync::mpsc::channel();
-        let (tiles, meshes) = (self.shown.clone(), Arc::clone(&self.meshes));
-        let levels: Vec<usize> = tiles.iter().map(|i| self.set.tiles[*i].depth).collect();
-        let top = self.set.levels().saturating_sub(1).max(1) as f32;
+        let (wanted, meshes, set) = (
+            self.wanted.clone(),
+            Arc::clone(&self.meshes),
+            self.set.clone(),
+        );
+        let of = wanted.clone();
         let spawned = std::thread::Builder::new()
             .name("tileset cut".into())
             .spawn(move || {
-                let _ = tx.send(cut_scene(&meshes, &tiles, &levels, top, by_level));
+                let _ = tx.send(cut_scene(&meshes, &set, &of));
             });
-        self.making = spawned.is_ok().then_some(rx);
+        if spawned.is_ok() {
+            self.making = Some((rx, wanted));
+        }
     }
 
     /// Whether a cut's scene is being made (the studio polls for it).
     pub fn is_making(&self) -> bool {
         self.making.is_some()
-    }
-
-    /// The root tile alone, to frame the camera on.
-    pub fn root_scene(&self) -> Scene {
-        cut_scene(&self.meshes, &[0], &[0], 1.0, false)
     }
 
     pub fn scene(&self) -> &Arc<Scene> {
@@ -170,21 +212,16 @@ impl TilesetView {
     }
 }
 
-/// The scene of the cut `tiles` (at `levels`), coloured by level on a ramp
-/// up to `top`, or in their materials.
-fn cut_scene(
-    meshes: &[Option<TriMesh>],
-    tiles: &[usize],
-    levels: &[usize],
-    top: f32,
-    by_level: bool,
-) -> Scene {
+/// The scene of the cut `(tiles, by_level)` of `set`: coloured by level
+/// on a ramp from the root to the deepest level, or in their materials.
+fn cut_scene(meshes: &[Option<Arc<TriMesh>>], set: &Tileset, (tiles, by_level): &CutOf) -> Scene {
+    let top = set.levels().saturating_sub(1).max(1) as f32;
     let mut mesh = TriMesh::default();
     let mut colors: Vec<Vec3> = Vec::new();
-    for (i, level) in tiles.iter().zip(levels) {
+    for i in tiles {
         if let Some(m) = &meshes[*i] {
             mesh.append(m);
-            let colour = heatmap::linear(*level as f32 / top);
+            let colour = heatmap::linear(set.tiles[*i].depth as f32 / top);
             colors.extend(std::iter::repeat_n(colour, m.triangles.len()));
         }
     }

@@ -159,6 +159,23 @@ fn every_tile_is_within_its_geometric_error_and_every_cut_is_closed() {
     );
     let again = lodstudio(&["tiles", "builtin:torus", "-o", one.to_str().unwrap()]);
     assert_eq!(again.status.code(), Some(2));
+    // A folder whose tiles/ lodstudio did not make: refused, and with
+    // --force its own files are left where they are.
+    let foreign = tmp.path().join("foreign");
+    std::fs::create_dir_all(foreign.join("tiles")).unwrap();
+    std::fs::write(foreign.join("tiles/car.glb"), b"the user's").unwrap();
+    let args = ["tiles", "builtin:torus", "-o", foreign.to_str().unwrap()];
+    assert_eq!(lodstudio(&args).status.code(), Some(2));
+    let forced = lodstudio(&[&args[..], &["--force"]].concat());
+    assert!(
+        forced.status.success(),
+        "{}",
+        String::from_utf8_lossy(&forced.stderr)
+    );
+    assert_eq!(
+        std::fs::read(foreign.join("tiles/car.glb")).unwrap(),
+        b"the user's"
+    );
     let bad = lodstudio(&[
         "tiles",
         "builtin:torus",

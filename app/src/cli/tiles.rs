@@ -82,10 +82,28 @@ pub fn run(args: TilesArgs) -> Result<(), CliError> {
     let mut counts = tiles::Counts::default();
     let mut streamed = false;
     let leaves = |p: &tiles::Plan| p.children.iter().filter(|k| k.is_empty()).count();
-    let plan = match planned {
-        Some(plan) => {
+    if planned.is_none() && Store::foreign_tiles(&args.output) && !args.report.force {
+        return Err(CliError::BadInput(format!(
+            "{}: holds files lodstudio did not make (use --force to replace them)",
+            args.output.join("tiles").display()
+        )));
+    }
+    // The run lock is held shared while tiles are made (see `store`).
+    let (store, _run_lock, plan) = match planned {
+        Some(_) => {
+            let store = open_store(&args.output)?;
+            let lock = store
+                .run_lock(false)
+                .map_err(|e| store_error(&args.output, e))?;
+            // Read again under the lock: another input may have replaced it.
+            let Some(plan) = store.plan().filter(|p| p.key == key) else {
+                return Err(CliError::BadInput(format!(
+                    "{}: another input's tiles replaced these while this run waited",
+                    args.output.display()
+                )));
+            };
             counts.reused += leaves(&plan);
-            plan
+            (store, lock, plan)
         }
         None => {
             let out_of_core = out_of_core(&args, memory)?;
@@ -102,13 +120,16 @@ pub fn run(args: TilesArgs) -> Result<(), CliError> {
             }
             let made_here = !args.output.exists();
             let store = open_store(&args.output)?;
-            let _planning = store
-                .lock("plan", true)
+            let planning = store
+                .planning_lock()
                 .map_err(|e| store_error(&args.output, e))?;
-            match store.plan() {
+            let plan = match store.plan() {
                 Some(p) if p.key == key => {
                     counts.reused += leaves(&p);
-                    p
+                    let run = store
+                        .run_lock(false)
+                        .map_err(|e| store_error(&args.output, e))?;
+                    (p, run)
                 }
                 Some(_) if !args.report.force => {
                     return Err(CliError::BadInput(format!(
@@ -117,6 +138,10 @@ pub fn run(args: TilesArgs) -> Result<(), CliError> {
                     )));
                 }
                 _ => {
+                    // Waits for the shards of a plan being replaced.
+                    let run = store
+                        .run_lock(true)
+                        .map_err(|e| store_error(&args.output, e))?;
                     let plan = match &mesh {
                         Some(mesh) => {
                             tiles::plan(&store, mesh, args.tile_triangles, &key, &progress)
@@ -134,12 +159,16 @@ pub fn run(args: TilesArgs) -> Result<(), CliError> {
                         }
                     })?;
                     counts.built += leaves(&plan);
-                    plan
+                    run.lock_shared()
+                        .map_err(|e| store_error(&args.output, e))?;
+                    (plan, run)
                 }
-            }
+            };
+            drop(planning);
+            let (plan, run) = plan;
+            (store, run, plan)
         }
     };
-    let store = open_store(&args.output)?;
     let deepest = plan.levels() - 1;
     let levels: Vec<usize> = match args.level {
         Some(l) if l > deepest => {

@@ -444,7 +444,7 @@ impl StudioApp {
         self.poll_export();
         self.poll_chain(&ctx);
         self.poll_asset(&ctx);
-        self.poll_tileset();
+        self.poll_tileset(&ctx);
         self.start_build_when_due(&ctx);
         self.autosave(&ctx);
 

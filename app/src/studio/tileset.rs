@@ -65,13 +65,24 @@ impl StudioApp {
                     .parent()
                     .unwrap_or(std::path::Path::new("."))
                     .to_path_buf();
+                if Store::foreign_tiles(&dir) {
+                    return Ok(Err(format!(
+                        "{}: holds files lodstudio did not make; choose an empty folder",
+                        dir.join("tiles").display()
+                    )));
+                }
                 let built = Store::open(&dir)
                     .map_err(tiles::TilesError::Io)
                     .and_then(|store| {
+                        // The whole folder is this build's: no shard of
+                        // another run makes tiles in it meanwhile.
+                        let _planning = store.planning_lock()?;
+                        let _run = store.run_lock(true)?;
                         let plan = tiles::build(&store, &mesh, budget, workers, progress)?;
                         let made: Vec<_> = (0..plan.children.len())
-                            .map(|i| store.made(i).expect("every tile is made"))
-                            .collect();
+                            .map(|i| store.made(i))
+                            .collect::<Option<_>>()
+                            .ok_or_else(|| std::io::Error::other("a tile went missing"))?;
                         lodstudio_core::io::write_atomic(
                             &path,
                             &tiles::tileset::encode(&plan, &made),
@@ -92,7 +103,7 @@ impl StudioApp {
     }
 
     /// A finished tileset load or build.
-    pub(super) fn poll_tileset(&mut self) {
+    pub(super) fn poll_tileset(&mut self, ctx: &egui::Context) {
         let Some(job) = &self.tileset_job else {
             return;
         };
@@ -120,7 +131,7 @@ impl StudioApp {
                 self.current = None;
                 self.remember(&view.path);
                 // Framed on the root alone (the scene drawn is any cut of it).
-                self.viewport.frame_scene(Arc::new(view.root_scene()));
+                self.viewport.frame_scene(Arc::clone(view.scene()));
                 self.tileset = Some(*view);
             }
             Ok(TilesetDone::Built(path)) => {
@@ -128,7 +139,7 @@ impl StudioApp {
                     "Built the tileset {} in {seconds:.1} s",
                     path.display()
                 ));
-                self.open(path);
+                self.start_tileset_load(path, ctx);
             }
             Ok(TilesetDone::NoFile) => {
                 self.info("No tileset built: no place chosen".into());

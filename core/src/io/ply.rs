@@ -345,6 +345,9 @@ fn plan(elements: &[Element]) -> ParseResult<Plan> {
 // Body sources
 // ---------------------------------------------------------------------------
 
+/// Most corners of one face.
+const MAX_FACE_CORNERS: usize = 1 << 24;
+
 /// Why a value could not be read.
 enum Miss {
     End,
@@ -499,6 +502,8 @@ struct StreamBinary<R> {
     pos: usize,
     total: usize,
     big_endian: bool,
+    /// A read that failed other than at the end (corrupt gzip, a disk).
+    failed: Option<std::io::Error>,
 }
 
 impl<R: std::io::Read> Source for StreamBinary<R> {
@@ -511,7 +516,12 @@ impl<R: std::io::Read> Source for StreamBinary<R> {
     fn value(&mut self, t: ScalarType) -> Result<f64, Miss> {
         let mut b = [0u8; 8];
         let b = &mut b[..t.size()];
-        self.reader.read_exact(b).map_err(|_| Miss::End)?;
+        self.reader.read_exact(b).map_err(|e| {
+            if e.kind() != std::io::ErrorKind::UnexpectedEof {
+                self.failed.get_or_insert(e);
+            }
+            Miss::End
+        })?;
         self.pos += b.len();
         Ok(t.decode(b, self.big_endian))
     }
@@ -552,6 +562,7 @@ struct StreamText<R> {
     number: usize,
     pos: usize,
     total: usize,
+    failed: Option<std::io::Error>,
 }
 
 impl<R: std::io::BufRead> StreamText<R> {
@@ -570,7 +581,11 @@ impl<R: std::io::BufRead> Source for StreamText<R> {
         loop {
             self.line.clear();
             match self.reader.read_until(b'\n', &mut self.line) {
-                Ok(0) | Err(_) => return false,
+                Ok(0) => return false,
+                Err(e) => {
+                    self.failed.get_or_insert(e);
+                    return false;
+                }
                 Ok(n) => {
                     self.pos += n;
                     self.number += 1;
@@ -652,7 +667,7 @@ pub fn stream_mesh(
             .read_until(b'\n', &mut head)
             .map_err(|e| ParseError::line(0, format!("cannot read: {e}")))?;
         let line = head[before..].trim_ascii();
-        if line == b"end_header" {
+        if line.split(|b| b.is_ascii_whitespace()).next() == Some(b"end_header") {
             break;
         }
         if n == 0 || head.len() >= 65_536 {
@@ -674,6 +689,9 @@ pub fn stream_mesh(
             "faces come before the vertices: this PLY cannot be read as a stream",
         ));
     }
+    // A read that failed is said as such, not as the data ending there.
+    let failed =
+        |e: Option<std::io::Error>| e.map(|e| ParseError::line(0, format!("cannot read: {e}")));
     let model = match header.encoding {
         Encoding::Ascii => {
             let mut src = StreamText {
@@ -683,8 +701,10 @@ pub fn stream_mesh(
                 number: header.body.line(),
                 pos: head.len(),
                 total,
+                failed: None,
             };
-            read_body(&mut src, &header.elements, &plan, progress, Some(sink))
+            let read = read_body(&mut src, &header.elements, &plan, progress, Some(sink));
+            read.map_err(|e| failed(src.failed.take()).unwrap_or(e))
         }
         enc => {
             let mut src = StreamBinary {
@@ -692,8 +712,10 @@ pub fn stream_mesh(
                 pos: head.len(),
                 total,
                 big_endian: enc == Encoding::BinaryBigEndian,
+                failed: None,
             };
-            read_body(&mut src, &header.elements, &plan, progress, Some(sink))
+            let read = read_body(&mut src, &header.elements, &plan, progress, Some(sink));
+            read.map_err(|e| failed(src.failed.take()).unwrap_or(e))
         }
     }?;
     match model {
@@ -903,6 +925,11 @@ fn read_list<S: Source>(
     let n = src.value(count)?;
     if !(n >= 0.0 && n.fract() == 0.0) {
         return Err(Miss::Bad("a list length", n.to_string()));
+    }
+    // A kept list is held whole (8 bytes an item, its fan 12 a triangle):
+    // no real polygon comes near this many corners.
+    if keep && n > MAX_FACE_CORNERS as f64 {
+        return Err(Miss::Bad("a face of at most 2^24 corners", n.to_string()));
     }
     if keep {
         out.clear();

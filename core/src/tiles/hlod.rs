@@ -225,7 +225,7 @@ pub fn make_level(
                             None => return,
                         },
                     };
-                    match make_tile(store, plan, i, wait) {
+                    match make_tile(store, plan, level, i, wait) {
                         Ok(Some(c)) => {
                             let mut all = locked(&counts);
                             *all += c;
@@ -251,11 +251,12 @@ fn locked<T>(m: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
     m.lock().unwrap_or_else(|e| e.into_inner())
 }
 
-/// Makes tile `i` from its children unless it is made; `None` when another
-/// process holds it and `wait` is false.
+/// Makes tile `i` (at depth `level`) from its children unless it is made;
+/// `None` when another process holds it and `wait` is false.
 fn make_tile(
     store: &Store,
     plan: &Plan,
+    level: usize,
     i: usize,
     wait: bool,
 ) -> Result<Option<Counts>, TilesError> {
@@ -266,7 +267,7 @@ fn make_tile(
     if store.made(i).is_some() {
         return Ok(Some(reused));
     }
-    let Some(_held) = store.lock(&i.to_string(), wait)? else {
+    let Some(_held) = store.tile_lock(i, wait)? else {
         return Ok(None);
     };
     if store.made(i).is_some() {
@@ -275,7 +276,6 @@ fn make_tile(
     let kids = &plan.children[i];
     let mut made = Vec::with_capacity(kids.len());
     let mut meshes = Vec::with_capacity(kids.len());
-    let level = plan.depths()[i];
     for k in kids {
         made.push(
             store

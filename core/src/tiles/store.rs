@@ -14,7 +14,10 @@
 //!   planning out of core (empty once planned).
 //! - `locks/`: advisory locks (`flock`, which the kernel releases when a
 //!   process dies, on local disks and NFSv4 alike): `plan.lock` while one
-//!   process plans, `N.lock` while one builds tile N. A process that finds
+//!   process reads or writes the plan, `run.lock` shared while any makes
+//!   tiles and exclusive to replace the plan (so a `--force` of another
+//!   input waits for the shards still running), and `N.lock` while one
+//!   builds tile N. A process that finds
 //!   a tile locked builds others first and then waits for it, so waiting
 //!   for the last tile of a level is the barrier between levels.
 
@@ -46,6 +49,23 @@ pub struct Plan {
 }
 
 impl Plan {
+    /// Whether the children make one tree rooted at 0 with every child after
+    /// its parent (a damaged or hand-made plan is no plan: planning again
+    /// writes it whole).
+    pub fn is_tree(&self) -> bool {
+        let n = self.children.len();
+        let mut parents = vec![0u32; n];
+        for (i, kids) in self.children.iter().enumerate() {
+            for k in kids {
+                if *k <= i || *k >= n {
+                    return false;
+                }
+                parents[*k] += 1;
+            }
+        }
+        n > 0 && parents[0] == 0 && parents[1..].iter().all(|p| *p == 1)
+    }
+
     /// Each tile's depth (the root's is 0).
     pub fn depths(&self) -> Vec<usize> {
         let mut depth = vec![0; self.children.len()];
@@ -110,7 +130,9 @@ impl Store {
     /// only: nothing is made).
     pub fn plan_in(dir: &Path) -> Option<Plan> {
         let bytes = std::fs::read(dir.join(DIR_NAME).join("plan.json")).ok()?;
-        serde_json::from_slice(&bytes).ok()
+        serde_json::from_slice::<Plan>(&bytes)
+            .ok()
+            .filter(Plan::is_tree)
     }
 
     /// The tileset's folder.
@@ -129,20 +151,31 @@ impl Store {
         write_whole(&self.work.join("plan.json"), &json)
     }
 
-    /// Forgets every tile and the plan (another input's work).
+    /// Forgets every tile and the plan (another input's work): the plan,
+    /// `tileset.json`, and of `tiles/` only the GLBs of tiles it made
+    /// (another file there is the user's).
     pub fn clear(&self) -> std::io::Result<()> {
         let _ = std::fs::remove_file(self.work.join("plan.json"));
+        let _ = std::fs::remove_file(self.dir.join("tileset.json"));
+        for entry in std::fs::read_dir(self.work.join("made"))? {
+            let name = entry?.file_name();
+            let tile = name.to_str().and_then(|n| n.strip_suffix(".json"));
+            if let Some(i) = tile.and_then(|t| t.parse::<usize>().ok()) {
+                let _ = std::fs::remove_file(self.dir.join(content_path(i)));
+            }
+        }
         for sub in ["made", "mesh"] {
             std::fs::remove_dir_all(self.work.join(sub))?;
             std::fs::create_dir_all(self.work.join(sub))?;
         }
-        for entry in std::fs::read_dir(self.dir.join("tiles"))? {
-            let path = entry?.path();
-            if path.extension().is_some_and(|e| e == "glb") {
-                std::fs::remove_file(path)?;
-            }
-        }
         Ok(())
+    }
+
+    /// Whether `dir/tiles/` holds files while `dir` has no work folder: a
+    /// folder lodstudio did not make, whose files a build would replace.
+    pub fn foreign_tiles(dir: &Path) -> bool {
+        !dir.join(DIR_NAME).exists()
+            && std::fs::read_dir(dir.join("tiles")).is_ok_and(|mut d| d.next().is_some())
     }
 
     /// An empty folder for the cells planning spills to disk (what a
@@ -182,15 +215,31 @@ impl Store {
         write_whole(&self.work.join(format!("made/{i}.json")), &json)
     }
 
-    /// The lock named `name` (`plan`, or a tile's index): waited for, or
-    /// `None` when another holds it and `wait` is false. Held until dropped.
-    pub fn lock(&self, name: &str, wait: bool) -> std::io::Result<Option<File>> {
-        let file = std::fs::OpenOptions::new()
-            .read(true)
-            .write(true)
-            .create(true)
-            .truncate(false)
-            .open(self.work.join(format!("locks/{name}.lock")))?;
+    /// The planning lock, waited for: one process at a time reads or
+    /// writes the plan. Held until dropped.
+    pub fn planning_lock(&self) -> std::io::Result<File> {
+        let file = self.lock_file("plan")?;
+        file.lock()?;
+        Ok(file)
+    }
+
+    /// The run lock, waited for: shared while a process makes tiles of
+    /// the plan, exclusive to replace the plan (another input's, with
+    /// `--force`), so a plan is never replaced under a running build. Held
+    /// until dropped; an exclusive one turns shared with `lock_shared`.
+    pub fn run_lock(&self, exclusive: bool) -> std::io::Result<File> {
+        let file = self.lock_file("run")?;
+        match exclusive {
+            true => file.lock()?,
+            false => file.lock_shared()?,
+        }
+        Ok(file)
+    }
+
+    /// Tile `i`'s lock: waited for, or `None` when another holds it and
+    /// `wait` is false. Held until dropped.
+    pub fn tile_lock(&self, i: usize, wait: bool) -> std::io::Result<Option<File>> {
+        let file = self.lock_file(&i.to_string())?;
         if wait {
             file.lock()?;
             return Ok(Some(file));
@@ -200,6 +249,15 @@ impl Store {
             Err(std::fs::TryLockError::WouldBlock) => Ok(None),
             Err(std::fs::TryLockError::Error(e)) => Err(e),
         }
+    }
+
+    fn lock_file(&self, name: &str) -> std::io::Result<File> {
+        std::fs::OpenOptions::new()
+            .read(true)
+            .write(true)
+            .create(true)
+            .truncate(false)
+            .open(self.work.join(format!("locks/{name}.lock")))
     }
 }
 

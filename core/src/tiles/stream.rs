@@ -65,7 +65,7 @@ pub fn stream_ply(
     let file = crate::io::confine::open_regular(path)?;
     // A gzip bomb is stopped where loading stops it (the faces would fill
     // the disk rather than memory).
-    let cap = crate::io::limits::current().max_decompressed;
+    let cap = crate::io::decompression_cap(file.metadata()?.len());
     let capped = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
     let (reader, total): (Box<dyn std::io::BufRead>, usize) = if gz {
         let inflate = Capped {
@@ -113,23 +113,27 @@ pub fn stream_ply(
         _ => Some(weld_exact(&positions, &bad)),
     };
     // Welded records whose normals or colours differ keep them per corner
-    // in memory (wedges); out of core, each vertex keeps its own.
+    // in memory (`Wedges::of_welded`, over the records triangles use);
+    // out of core each vertex keeps its own, so such a file is refused.
     let attributes = [&vertices.normals, &vertices.colors];
-    let split = remap.as_ref().and_then(|r| {
-        (0..r.len()).find(|&i| {
-            let w = r[i] as usize;
-            w != i
-                && attributes
-                    .iter()
-                    .any(|a| a.as_ref().is_some_and(|a| a[i] != a[w]))
-        })
-    });
-    if let Some(i) = split {
-        let _ = std::fs::remove_file(&raw_path);
-        return Err(bad_input(format!(
-            "vertex {i} is welded to one of the same position with another normal or colour, which out of core does not carry (give it the memory to be tiled in memory)"
-        )));
+    let has_attributes = attributes.iter().any(|a| a.is_some());
+    let mut merged = vec![false; if has_attributes { positions.len() } else { 0 }];
+    if let Some(r) = remap.as_ref().filter(|_| has_attributes) {
+        for (i, w) in r.iter().enumerate() {
+            if *w as usize != i {
+                merged[*w as usize] = true;
+            }
+        }
     }
+    // +0 and −0 are one value, as `of_welded` has it.
+    let bits = |r: usize| -> Vec<u32> {
+        attributes
+            .iter()
+            .filter_map(|a| a.as_ref())
+            .flat_map(|a| a[r].to_array().map(|x| (x + 0.0).to_bits()))
+            .collect()
+    };
+    let mut seen: std::collections::HashMap<u32, Vec<u32>> = std::collections::HashMap::new();
     let mut root = CellWriter::create(dir.join("cell-root.bin"))?;
     let mut bounds = Aabb::EMPTY;
     let mut kept = 0u32;
@@ -143,7 +147,19 @@ pub fn stream_ply(
         if t.iter().any(|v| bad[*v as usize]) {
             continue;
         }
+        let records = t;
         let t = remap.as_ref().map_or(t, |r| t.map(|v| r[v as usize]));
+        for (r, w) in records.iter().zip(t) {
+            if merged.get(w as usize) == Some(&true) {
+                let own = bits(*r as usize);
+                if *seen.entry(w).or_insert_with(|| own.clone()) != own {
+                    let _ = std::fs::remove_file(&raw_path);
+                    return Err(bad_input(format!(
+                        "vertex {r} is welded to one of the same position with another normal or colour, which out of core does not carry (give it the memory to be tiled in memory)"
+                    )));
+                }
+            }
+        }
         if t[0] == t[1] || t[1] == t[2] || t[0] == t[2] || is_zero_area(&positions, &t) {
             continue;
         }
@@ -154,7 +170,9 @@ pub fn stream_ply(
             index: kept,
             vertices: t,
         })?;
-        kept += 1;
+        kept = kept
+            .checked_add(1)
+            .ok_or_else(|| bad_input(format!("more than {} triangles", u32::MAX)))?;
     }
     drop(reader);
     std::fs::remove_file(&raw_path)?;

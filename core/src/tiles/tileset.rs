@@ -130,9 +130,11 @@ fn read_tile(
     }
     let error = j["geometricError"]
         .as_f64()
+        .map(|e| e as f32)
         .filter(|e| e.is_finite() && *e >= 0.0)
-        .ok_or_else(|| format!("{at}: geometricError must be a number ≥ 0"))?
-        as f32;
+        .ok_or_else(|| {
+            format!("{at}: geometricError must be a number ≥ 0 (in single precision)")
+        })?;
     let bounds = volume(&j["boundingVolume"]).map_err(|e| format!("{at}: {e}"))?;
     let add = match j["refine"].as_str() {
         None => parent_add,
@@ -204,10 +206,14 @@ fn volume(j: &Value) -> Result<Aabb, String> {
     // z-up (x, y, z) ↦ y-up (x, z, −y), the inverse of `z_up_box`.
     let c = Vec3::new(centre[0] as f32, centre[2] as f32, -centre[1] as f32);
     let h = Vec3::new(half[0] as f32, half[2] as f32, half[1] as f32);
-    Ok(Aabb {
+    let b = Aabb {
         min: c - h,
         max: c + h,
-    })
+    };
+    match b.diagonal().is_finite() {
+        true => Ok(b),
+        false => Err("boundingVolume: beyond single precision".into()),
+    }
 }
 
 /// A content URI that stays in the tileset's folder: relative, no `..`, no
