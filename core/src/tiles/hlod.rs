@@ -18,7 +18,7 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 
 use glam::Vec3;
 
-use super::partition::{Items, Rec, Spill, SplitError, split};
+use super::partition::{Items, Rec, Spill, SplitError, records, split};
 use super::store::{Made, Plan, Store};
 use super::stream::Streamed;
 use crate::batch::Shard;
@@ -63,19 +63,10 @@ pub fn plan(
     key: &str,
     progress: &Progress,
 ) -> Result<Plan, TilesError> {
-    let recs = mesh
-        .triangles
-        .iter()
-        .enumerate()
-        .map(|(i, t)| Rec {
-            index: i as u32,
-            vertices: *t,
-        })
-        .collect();
     let arrays = mesh.arrays();
     let input = Input {
         positions: &mesh.positions,
-        root: Items::Memory(recs),
+        root: Items::Memory(records(mesh)),
         triangles: mesh.triangles.len(),
         bounds: mesh.bounds(),
     };

@@ -69,19 +69,10 @@ pub enum Cell {
 /// The partition of `mesh`'s triangles into cells of at most `budget`
 /// (≥ 1), in memory; node 0 is the root.
 pub fn partition(mesh: &TriMesh, budget: usize) -> Vec<Cell> {
-    let recs = mesh
-        .triangles
-        .iter()
-        .enumerate()
-        .map(|(i, t)| Rec {
-            index: i as u32,
-            vertices: *t,
-        })
-        .collect();
     let mut leaves = Vec::new();
     let tree = split(
         &mesh.positions,
-        Items::Memory(recs),
+        Items::Memory(records(mesh)),
         budget,
         &Spill::none(),
         &Progress::new(),
@@ -99,6 +90,18 @@ pub fn partition(mesh: &TriMesh, budget: usize) -> Vec<Cell> {
         cells[at] = Cell::Leaf(tris);
     }
     cells
+}
+
+/// Every triangle of `mesh` as a record, in input order.
+pub fn records(mesh: &TriMesh) -> Vec<Rec> {
+    mesh.triangles
+        .iter()
+        .enumerate()
+        .map(|(i, t)| Rec {
+            index: i as u32,
+            vertices: *t,
+        })
+        .collect()
 }
 
 /// Where cells too large for memory go, and what memory cells may use.
