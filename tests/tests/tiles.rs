@@ -322,7 +322,14 @@ fn shards_at_once_a_killed_run_and_single_levels_write_one_runs_bytes() {
         .unwrap();
     let work = killed.join(".lodstudio-tiles");
     let start = std::time::Instant::now();
-    let made = || std::fs::read_dir(work.join("made")).map_or(0, |d| d.count());
+    // Records written whole: a `.N.json.part` being written is not one.
+    let made = || {
+        std::fs::read_dir(work.join("made")).map_or(0, |d| {
+            d.flatten()
+                .filter(|e| !e.file_name().to_string_lossy().starts_with('.'))
+                .count()
+        })
+    };
     let leaves = || -> Option<usize> {
         let plan: Value =
             serde_json::from_slice(&std::fs::read(work.join("plan.json")).ok()?).ok()?;
