@@ -374,6 +374,50 @@ fn the_trucks_lods_show_no_texture_bleeding() {
     assert!(worst(&cards) > 0.1);
 }
 
+/// `--topology free` past a handle's floor: a torus asked for fewer
+/// triangles than the edge collapse can keep a handle with has its hole
+/// closed by pair contraction (`simplify/pairs.rs`), reaches the count, says
+/// so in its report, and stays within its certified bound by an independent
+/// dense measurement; `keep` stops short of the count and says why.
+#[test]
+fn topology_free_closes_a_handle_past_its_floor() {
+    let dir = tempfile::tempdir().unwrap();
+    let torus = lodstudio_core::builtins::torus(1.0, 0.3, 32, 16);
+    let file = dir.path().join("torus.obj");
+    let plain = TriMesh::new(torus.positions, torus.triangles);
+    std::fs::write(&file, io::obj::write(&plain)).unwrap();
+    let file = file.to_str().unwrap();
+    let out = |n: &str| dir.path().join(n).display().to_string();
+    let kept = lodstudio_json(&["simplify", file, "--triangles", "8", "-o", &out("k.obj")]);
+    assert!(kept["unmet"]["reached"].as_u64().unwrap() > 8, "{kept}");
+    let free = out("f.obj");
+    let r = lodstudio_json(&[
+        "simplify",
+        file,
+        "--triangles",
+        "8",
+        "--topology",
+        "free",
+        "-o",
+        &free,
+    ]);
+    let t = &r["topology"];
+    assert_eq!(
+        (&t["genus_before"], &t["genus_after"]),
+        (&1.into(), &0.into()),
+        "{r}"
+    );
+    assert!(t["pair_cell"].as_f64().unwrap() > 0.0, "{r}");
+    assert!(t["contracted_vertices"].as_u64().unwrap() > 0, "{r}");
+    assert!(r["unmet"].is_null(), "{r}");
+    assert!(load_file(&free).triangles.len() <= 8);
+    let measured = lodstudio_json(&["measure", file, &free])["hausdorff"]
+        .as_f64()
+        .unwrap();
+    let bound = r["error_bound"].as_f64().unwrap();
+    assert!(measured <= bound, "measured {measured} > {bound}");
+}
+
 /// `--topology free` (issue 48, item 2): a speck beside a sphere is pruned
 /// where that is certified within the budget, the certificate holds
 /// against an independent dense measurement of the whole input, and the

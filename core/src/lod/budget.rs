@@ -37,8 +37,9 @@ impl Blocker {
             }
             Blocker::Topology => {
                 "topology kept: every edge left would pinch the surface, close a handle or make \
-                 a piece vanish; --topology free prunes the pieces within the budget, and voxel, \
-                 which changes the topology, reaches fewer"
+                 a piece vanish; --topology free prunes pieces, merges them and closes holes \
+                 and handles at a certified cost, and voxel, which changes the topology, \
+                 reaches fewer"
             }
             Blocker::Bones => "bone boundaries kept: the vertices left share no joint",
             Blocker::Guards => {

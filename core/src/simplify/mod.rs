@@ -24,6 +24,7 @@ pub mod bound;
 pub mod collapse;
 mod history;
 mod limit;
+pub mod pairs;
 pub mod progressive;
 pub mod projection;
 pub mod prune;

@@ -23,7 +23,7 @@
 
 use rayon::prelude::*;
 
-use super::bound::{BoundOptions, max_distance_bound};
+use super::bound::{BoundOptions, Original, certify_against, max_distance_bound};
 use super::{Simplified, SimplifyError, SimplifyOptions, Target};
 use crate::distance::{Bvh, MeshDistance, closest_point_on_triangle};
 use crate::geom::{Aabb, Topology, TriMesh};
@@ -167,7 +167,8 @@ pub enum TopologyMode {
     /// Every component and handle stays.
     #[default]
     Keep,
-    /// Components may be pruned where that is certified ([`simplify_free`]).
+    /// Components may be pruned, and pieces merged and holes closed by pair
+    /// contraction, where that is certified ([`simplify_free`]).
     Free,
 }
 
@@ -187,12 +188,18 @@ impl std::str::FromStr for TopologyMode {
 pub struct TopologyReport {
     pub components_before: usize,
     pub components_after: usize,
+    /// Summed over components from their Euler characteristics: negative
+    /// where a contraction joined pieces at one vertex (not a manifold).
     pub genus_before: i64,
     pub genus_after: i64,
     pub pruned_components: usize,
     pub pruned_triangles: usize,
     /// The pruning's certified share of the bound (0 when none went).
     pub prune_bound: f32,
+    /// The grid spacing of the pair contraction across gaps (module
+    /// `pairs`) and the vertices it contracted into another; 0 when none.
+    pub pair_cell: f32,
+    pub contracted_vertices: usize,
 }
 
 /// The certified largest distance from the input's `removed` triangles to
@@ -232,13 +239,83 @@ fn simplify_pruned(
     Ok(result)
 }
 
+/// Pair contraction (module `pairs`) of a certified result of `mesh`, with
+/// the collapse going on from it, certified against `mesh` directly.
+struct Contracting<'a> {
+    original: Original<'a>,
+    opts: SimplifyOptions,
+    certifying: BoundOptions,
+}
+
+impl<'a> Contracting<'a> {
+    fn new(mesh: &'a TriMesh, opts: &SimplifyOptions, bound_opts: &BoundOptions) -> Self {
+        Contracting {
+            original: Original::new(mesh),
+            opts: *opts,
+            certifying: BoundOptions {
+                per_triangle: opts.per_triangle_bounds,
+                ..*bound_opts
+            },
+        }
+    }
+
+    /// `base`'s pairs within one cell of spacing `cell` (the grid offset by
+    /// `shift` cells) contracted, then collapsed to the options' target;
+    /// with an `error`, to what is left of it after the contraction's own
+    /// certified cost.
+    fn run(
+        &self,
+        base: &TriMesh,
+        cell: f32,
+        shift: f32,
+        error: Option<f32>,
+        progress: &Progress,
+    ) -> Result<Attempt, SimplifyError> {
+        let (contracted, pairs) = super::pairs::contract(base, cell, shift);
+        if pairs == 0 || contracted.triangles.is_empty() {
+            return Ok(Attempt::Nothing);
+        }
+        let mut opts = self.opts;
+        if let Some(e) = error {
+            let cost = certify_against(&self.original, &contracted, &self.certifying, progress)?
+                .error_bound();
+            if cost >= e {
+                return Ok(Attempt::Over);
+            }
+            opts.target = Target::Error(e - cost);
+        }
+        let mut result = super::simplify(&contracted, &opts, progress)?;
+        result.certificate =
+            certify_against(&self.original, &result.mesh, &self.certifying, progress)?;
+        Ok(Attempt::Done(result, pairs))
+    }
+}
+
+/// What one contraction gave.
+// One per attempt, matched at once: boxing the result buys nothing.
+#[allow(clippy::large_enum_variant)]
+enum Attempt {
+    /// No pair within a cell, or no triangle left.
+    Nothing,
+    /// The contraction alone costs the error.
+    Over,
+    /// The result and the vertices contracted.
+    Done(Simplified, usize),
+}
+
 /// [`simplify`](super::simplify) free to drop components (`--topology
 /// free`). For an error E, components costing at most E/2 are pruned and
-/// the rest simplified to E less what they cost. For a triangle count, the
+/// the rest simplified to E less what they cost (or not, where the plain
+/// collapse to E keeps fewer triangles); the collapse to E/2 is
+/// also contracted across gaps and holes (module `pairs`) and collapsed to
+/// E less the contraction's certified cost, and the fewest triangles win. For a triangle count, the
 /// plain result's bound e is the yardstick: the mesh is pruned at a
 /// quarter, half and all of e, and at √2·e, 2e, … while the count is unmet,
-/// each simplified to the count; of these and the plain result the one
-/// nearest the count wins, then the one with the lowest certified bound.
+/// each simplified to the count. Where the plain result stops short of the
+/// count, its vertices are also contracted across gaps and holes (module
+/// `pairs`) and collapsed to the count, certified against the input. Of all
+/// these and the plain result the one nearest the count wins, then the one
+/// with the lowest certified bound.
 ///
 /// # Errors
 /// As [`simplify`](super::simplify).
@@ -254,7 +331,7 @@ pub fn simplify_free(
         Target::RelativeError(e) => Some(e * diag),
         Target::Triangles(_) | Target::Ratio(_) => None,
     };
-    let (pruned, result) = match error {
+    let (pruned, result, pairs) = match error {
         Some(e) => {
             let pruned = prune(mesh, e * 0.5, &bound_opts);
             let rest = SimplifyOptions {
@@ -262,7 +339,45 @@ pub fn simplify_free(
                 ..*opts
             };
             let result = simplify_pruned(mesh, &pruned, &rest, &bound_opts, progress)?;
-            (pruned, result)
+            let mut best = (pruned, result, None);
+            // The plain collapse to E too: pruning at E/2 leaves the rest
+            // less room, which can cost more triangles than it saves.
+            let plain = super::simplify(mesh, opts, progress)?;
+            if plain.mesh.triangles.len() < best.1.mesh.triangles.len() {
+                best = (Pruned::nothing(mesh), plain, None);
+            }
+            // Pairs contracted in the collapse at half the error, where what
+            // contraction costs leaves room within E for the collapse to go
+            // on: cells from E/4 up by √2, two grid offsets each, until
+            // both cost the error or the cell is the diagonal.
+            let half = SimplifyOptions {
+                target: Target::Error(0.5 * e),
+                ..*opts
+            };
+            let base = super::simplify(mesh, &half, progress)?.mesh;
+            let contracting = Contracting::new(mesh, opts, &bound_opts);
+            let mut cell = 0.25 * e;
+            while cell <= diag {
+                let mut over = true;
+                for shift in [0.0, 0.5] {
+                    match contracting.run(&base, cell, shift, Some(e), progress)? {
+                        Attempt::Over => {}
+                        Attempt::Nothing => over = false,
+                        Attempt::Done(r, pairs) => {
+                            over = false;
+                            let fewer = r.mesh.triangles.len() < best.1.mesh.triangles.len();
+                            if fewer && r.error_bound() <= e {
+                                best = (Pruned::nothing(mesh), r, Some((cell, pairs)));
+                            }
+                        }
+                    }
+                }
+                if over {
+                    break;
+                }
+                cell *= std::f32::consts::SQRT_2;
+            }
+            best
         }
         None => {
             let plain = super::simplify(mesh, opts, progress)?;
@@ -277,7 +392,8 @@ pub fn simplify_free(
             };
             let key = |r: &Simplified| (r.mesh.triangles.len().max(asked), r.error_bound());
             let yardstick = plain.error_bound();
-            let mut best = (Pruned::nothing(mesh), plain);
+            let floor = (plain.mesh.triangles.len() > asked).then(|| plain.mesh.clone());
+            let mut best = (Pruned::nothing(mesh), plain, None);
             let mut tried: Vec<Vec<u32>> = Vec::new();
             // A quarter, half and all of the yardstick; then, while the
             // count is still unmet, √2 times as much each time, up to the
@@ -298,7 +414,33 @@ pub fn simplify_free(
                 let result = simplify_pruned(mesh, &pruned, &rest, &bound_opts, progress)?;
                 let (new, old) = (key(&result), key(&best.1));
                 if new.0 < old.0 || (new.0 == old.0 && new.1 < old.1) {
-                    best = (pruned, result);
+                    best = (pruned, result, None);
+                }
+            }
+            // Where the collapse stopped short of the count, pairs closer
+            // than a cell are contracted across gaps and holes (module
+            // `pairs`) and the collapse goes on, certified against the
+            // input directly: cells from the yardstick up by √2, up to the
+            // diagonal, until three have reached the count.
+            if let Some(floor) = floor {
+                let contracting = Contracting::new(mesh, &rest, &bound_opts);
+                let (mut cell, mut reached) = (yardstick.max(1e-4 * diag), 0);
+                while cell <= diag && reached < 3 {
+                    let mut any = false;
+                    for shift in [0.0, 0.25, 0.5, 0.75] {
+                        let Attempt::Done(result, pairs) =
+                            contracting.run(&floor, cell, shift, None, progress)?
+                        else {
+                            continue;
+                        };
+                        any |= result.mesh.triangles.len() <= asked;
+                        let (new, old) = (key(&result), key(&best.1));
+                        if new.0 < old.0 || (new.0 == old.0 && new.1 < old.1) {
+                            best = (Pruned::nothing(mesh), result, Some((cell, pairs)));
+                        }
+                    }
+                    reached += usize::from(any);
+                    cell *= std::f32::consts::SQRT_2;
                 }
             }
             best
@@ -313,6 +455,8 @@ pub fn simplify_free(
         pruned_components: pruned.components,
         pruned_triangles: pruned.removed.len(),
         prune_bound: pruned.bound,
+        pair_cell: pairs.map_or(0.0, |p| p.0),
+        contracted_vertices: pairs.map_or(0, |p| p.1),
     };
     Ok((result, report))
 }
@@ -352,5 +496,99 @@ mod tests {
         let kept = prune(&mesh, 0.01, &opts);
         assert_eq!((kept.components, kept.bound), (0, 0.0));
         assert_eq!(kept.mesh.triangles.len(), mesh.triangles.len());
+    }
+
+    /// A count for which the edge collapse alone must keep a piece or a
+    /// handle of four triangles or more, asked with `simplify_free`.
+    fn free_to(mesh: &TriMesh, count: usize) -> (Simplified, TopologyReport) {
+        let opts = SimplifyOptions {
+            target: Target::Triangles(count),
+            collapse: Default::default(),
+            per_triangle_bounds: false,
+        };
+        simplify_free(mesh, &opts, &Progress::new()).unwrap()
+    }
+
+    /// The certified bound holds against an independent dense measurement.
+    fn assert_certified(mesh: &TriMesh, r: &Simplified) {
+        let sampling = SamplingOptions {
+            samples: 400_000,
+            seed: 5,
+        };
+        let measured = hausdorff_mesh_mesh(mesh, &r.mesh, &sampling).two_sided();
+        assert!(
+            measured <= r.error_bound(),
+            "{measured} > {}",
+            r.error_bound()
+        );
+    }
+
+    /// Two spheres nearly touching, asked for fewer triangles than two
+    /// tetrahedra: pruning either costs its whole size, while contracting
+    /// the pair across the gap merges them into one piece for much less.
+    #[test]
+    fn nearly_touching_pieces_merge_by_a_virtual_edge() {
+        let a = crate::builtins::icosphere(Vec3::ZERO, 1.0, 3);
+        let b = crate::builtins::icosphere(Vec3::new(2.02, 0.0, 0.0), 1.0, 3);
+        let mesh = TriMesh::concat(&[a, b]);
+        let (r, t) = free_to(&mesh, 6);
+        eprintln!(
+            "{} triangles, bound {}, {t:?}",
+            r.mesh.triangles.len(),
+            r.error_bound()
+        );
+        assert!(r.mesh.triangles.len() <= 6 && r.unmet.is_none());
+        assert_eq!((t.components_before, t.components_after), (2, 1));
+        assert!(t.contracted_vertices > 0 && t.pair_cell > 0.0);
+        assert_eq!(t.pruned_components, 0);
+        assert_certified(&mesh, &r);
+        // Pruning a sphere leaves its far side 2 from the other.
+        assert!(r.error_bound() < 1.5, "{}", r.error_bound());
+    }
+
+    /// The same spheres within an error the collapse reaches with two
+    /// tetrahedra: contracting across the gap keeps fewer triangles, within
+    /// the error and its certified bound.
+    #[test]
+    fn an_error_target_merges_pieces_where_that_keeps_fewer_triangles() {
+        let a = crate::builtins::icosphere(Vec3::ZERO, 1.0, 3);
+        let b = crate::builtins::icosphere(Vec3::new(2.02, 0.0, 0.0), 1.0, 3);
+        let mesh = TriMesh::concat(&[a, b]);
+        let opts = SimplifyOptions {
+            target: Target::Error(1.5),
+            collapse: Default::default(),
+            per_triangle_bounds: false,
+        };
+        let kept = super::super::simplify(&mesh, &opts, &Progress::new()).unwrap();
+        let (r, t) = simplify_free(&mesh, &opts, &Progress::new()).unwrap();
+        eprintln!(
+            "keep {} at {}, free {} at {}, {t:?}",
+            kept.mesh.triangles.len(),
+            kept.error_bound(),
+            r.mesh.triangles.len(),
+            r.error_bound()
+        );
+        assert_eq!(kept.mesh.triangles.len(), 8);
+        assert!(r.mesh.triangles.len() < 8 && r.error_bound() <= 1.5);
+        assert_eq!((t.components_after, t.pruned_components), (1, 0));
+        assert!(t.pair_cell > 0.0);
+        assert_certified(&mesh, &r);
+    }
+
+    /// A torus at a count under its handle's floor: the hole closes.
+    #[test]
+    fn a_torus_hole_closes_at_a_coarse_count() {
+        let mesh = crate::builtins::torus(1.0, 0.3, 32, 16);
+        let (r, t) = free_to(&mesh, 8);
+        eprintln!(
+            "{} triangles, bound {}, {t:?}",
+            r.mesh.triangles.len(),
+            r.error_bound()
+        );
+        assert!(r.mesh.triangles.len() <= 8 && r.unmet.is_none());
+        assert_eq!((t.genus_before, t.genus_after), (1, 0));
+        assert_eq!(t.components_after, 1);
+        assert!(t.contracted_vertices > 0);
+        assert_certified(&mesh, &r);
     }
 }
