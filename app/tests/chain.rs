@@ -289,9 +289,9 @@ fn the_panel_edits_rows_and_refuses_bad_recipes() {
         .map(|r| r.bakes())
         .collect();
     assert_eq!(bakes.iter().filter(|b| **b).count(), 1, "{bakes:?}");
-    // An edge-collapse row's Edit menu lets it prune small pieces
-    // ("topology": "free"); other methods' menus do not offer it.
-    assert!(harness.query_by_label("Prune small pieces").is_none());
+    // An edge-collapse row's Edit menu frees its topology ("topology":
+    // "free"); other methods' menus do not offer it.
+    assert!(harness.query_by_label("Free topology").is_none());
     let collapse = harness
         .state()
         .chain_settings()
@@ -306,11 +306,11 @@ fn the_panel_edits_rows_and_refuses_bad_recipes() {
         .expect("Edit")
         .click();
     harness.run();
-    click(&mut harness, "Prune small pieces");
+    click(&mut harness, "Free topology");
     harness.run();
     let rows_now = &harness.state().chain_settings().recipe.rows;
-    assert!(rows_now[collapse].prunes());
-    assert_eq!(rows_now.iter().filter(|r| r.prunes()).count(), 1);
+    assert!(rows_now[collapse].frees_topology());
+    assert_eq!(rows_now.iter().filter(|r| r.frees_topology()).count(), 1);
     assert!(harness.state().chain_settings().recipe.check().is_ok());
     // Auto chain replaces the rows and builds them.
     click(&mut harness, "Auto chain");

@@ -135,8 +135,8 @@ impl ChainSettings {
                     })
                     .response
                     .on_hover_text(
-                        "Move, duplicate or remove this row; bake its own texture; let it prune \
-                         small pieces.",
+                        "Move, duplicate or remove this row; bake its own texture; free its \
+                         topology.",
                     );
                     match fig {
                         Some(f) => {
@@ -358,19 +358,20 @@ const TEXTURE_HINT: &str = "The baked texture's side. auto: the model's texels p
     drag to set one.";
 
 const TOPOLOGY_HINT: &str = "Checked, this edge-collapse row may remove whole small pieces \
-    (specks, loose parts) where its certified two-sided bound, which covers what was removed, \
-    stays within the row's budget: a count the pieces' own triangles kept out of reach is met. \
-    Unchecked, every piece is kept (\"topology\": \"keep\").";
+    (specks, loose parts), and for a count merge nearby pieces and close holes and handles by \
+    contracting close vertices, where its certified two-sided bound, which covers what changed, \
+    stays within the row's budget: a count the pieces and handles kept out of reach is met. \
+    Unchecked, every piece and handle is kept (\"topology\": \"keep\").";
 
-/// Whether an edge-collapse row may prune components (`"topology": "free"`).
+/// Whether an edge-collapse row may change topology (`"topology": "free"`).
 fn topology_ui(ui: &mut egui::Ui, row: &mut Row) {
     if row.method != Method::EdgeCollapse || row.tolerance == RowTolerance::Source {
         return;
     }
     ui.separator();
-    let mut free = row.prunes();
+    let mut free = row.frees_topology();
     if ui
-        .checkbox(&mut free, "Prune small pieces")
+        .checkbox(&mut free, "Free topology")
         .on_hover_text(TOPOLOGY_HINT)
         .changed()
     {

@@ -440,7 +440,7 @@ fn simplify_rows(
     // Rows free to prune components (`"topology": "free"`) are each their
     // own `simplify::prune::simplify_free`, not one shared collapse: each
     // prunes what its own budget affords.
-    if recipe.rows[group[0]].prunes() {
+    if recipe.rows[group[0]].frees_topology() {
         return targets
             .into_iter()
             .zip(group)

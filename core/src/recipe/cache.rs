@@ -188,7 +188,7 @@ pub(super) fn group_key(recipe: &Recipe, group: &[usize]) -> String {
         tolerances,
         recipe.viewport_height,
         recipe.coverage,
-        recipe.rows[group[0]].prunes(),
+        recipe.rows[group[0]].frees_topology(),
     );
     serde_json::to_string(&key).unwrap_or_default()
 }

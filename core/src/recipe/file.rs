@@ -235,11 +235,11 @@ impl Row {
 
     /// Rows that build the same hierarchy (same method, same parameters).
     pub fn same_hierarchy(&self, other: &Row) -> bool {
-        self.params(false) == other.params(false) && self.prunes() == other.prunes()
+        self.params(false) == other.params(false) && self.frees_topology() == other.frees_topology()
     }
 
-    /// Whether the row may prune components (`"topology": "free"`).
-    pub fn prunes(&self) -> bool {
+    /// Whether the row may change topology (`"topology": "free"`).
+    pub fn frees_topology(&self) -> bool {
         self.topology == Some(TopologyMode::Free)
     }
 }
