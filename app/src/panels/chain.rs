@@ -358,8 +358,8 @@ const TEXTURE_HINT: &str = "The baked texture's side. auto: the model's texels p
     drag to set one.";
 
 const TOPOLOGY_HINT: &str = "Checked, this edge-collapse row may remove whole small pieces \
-    (specks, loose parts), and for a count merge nearby pieces and close holes and handles by \
-    contracting close vertices, where its certified two-sided bound, which covers what changed, \
+    (specks, loose parts), and merge nearby pieces and close holes and handles by contracting \
+    close vertices, where its certified two-sided bound, which covers what changed, \
     stays within the row's budget: a count the pieces and handles kept out of reach is met. \
     Unchecked, every piece and handle is kept (\"topology\": \"keep\").";
 

@@ -9,10 +9,12 @@
 //! contracted, as vertex clustering does (Rossignac and Borrel 1993;
 //! meshoptimizer's sloppy mode): the cell's vertices become the one of them
 //! whose position the cell's summed quadric likes best, which keeps that
-//! vertex's attributes (wedges stay per corner). A triangle left with two
-//! corners in one cell, a second copy of a triangle and one of zero area
-//! go. This is run on a mesh the certified collapse has already taken to
-//! its topology's floor, and the collapse then goes on from it.
+//! vertex's attributes (wedges stay per corner), placed at the quadric's
+//! optimum where that lies within the members' box (Lindstrom 2000). A
+//! triangle left with two corners in one cell, a second copy of a triangle
+//! and one of zero area go. This is run on a mesh the certified collapse
+//! has already taken to its topology's floor (for a count) or to half the
+//! error (for an error), and the collapse then goes on from it.
 //!
 //! **The bound.** Nothing is composed: what comes out of contraction and
 //! the collapse after it is certified directly against the input, two-sided
@@ -27,8 +29,8 @@ use std::collections::{HashMap, HashSet};
 use glam::Vec3;
 
 use super::quadric::Quadric;
-use crate::geom::TriMesh;
 use crate::geom::repair::is_zero_area;
+use crate::geom::{Aabb, TriMesh};
 
 /// `mesh` with the vertices of each cell of a grid of spacing `cell`
 /// contracted to one (module doc), and the number of vertices contracted
@@ -69,22 +71,36 @@ pub fn contract(mesh: &TriMesh, cell: f32, shift: f32) -> (TriMesh, usize) {
         members[c as usize].push(v as u32);
         cluster[v] = c;
     }
+    // Each cell's vertex: the member its summed quadric likes best (whose
+    // attributes it keeps), moved to the quadric's optimum where that lies
+    // within the members' box and is better still (Lindstrom 2000).
+    let mut out = mesh.clone();
     let representative: Vec<u32> = members
         .iter()
         .map(|m| {
             let mut q = Quadric::default();
+            let mut reach = Aabb::EMPTY;
             for &v in m {
                 q.add(&quadric[v as usize]);
+                reach = reach.grow(mesh.positions[v as usize]);
             }
             let cost = |v: u32| q.error(mesh.positions[v as usize]);
-            *m.iter()
+            let best = *m
+                .iter()
                 .min_by(|&&a, &&b| cost(a).total_cmp(&cost(b)).then(a.cmp(&b)))
-                .expect("a cell has a vertex")
+                .expect("a cell has a vertex");
+            let within = |p: Vec3| p.cmpge(reach.min).all() && p.cmple(reach.max).all();
+            if let Some(p) = q
+                .optimum()
+                .filter(|&p| within(p) && q.error(p) < cost(best))
+            {
+                out.positions[best as usize] = p;
+            }
+            best
         })
         .collect();
     let contracted = members.iter().map(|m| m.len() - 1).sum();
     let to = |v: u32| representative[cluster[v as usize] as usize];
-    let mut out = mesh.clone();
     let mut seen = HashSet::new();
     let mut kept = Vec::new();
     for (t, tri) in mesh.triangles.iter().enumerate() {
@@ -92,7 +108,7 @@ pub fn contract(mesh: &TriMesh, cell: f32, shift: f32) -> (TriMesh, usize) {
         let mut sorted = new;
         sorted.sort_unstable();
         let distinct = sorted[0] != sorted[1] && sorted[1] != sorted[2];
-        if distinct && !is_zero_area(&mesh.positions, &new) && seen.insert(sorted) {
+        if distinct && !is_zero_area(&out.positions, &new) && seen.insert(sorted) {
             kept.push(t as u32);
         }
         out.triangles[t] = new;
@@ -131,9 +147,14 @@ mod tests {
         let (merged, contracted) = contract(&mesh, 0.6, 0.0);
         assert_eq!(pieces(&merged), 1, "{}", merged.triangles.len());
         assert!(contracted > 0 && merged.triangles.len() < mesh.triangles.len());
-        // Every vertex left is one of the input's, where it was.
-        for p in &merged.positions {
-            assert!(mesh.positions.contains(p));
-        }
+        // Every vertex left is one of the input's, or within the box of
+        // the input's vertices of its cell.
+        let o = mesh.bounds().min;
+        let near = |p: &Vec3| {
+            let cell = |q: &Vec3| ((*q - o) / 0.6).floor() == ((*p - o) / 0.6).floor();
+            let box_ = Aabb::from_points(mesh.positions.iter().filter(|q| cell(q)));
+            p.cmpge(box_.min).all() && p.cmple(box_.max).all()
+        };
+        assert!(merged.positions.iter().all(near));
     }
 }

@@ -325,6 +325,9 @@ pub fn simplify_free(
     progress: &Progress,
 ) -> Result<(Simplified, TopologyReport), SimplifyError> {
     let diag = mesh.bounds().diagonal();
+    // A grid spacing to contract pairs at: none past the diagonal, and none
+    // at 0 (an error of 0) or at infinity, where √2 steps never end.
+    let spacing = |cell: f32| cell > 0.0 && cell.is_finite() && cell <= diag;
     let bound_opts = BoundOptions::for_diagonal(diag);
     let error = match opts.target {
         Target::Error(e) => Some(e),
@@ -357,7 +360,7 @@ pub fn simplify_free(
             let base = super::simplify(mesh, &half, progress)?.mesh;
             let contracting = Contracting::new(mesh, opts, &bound_opts);
             let mut cell = 0.25 * e;
-            while cell <= diag {
+            while spacing(cell) {
                 let mut over = true;
                 for shift in [0.0, 0.5] {
                     match contracting.run(&base, cell, shift, Some(e), progress)? {
@@ -425,7 +428,7 @@ pub fn simplify_free(
             if let Some(floor) = floor {
                 let contracting = Contracting::new(mesh, &rest, &bound_opts);
                 let (mut cell, mut reached) = (yardstick.max(1e-4 * diag), 0);
-                while cell <= diag && reached < 3 {
+                while spacing(cell) && reached < 3 {
                     let mut any = false;
                     for shift in [0.0, 0.25, 0.5, 0.75] {
                         let Attempt::Done(result, pairs) =
@@ -506,7 +509,20 @@ mod tests {
             collapse: Default::default(),
             per_triangle_bounds: false,
         };
-        simplify_free(mesh, &opts, &Progress::new()).unwrap()
+        let (r, t) = simplify_free(mesh, &opts, &Progress::new()).unwrap();
+        eprintln!(
+            "{} triangles, bound {}, {t:?}",
+            r.mesh.triangles.len(),
+            r.error_bound()
+        );
+        (r, t)
+    }
+
+    /// Two unit spheres 0.02 apart.
+    fn touching_spheres() -> TriMesh {
+        let a = crate::builtins::icosphere(Vec3::ZERO, 1.0, 3);
+        let b = crate::builtins::icosphere(Vec3::new(2.02, 0.0, 0.0), 1.0, 3);
+        TriMesh::concat(&[a, b])
     }
 
     /// The certified bound holds against an independent dense measurement.
@@ -528,15 +544,8 @@ mod tests {
     /// the pair across the gap merges them into one piece for much less.
     #[test]
     fn nearly_touching_pieces_merge_by_a_virtual_edge() {
-        let a = crate::builtins::icosphere(Vec3::ZERO, 1.0, 3);
-        let b = crate::builtins::icosphere(Vec3::new(2.02, 0.0, 0.0), 1.0, 3);
-        let mesh = TriMesh::concat(&[a, b]);
+        let mesh = touching_spheres();
         let (r, t) = free_to(&mesh, 6);
-        eprintln!(
-            "{} triangles, bound {}, {t:?}",
-            r.mesh.triangles.len(),
-            r.error_bound()
-        );
         assert!(r.mesh.triangles.len() <= 6 && r.unmet.is_none());
         assert_eq!((t.components_before, t.components_after), (2, 1));
         assert!(t.contracted_vertices > 0 && t.pair_cell > 0.0);
@@ -551,9 +560,7 @@ mod tests {
     /// the error and its certified bound.
     #[test]
     fn an_error_target_merges_pieces_where_that_keeps_fewer_triangles() {
-        let a = crate::builtins::icosphere(Vec3::ZERO, 1.0, 3);
-        let b = crate::builtins::icosphere(Vec3::new(2.02, 0.0, 0.0), 1.0, 3);
-        let mesh = TriMesh::concat(&[a, b]);
+        let mesh = touching_spheres();
         let opts = SimplifyOptions {
             target: Target::Error(1.5),
             collapse: Default::default(),
@@ -573,6 +580,14 @@ mod tests {
         assert_eq!((t.components_after, t.pruned_components), (1, 0));
         assert!(t.pair_cell > 0.0);
         assert_certified(&mesh, &r);
+        // An error of 0 contracts nothing (a spacing of 0 never grows).
+        let exact = SimplifyOptions {
+            target: Target::Error(0.0),
+            ..opts
+        };
+        let (r, t) = simplify_free(&mesh, &exact, &Progress::new()).unwrap();
+        assert_eq!(t.pair_cell, 0.0);
+        assert_eq!(r.mesh.triangles.len(), mesh.triangles.len());
     }
 
     /// A torus at a count under its handle's floor: the hole closes.
@@ -580,11 +595,6 @@ mod tests {
     fn a_torus_hole_closes_at_a_coarse_count() {
         let mesh = crate::builtins::torus(1.0, 0.3, 32, 16);
         let (r, t) = free_to(&mesh, 8);
-        eprintln!(
-            "{} triangles, bound {}, {t:?}",
-            r.mesh.triangles.len(),
-            r.error_bound()
-        );
         assert!(r.mesh.triangles.len() <= 8 && r.unmet.is_none());
         assert_eq!((t.genus_before, t.genus_after), (1, 0));
         assert_eq!(t.components_after, 1);
