@@ -43,14 +43,11 @@ pub struct SimplifyArgs {
     attribute_weights: Option<AttributeWeights>,
     /// keep: every component and handle stays (the default). free: components
     /// whose removal costs at most the error (half of it for --error) are
-    /// pruned where that lowers the certified bound (`topology` in the JSON:
-    /// components and genus before and after, what pruning took).
-    #[arg(
-        long,
-        value_name = "keep|free",
-        default_value = "keep",
-        conflicts_with = "save"
-    )]
+    /// pruned where that lowers the certified bound, and pairs closer than a
+    /// cell contracted across gaps and holes where the collapse stops short
+    /// (`topology` in the JSON: components and genus before and after, what
+    /// pruning and contraction took).
+    #[arg(long, value_name = "keep|free", default_value = "keep")]
     topology: TopologyMode,
     #[command(flatten)]
     bake: BakeArgs,
@@ -146,9 +143,8 @@ pub fn run(args: SimplifyArgs) -> Result<(), CliError> {
         let progress = Progress::new();
         match args.topology {
             TopologyMode::Keep => simplify::simplify(&mesh, opts, &progress).map(|r| (r, None)),
-            TopologyMode::Free => {
-                simplify::prune::simplify_free(&mesh, opts, &progress).map(|(r, t)| (r, Some(t)))
-            }
+            TopologyMode::Free => simplify::prune::simplify_free(&mesh, opts, &progress)
+                .map(|f| (f.result, Some(f.report))),
         }
         .map_err(|e| match e {
             simplify::SimplifyError::BadTarget(m) => CliError::BadInput(m),
@@ -203,6 +199,7 @@ pub fn run(args: SimplifyArgs) -> Result<(), CliError> {
                 ..collapse
             },
             floor: Some(floor),
+            topology: args.topology,
         });
         let progressive: Box<simplify::progressive::ProgressiveCut> =
             super::build(&params, &mesh, &args.file)?;
@@ -213,6 +210,7 @@ pub fn run(args: SimplifyArgs) -> Result<(), CliError> {
                 "floor": floor,
                 "lock_borders": opts.collapse.lock_borders,
                 "min_quality": opts.collapse.min_quality,
+                "topology": args.topology,
             }),
         )?;
     }

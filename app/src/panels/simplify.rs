@@ -5,7 +5,7 @@
 
 use crate::settings::simplify::{
     ATTRIBUTE_WEIGHT_RANGE, EdgeCollapseSettings, GUARD_RANGE, MAX_TRIANGLES, RATIO_RANGE,
-    TargetMode, UV_TOLERANCE_RANGE,
+    TargetMode, TopologyMode, UV_TOLERANCE_RANGE,
 };
 
 pub const TARGET_HINT: &str = "Where to stop collapsing edges. Edges collapse in order of \
@@ -21,6 +21,12 @@ pub const TRIANGLES_HINT: &str = "Collapse until at most this many triangles rem
 const LOCK_HINT: &str = "Border vertices never move, so open boundaries, seams between \
     parts and non-manifold edges keep their exact shape. Off: they may still only slide \
     along the border, never off it.";
+
+const TOPOLOGY_HINT: &str = "Where pieces or handles stop the collapse short of the floor, \
+    the build may prune small pieces and contract pairs of vertices across gaps and holes \
+    (Garland and Heckbert's virtual edges), so pieces merge and holes close. That step is \
+    certified against the input, and the collapse goes on from it; cuts before the step \
+    are the plain collapse's.";
 
 const QUALITY_HINT: &str = "Sliver guard: reject a collapse that creates a triangle of \
     quality q = 4√3·area / (l0² + l1² + l2²) below this (merge-tree paper, eq. 3; q = 1 \
@@ -48,6 +54,17 @@ impl EdgeCollapseSettings {
         let before = *self;
         ui.checkbox(&mut self.lock_borders, "Lock borders")
             .on_hover_text(LOCK_HINT);
+        let mut free = self.topology == TopologyMode::Free;
+        if ui
+            .checkbox(&mut free, "Free topology")
+            .on_hover_text(TOPOLOGY_HINT)
+            .changed()
+        {
+            self.topology = match free {
+                true => TopologyMode::Free,
+                false => TopologyMode::Keep,
+            };
+        }
         ui.add(egui::Slider::new(&mut self.min_quality, GUARD_RANGE).text("sliver guard"))
             .on_hover_text(QUALITY_HINT);
         ui.add(egui::Slider::new(&mut self.min_normal_cos, GUARD_RANGE).text("fold guard"))

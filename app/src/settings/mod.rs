@@ -100,6 +100,9 @@ impl MethodSettings {
                 ec.lock_borders = p.collapse.lock_borders;
                 ec.min_quality = p.collapse.min_quality;
                 ec.min_normal_cos = p.collapse.min_normal_cos;
+                ec.uv_tolerance = p.collapse.uv_tolerance;
+                ec.attribute_weights = p.collapse.attribute_weights;
+                ec.topology = p.topology;
             }
             Params::Voxel(p) => {
                 let v = &mut self.voxel;

@@ -10,6 +10,7 @@ pub use lodstudio_core::simplify::collapse::{
     ATTRIBUTE_WEIGHT_RANGE, AttributeWeights, GUARD_RANGE, UV_TOLERANCE_RANGE,
 };
 use lodstudio_core::simplify::progressive::{FLOOR_RATIO, ProgressiveOptions};
+pub use lodstudio_core::simplify::prune::TopologyMode;
 use serde::{Deserialize, Serialize};
 
 use super::clamp_or;
@@ -50,6 +51,9 @@ pub struct EdgeCollapseSettings {
     pub uv_tolerance: f32,
     /// Appearance in the collapse order.
     pub attribute_weights: AttributeWeights,
+    /// Whether the record may prune pieces and contract pairs where the
+    /// collapse stops short of the floor.
+    pub topology: TopologyMode,
 }
 
 impl Default for EdgeCollapseSettings {
@@ -64,6 +68,7 @@ impl Default for EdgeCollapseSettings {
             min_normal_cos: collapse.min_normal_cos,
             uv_tolerance: collapse.uv_tolerance,
             attribute_weights: collapse.attribute_weights,
+            topology: TopologyMode::Keep,
         }
     }
 }
@@ -88,6 +93,7 @@ impl EdgeCollapseSettings {
                     color: clamp_or(w.color, ATTRIBUTE_WEIGHT_RANGE, dw.color),
                 }
             },
+            topology: self.topology,
         }
     }
 
@@ -110,6 +116,7 @@ impl EdgeCollapseSettings {
         ProgressiveOptions {
             collapse: self.collapse(),
             floor: None,
+            topology: self.topology,
         }
     }
 
@@ -146,6 +153,12 @@ mod tests {
         assert_eq!(s.runtime(1000), None);
         let moved = EdgeCollapseSettings { ratio: 0.5, ..s };
         assert_eq!(moved.collapse(), s.collapse(), "a target is no rebuild");
+        let free = EdgeCollapseSettings {
+            topology: TopologyMode::Free,
+            ..s
+        };
+        assert_ne!(free.params(), s.params(), "free topology rebuilds");
+        assert_eq!(free.params().topology, TopologyMode::Free);
         s.min_normal_cos = f32::NAN;
         assert_eq!(
             s.collapse().min_normal_cos,

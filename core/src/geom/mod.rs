@@ -260,6 +260,14 @@ impl TriMesh {
         self.append_after(other, self.part_count());
     }
 
+    /// Appends `other`, a mesh of our parts and materials (both gathered
+    /// from one mesh), keeping its part ids.
+    pub fn append_same_parts(&mut self, other: &TriMesh) {
+        let materials = self.materials.take().or_else(|| other.materials.clone());
+        self.append_after(other, 0);
+        self.materials = materials;
+    }
+
     /// `pieces` one after the other, as [`TriMesh::append`] would join them,
     /// in time linear in their size (the part count is kept as it grows, not
     /// recounted per piece).

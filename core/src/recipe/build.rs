@@ -451,7 +451,7 @@ fn simplify_rows(
                     per_triangle_bounds: false,
                 };
                 simplify::prune::simplify_free(mesh, &opts, progress)
-                    .map(|(r, _)| simplified_set(r))
+                    .map(|free| simplified_set(free.result))
                     .map_err(|e| simplify_error(e, j))
             })
             .collect();

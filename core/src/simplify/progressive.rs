@@ -18,6 +18,7 @@ use glam::Vec3;
 use serde::{Deserialize, Serialize};
 
 use super::collapse::{CollapseOptions, EdgeCollapser};
+use super::prune::TopologyMode;
 use super::step_bounds::run_bounded;
 use crate::geom::TriMesh;
 use crate::lod::{DrawSet, Hierarchy, PrefixTarget};
@@ -76,6 +77,11 @@ pub struct ProgressiveOptions {
     pub collapse: CollapseOptions,
     /// Record down to this many triangles; `None`: [`FLOOR_RATIO`] of the input.
     pub floor: Option<usize>,
+    /// `free`: the record reaches the floor as `simplify_free` does, through
+    /// a topology step where pieces or handles stop the collapse
+    /// (`prune::record_free`).
+    #[serde(skip_serializing_if = "TopologyMode::is_keep")]
+    pub topology: TopologyMode,
 }
 
 impl ProgressiveOptions {
@@ -92,7 +98,10 @@ impl ProgressiveOptions {
     /// Records `mesh`'s collapses down to the floor, cut live.
     pub fn build(&self, mesh: &TriMesh, progress: &Progress) -> Result<ProgressiveCut, Cancelled> {
         let floor = self.floor(mesh.triangles.len());
-        let recorded = record(mesh, self.collapse, floor, progress)?;
+        let recorded = match self.topology {
+            TopologyMode::Keep => record(mesh, self.collapse, floor, progress)?,
+            TopologyMode::Free => super::prune::record_free(mesh, self.collapse, floor, progress)?,
+        };
         Ok(ProgressiveCut::new(Arc::new(recorded)))
     }
 }
@@ -150,6 +159,55 @@ pub fn record(
 }
 
 impl Progressive {
+    /// `mesh` as a record of no collapse.
+    pub fn of(mesh: &TriMesh) -> Progressive {
+        let record = Record {
+            history: mesh.clone(),
+            input_triangles: mesh.triangles.len() as u32,
+            removed: Vec::new(),
+            removed_end: Vec::new(),
+            added: Vec::new(),
+            added_end: Vec::new(),
+            step_bound: Vec::new(),
+            diagonal: mesh.bounds().diagonal(),
+        };
+        Progressive::new(record).expect("a mesh is a consistent record")
+    }
+
+    /// This record, then a topology step to `next`'s input (a mesh of the
+    /// same parts: pieces pruned, pairs contracted, or the same triangles
+    /// recertified), then `next`'s collapses. The step removes every
+    /// triangle alive at our last prefix and adds `next`'s input, certified
+    /// within `jump` of our input O directly; every triangle after it is
+    /// then within `jump` plus its own bound against `next`'s input N of O
+    /// (d_H(S, O) ≤ d_H(S, N) + d_H(N, O)), so each of `next`'s step bounds
+    /// is raised by `jump`. The step adds every triangle alive after it, so
+    /// the prefix bound (the largest among the steps that made the
+    /// triangles alive) is `jump` there and the sums after it.
+    pub fn then(self, jump: f32, next: Progressive) -> Progressive {
+        let last = self.alive_at(self.collapses());
+        let mut r = self.record;
+        let n = next.record;
+        let base = r.history.triangles.len() as u32;
+        r.history.append_same_parts(&n.history);
+        r.removed
+            .extend((0..last.len() as u32).filter(|t| last[*t as usize]));
+        r.removed_end.push(r.removed.len() as u32);
+        r.added.extend(base..base + n.input_triangles);
+        r.added_end.push(r.added.len() as u32);
+        r.step_bound.push(jump);
+        let (removed, added) = (r.removed.len() as u32, r.added.len() as u32);
+        r.removed_end
+            .extend(n.removed_end.iter().map(|e| e + removed));
+        r.added_end.extend(n.added_end.iter().map(|e| e + added));
+        r.removed.extend(n.removed.iter().map(|t| t + base));
+        r.added.extend(n.added.iter().map(|t| t + base));
+        // Rounded up: a sum of floats may round below the real one.
+        let raised = |b: f32| (jump + b) * (1.0 + super::bound::ROUNDING);
+        r.step_bound.extend(n.step_bound.iter().map(|b| raised(*b)));
+        Progressive::new(r).expect("two consistent records join into one")
+    }
+
     /// Checks a record (one read from a file, say) and derives what cuts need.
     pub fn new(record: Record) -> Result<Self, String> {
         let r = &record;
@@ -260,8 +318,19 @@ impl Progressive {
     /// The first prefix with at most `n` triangles (where `simplify` run to
     /// `n` stops), or the floor.
     pub fn prefix_for_triangles(&self, n: usize) -> usize {
-        let k = self.prefix_triangles.partition_point(|&c| c as usize > n);
-        k.min(self.collapses())
+        let mut k = self
+            .prefix_triangles
+            .partition_point(|&c| c as usize > n)
+            .min(self.collapses());
+        // A step that keeps the count (the same triangles recertified,
+        // `then`) is taken where it lowers the bound.
+        while k < self.collapses()
+            && self.prefix_triangles[k + 1] == self.prefix_triangles[k]
+            && self.prefix_bound[k + 1] < self.prefix_bound[k]
+        {
+            k += 1;
+        }
+        k
     }
 
     /// The coarsest prefix whose bound `tolerance` accepts for `view`.
@@ -493,7 +562,6 @@ mod tests {
         assert!(p.prefix_within(&far, Tolerance::Pixels(1.0)) > near);
     }
 
-    /// Hostile records are refused, never replayed.
     /// A watched record shows the mesh as it is simplified (the studio's
     /// edge-collapse build draws it): a state between the input and the floor.
     #[test]
@@ -507,6 +575,7 @@ mod tests {
         assert!(t < mesh.triangles.len() && t >= 100, "{t}");
     }
 
+    /// Hostile records are refused, never replayed.
     #[test]
     fn inconsistent_records_are_refused() {
         let mesh = crate::builtins::torus(1.0, 0.3, 12, 8);

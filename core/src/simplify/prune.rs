@@ -24,10 +24,12 @@
 use rayon::prelude::*;
 
 use super::bound::{BoundOptions, Original, certify_against, max_distance_bound};
+use super::collapse::CollapseOptions;
+use super::progressive::{Progressive, record};
 use super::{Simplified, SimplifyError, SimplifyOptions, Target};
 use crate::distance::{Bvh, MeshDistance, closest_point_on_triangle};
 use crate::geom::{Aabb, Topology, TriMesh};
-use crate::progress::Progress;
+use crate::progress::{Cancelled, Progress};
 
 /// A mesh less its pruned components.
 #[derive(Debug, Clone)]
@@ -172,6 +174,12 @@ pub enum TopologyMode {
     Free,
 }
 
+impl TopologyMode {
+    pub fn is_keep(&self) -> bool {
+        *self == TopologyMode::Keep
+    }
+}
+
 impl std::str::FromStr for TopologyMode {
     type Err = String;
     fn from_str(s: &str) -> Result<Self, String> {
@@ -287,7 +295,13 @@ impl<'a> Contracting<'a> {
         let mut result = super::simplify(&contracted, &opts, progress)?;
         result.certificate =
             certify_against(&self.original, &result.mesh, &self.certifying, progress)?;
-        Ok(Attempt::Done(result, pairs))
+        let contraction = Contraction {
+            cell,
+            pairs,
+            from: base.triangles.len(),
+            mesh: contracted,
+        };
+        Ok(Attempt::Done(result, contraction))
     }
 }
 
@@ -299,8 +313,19 @@ enum Attempt {
     Nothing,
     /// The contraction alone costs the error.
     Over,
-    /// The result and the vertices contracted.
-    Done(Simplified, usize),
+    /// The result and the contraction it went on from.
+    Done(Simplified, Contraction),
+}
+
+/// A state of the collapse with its pairs contracted (module `pairs`).
+#[derive(Debug, Clone)]
+struct Contraction {
+    cell: f32,
+    /// Vertices contracted into another.
+    pairs: usize,
+    /// The state's triangles, and the mesh the contraction made of it.
+    from: usize,
+    mesh: TriMesh,
 }
 
 /// [`simplify`](super::simplify) free to drop components (`--topology
@@ -323,7 +348,7 @@ pub fn simplify_free(
     mesh: &TriMesh,
     opts: &SimplifyOptions,
     progress: &Progress,
-) -> Result<(Simplified, TopologyReport), SimplifyError> {
+) -> Result<Free, SimplifyError> {
     let diag = mesh.bounds().diagonal();
     // A grid spacing to contract pairs at: none past the diagonal, and none
     // at 0 (an error of 0) or at infinity, where √2 steps never end.
@@ -366,11 +391,11 @@ pub fn simplify_free(
                     match contracting.run(&base, cell, shift, Some(e), progress)? {
                         Attempt::Over => {}
                         Attempt::Nothing => over = false,
-                        Attempt::Done(r, pairs) => {
+                        Attempt::Done(r, contraction) => {
                             over = false;
                             let fewer = r.mesh.triangles.len() < best.1.mesh.triangles.len();
                             if fewer && r.error_bound() <= e {
-                                best = (Pruned::nothing(mesh), r, Some((cell, pairs)));
+                                best = (Pruned::nothing(mesh), r, Some(contraction));
                             }
                         }
                     }
@@ -431,7 +456,7 @@ pub fn simplify_free(
                 while spacing(cell) && reached < 3 {
                     let mut any = false;
                     for shift in [0.0, 0.25, 0.5, 0.75] {
-                        let Attempt::Done(result, pairs) =
+                        let Attempt::Done(result, contraction) =
                             contracting.run(&floor, cell, shift, None, progress)?
                         else {
                             continue;
@@ -439,7 +464,7 @@ pub fn simplify_free(
                         any |= result.mesh.triangles.len() <= asked;
                         let (new, old) = (key(&result), key(&best.1));
                         if new.0 < old.0 || (new.0 == old.0 && new.1 < old.1) {
-                            best = (Pruned::nothing(mesh), result, Some((cell, pairs)));
+                            best = (Pruned::nothing(mesh), result, Some(contraction));
                         }
                     }
                     reached += usize::from(any);
@@ -458,10 +483,90 @@ pub fn simplify_free(
         pruned_components: pruned.components,
         pruned_triangles: pruned.removed.len(),
         prune_bound: pruned.bound,
-        pair_cell: pairs.map_or(0.0, |p| p.0),
-        contracted_vertices: pairs.map_or(0, |p| p.1),
+        pair_cell: pairs.as_ref().map_or(0.0, |p| p.cell),
+        contracted_vertices: pairs.as_ref().map_or(0, |p| p.pairs),
     };
-    Ok((result, report))
+    let route = match pairs {
+        Some(c) => Route::Changed {
+            from: c.from,
+            to: Box::new(c.mesh),
+        },
+        None if pruned.components > 0 => Route::Changed {
+            from: mesh.triangles.len(),
+            to: Box::new(pruned.mesh),
+        },
+        None => Route::Collapse,
+    };
+    Ok(Free {
+        result,
+        report,
+        route,
+    })
+}
+
+/// What [`simplify_free`] made, and how.
+#[derive(Debug, Clone)]
+pub struct Free {
+    pub result: Simplified,
+    pub report: TopologyReport,
+    pub route: Route,
+}
+
+/// How [`simplify_free`] reached its result, for its progressive record
+/// ([`record_free`]).
+#[derive(Debug, Clone)]
+pub enum Route {
+    /// The plain collapse.
+    Collapse,
+    /// The plain collapse down to `from` triangles, then `to` in its place
+    /// (the input less pruned pieces, or that state's pairs contracted),
+    /// and the collapse of `to`.
+    Changed { from: usize, to: Box<TriMesh> },
+}
+
+/// The progressive record of [`simplify_free`] run to `floor` triangles
+/// (`--save` with `--topology free`, and the studio's free-topology
+/// build): the plain collapse down to where the topology changed, the
+/// change as one step certified against the input directly, then the
+/// collapse of the changed mesh, each step bound raised by the change's
+/// (triangle inequality, `Progressive::then`); the floor is certified
+/// directly once more, a last step where that is lower. Each prefix is
+/// what `simplify_free` makes run to its count: the same collapses, on the
+/// same meshes.
+///
+/// # Errors
+/// Cancelled through `progress`.
+pub fn record_free(
+    mesh: &TriMesh,
+    collapse: CollapseOptions,
+    floor: usize,
+    progress: &Progress,
+) -> Result<Progressive, Cancelled> {
+    let opts = SimplifyOptions {
+        target: Target::Triangles(floor.max(1)),
+        collapse,
+        per_triangle_bounds: false,
+    };
+    let free = simplify_free(mesh, &opts, progress).map_err(|e| match e {
+        SimplifyError::Cancelled => Cancelled,
+        SimplifyError::BadTarget(m) => unreachable!("a count of at least 1 is a target: {m}"),
+    })?;
+    let Route::Changed { from, to } = free.route else {
+        return record(mesh, collapse, floor, progress);
+    };
+    let original = Original::new(mesh);
+    let certifying = BoundOptions::for_diagonal(mesh.bounds().diagonal());
+    let certify =
+        |m: &TriMesh| certify_against(&original, m, &certifying, progress).map(|c| c.error_bound());
+    let before = record(mesh, collapse, from, progress)?;
+    let jump = certify(&to)?;
+    let joined = before.then(jump, record(&to, collapse, floor, progress)?);
+    let last = joined.mesh_at(joined.collapses());
+    let direct = certify(&last)?;
+    Ok(match direct < joined.bound_at(joined.collapses()) {
+        true => joined.then(direct, Progressive::of(&last)),
+        false => joined,
+    })
 }
 
 #[cfg(test)]
@@ -509,7 +614,11 @@ mod tests {
             collapse: Default::default(),
             per_triangle_bounds: false,
         };
-        let (r, t) = simplify_free(mesh, &opts, &Progress::new()).unwrap();
+        let Free {
+            result: r,
+            report: t,
+            ..
+        } = simplify_free(mesh, &opts, &Progress::new()).unwrap();
         eprintln!(
             "{} triangles, bound {}, {t:?}",
             r.mesh.triangles.len(),
@@ -567,7 +676,11 @@ mod tests {
             per_triangle_bounds: false,
         };
         let kept = super::super::simplify(&mesh, &opts, &Progress::new()).unwrap();
-        let (r, t) = simplify_free(&mesh, &opts, &Progress::new()).unwrap();
+        let Free {
+            result: r,
+            report: t,
+            ..
+        } = simplify_free(&mesh, &opts, &Progress::new()).unwrap();
         eprintln!(
             "keep {} at {}, free {} at {}, {t:?}",
             kept.mesh.triangles.len(),
@@ -585,9 +698,43 @@ mod tests {
             target: Target::Error(0.0),
             ..opts
         };
-        let (r, t) = simplify_free(&mesh, &exact, &Progress::new()).unwrap();
+        let Free {
+            result: r,
+            report: t,
+            ..
+        } = simplify_free(&mesh, &exact, &Progress::new()).unwrap();
         assert_eq!(t.pair_cell, 0.0);
         assert_eq!(r.mesh.triangles.len(), mesh.triangles.len());
+    }
+
+    /// The record of a free run to a count (`--save`, the studio's free
+    /// build): the plain collapse down to where it stopped, one step that
+    /// closes the hole, the collapse on; its prefix at the count is the
+    /// run's mesh with the run's bound, and the prefixes on both sides of
+    /// the step hold against an independent dense measurement.
+    #[test]
+    fn a_free_record_steps_through_the_topology_change() {
+        let mesh = crate::builtins::torus(1.0, 0.3, 32, 16);
+        let (r, _) = free_to(&mesh, 8);
+        let p = record_free(&mesh, CollapseOptions::default(), 8, &Progress::new()).unwrap();
+        let floor = p.prefix_for_triangles(8);
+        assert_eq!(p.mesh_at(floor), r.mesh);
+        assert_eq!(p.bound_at(floor), r.error_bound());
+        let genus = |k: usize| Topology::of(&p.mesh_at(k)).genus;
+        let step = (0..=p.collapses()).position(|k| genus(k) != 1).unwrap();
+        assert!(p.triangles_at(step - 1) > 8 && step < floor);
+        let sampling = SamplingOptions {
+            samples: 200_000,
+            seed: 3,
+        };
+        for k in [step - 1, step, step + 1, floor] {
+            let measured = hausdorff_mesh_mesh(&mesh, &p.mesh_at(k), &sampling).two_sided();
+            assert!(
+                measured <= p.bound_at(k),
+                "{k}: {measured} > {}",
+                p.bound_at(k)
+            );
+        }
     }
 
     /// A torus at a count under its handle's floor: the hole closes.
