@@ -56,7 +56,7 @@ impl EdgeCollapseSettings {
             .on_hover_text(LOCK_HINT);
         let mut free = self.topology == TopologyMode::Free;
         if ui
-            .checkbox(&mut free, "Free topology")
+            .checkbox(&mut free, "Prune, merge pieces, close holes")
             .on_hover_text(TOPOLOGY_HINT)
             .changed()
         {

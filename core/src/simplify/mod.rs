@@ -161,6 +161,25 @@ pub fn simplify(
     Ok(out.pop().expect("one result per target"))
 }
 
+/// The plain collapse's states at `counts`, from one run: what
+/// [`simplify`] run to each makes, uncertified (the finer states `prune`
+/// contracts pairs of).
+pub(super) fn states(
+    mesh: &TriMesh,
+    collapse: CollapseOptions,
+    counts: &[usize],
+    progress: &Progress,
+) -> Result<Vec<TriMesh>, Cancelled> {
+    let mut history = History::new(EdgeCollapser::new(mesh, collapse), None);
+    counts
+        .iter()
+        .map(|&count| {
+            let k = history.reach(count, progress)?;
+            Ok(history.mesh_at(k).0)
+        })
+        .collect()
+}
+
 /// Simplifies `mesh` to every target of an LOD chain in one progressive
 /// collapse, run forward once with every state at hand (`history`). The
 /// error targets, smallest first, are phases of it under a rising limit
