@@ -180,6 +180,22 @@ pub(super) fn states(
         .collect()
 }
 
+/// `mesh` collapsed to `count` triangles as [`simplify`] collapses it,
+/// uncertified: the mesh, its collapses and the count unmet (`prune`
+/// certifies a contracted mesh's collapse against the input instead).
+pub(super) fn collapse_to(
+    mesh: &TriMesh,
+    collapse: CollapseOptions,
+    count: usize,
+    progress: &Progress,
+) -> Result<(TriMesh, usize, Option<Unmet>), Cancelled> {
+    let mut history = History::new(EdgeCollapser::new(mesh, collapse), None);
+    let k = history.reach(count, progress)?;
+    let out = history.mesh_at(k).0;
+    let unmet = unmet(count, out.triangles.len(), history.collapser());
+    Ok((out, k, unmet))
+}
+
 /// Simplifies `mesh` to every target of an LOD chain in one progressive
 /// collapse, run forward once with every state at hand (`history`). The
 /// error targets, smallest first, are phases of it under a rising limit
