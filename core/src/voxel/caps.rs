@@ -36,6 +36,11 @@ const FAR: f64 = 0.45;
 /// A cluster is taken whole when its centre is this many radii away.
 const OPENING: f64 = 3.0;
 
+/// The opening of a second try where the first's far-field error could tip
+/// the answer, before every triangle is summed (the error falls as the
+/// cube of the opening).
+pub const FINER: f64 = 12.0;
+
 /// Leaves hold at most this many cap triangles.
 const LEAF: usize = 4;
 
@@ -92,12 +97,16 @@ struct Node {
 /// The caps' solid angle at a point over 4π, with what the far field may
 /// have left out, a bound S on its gradient there and a distance d within
 /// which each term of S grows at most as (d/(d − t))³ at t from the point.
+/// `clearance` is at most the distance to the caps themselves (0 unless
+/// asked for): within it no path crosses a cap, so the value moves by its
+/// drift whichever way one goes, not only along a row.
 #[derive(Debug, Clone, Copy, Default)]
 pub struct Eval {
     pub value: f64,
     pub error: f64,
     pub slope: f64,
     pub distance: f64,
+    pub clearance: f64,
 }
 
 impl Eval {
@@ -186,12 +195,30 @@ impl Caps {
 
     /// The caps' solid angle at `p` over 4π; `exact` sums every triangle.
     pub fn eval(&self, p: DVec3, exact: bool) -> Eval {
+        self.eval_opened(p, if exact { f64::INFINITY } else { OPENING })
+    }
+
+    /// [`Caps::eval`] with clusters taken whole from `opening` radii away
+    /// (infinite: every triangle).
+    pub fn eval_opened(&self, p: DVec3, opening: f64) -> Eval {
+        self.eval_with(p, opening, false)
+    }
+
+    /// [`Caps::eval`] (the far field allowed) with its clearance: what a
+    /// ball about `p` needs to be known whole.
+    pub fn eval_cleared(&self, p: DVec3) -> Eval {
+        self.eval_with(p, OPENING, true)
+    }
+
+    fn eval_with(&self, p: DVec3, opening: f64, clear: bool) -> Eval {
         if self.nodes.is_empty() {
             return Eval {
                 distance: f64::INFINITY,
+                clearance: f64::INFINITY,
                 ..Eval::default()
             };
         }
+        let mut clearance = f64::INFINITY;
         // Sums in steradians and length/distance², over 4π at the end.
         let (mut value, mut error, mut slope) = (0.0, 0.0, 0.0);
         let mut nearest = f64::INFINITY;
@@ -208,7 +235,7 @@ impl Caps {
             let node = &self.nodes[stack[top] as usize];
             let r = node.center - p;
             let d = r.length();
-            if !exact && d > OPENING * node.radius {
+            if d > opening * node.radius {
                 let gap = d - node.radius;
                 value += node.normal.dot(r) / (d * d * d);
                 error += 2.0 * node.area * node.radius / (gap * gap * gap);
@@ -216,6 +243,7 @@ impl Caps {
                 // its area (far better for slivers): both bound the gradient.
                 slope += (node.length / (gap * gap)).min(2.0 * node.area / (gap * gap * gap));
                 far = far.min(gap);
+                clearance = clearance.min(gap);
             } else if node.count > 0 {
                 let range = node.first as usize..(node.first + node.count) as usize;
                 for piece in &self.pieces[range] {
@@ -225,6 +253,10 @@ impl Caps {
                     };
                     value +=
                         FOUR_PI * solid_angle([from(piece.b), from(piece.a), from(piece.center)]);
+                    if clear {
+                        clearance =
+                            clearance.min(triangle_distance(p, [piece.a, piece.b, piece.center]));
+                    }
                     let (ab, d_ab) = edge(piece.a, piece.b);
                     if !piece.sliver {
                         slope += ab;
@@ -257,6 +289,7 @@ impl Caps {
             error: error / FOUR_PI,
             slope: slope / FOUR_PI,
             distance: nearest.min(far),
+            clearance: if clear { clearance } else { 0.0 },
         }
     }
 
@@ -417,6 +450,23 @@ pub fn close(mesh: &TriMesh) -> Option<(Cow<'_, TriMesh>, Caps)> {
     Some((Cow::Owned(closed), Caps::new(pieces, loops)))
 }
 
+/// The distance from `p` to the triangle `t`: to its plane where `p`
+/// projects inside it, else to its nearest edge.
+fn triangle_distance(p: DVec3, [a, b, c]: [DVec3; 3]) -> f64 {
+    let n = (b - a).cross(c - a);
+    let n2 = n.length_squared();
+    if n2 > 0.0 {
+        let q = p - (p - a).dot(n) / n2 * n;
+        let side = |u: DVec3, v: DVec3| (v - u).cross(q - u).dot(n) >= 0.0;
+        if side(a, b) && side(b, c) && side(c, a) {
+            return p.distance(q);
+        }
+    }
+    segment_distance(a, b, p)
+        .min(segment_distance(b, c, p))
+        .min(segment_distance(c, a, p))
+}
+
 /// The distance from `p` to the segment a–b.
 fn segment_distance(a: DVec3, b: DVec3, p: DVec3) -> f64 {
     let ab = b - a;
@@ -556,8 +606,33 @@ mod tests {
     use glam::Vec3;
 
     /// Along x within a tenth of the distance `eval` gives, the caps' value
-    /// moves by at most its drift, across a cap by a whole turn more.
+    /// moves by at most its drift, across a cap by a whole turn more; in
+    /// any direction within the clearance (which no cap comes closer than,
+    /// by an independent closest point), by at most its drift alone.
     fn drift_holds(caps: &Caps, p: DVec3) {
+        let cleared = caps.eval_cleared(p);
+        let nearest = caps
+            .pieces
+            .iter()
+            .map(|t| {
+                let [a, b, c] = [t.a, t.b, t.center].map(|v| v.as_vec3());
+                let q = crate::distance::closest_point_on_triangle(p.as_vec3(), a, b, c);
+                q.as_dvec3().distance(p)
+            })
+            .fold(f64::INFINITY, f64::min);
+        assert!(
+            cleared.clearance <= nearest * (1.0 + 1e-5) + 1e-6,
+            "{p}: clearance {} past the caps at {nearest}",
+            cleared.clearance
+        );
+        let u = DVec3::new(p.y + 0.31, p.z - 0.77, p.x + 0.19).normalize();
+        let t = (0.5 * cleared.distance).min(0.999 * cleared.clearance);
+        let moved = caps.eval(p + t * u, true).value - caps.eval(p, true).value;
+        let bound = cleared.drift(t);
+        assert!(
+            moved.abs() <= bound + 1e-12,
+            "{p} along {u}: moved {moved}, bound {bound}"
+        );
         // The slope and distance of the far field's answer and of the exact.
         for exact in [false, true] {
             let here = caps.eval(p, exact);
