@@ -663,7 +663,7 @@ fn split_at_junctions(
 }
 
 #[cfg(test)]
-mod tests {
+pub(super) mod tests {
     use super::*;
     use glam::Vec3;
 
@@ -738,6 +738,15 @@ mod tests {
         }
     }
 
+    /// A torus with a band of faces taken away (two loops) and the face
+    /// `flipped` turned against its neighbours (a loop run twice).
+    pub(in crate::voxel) fn holed_torus(flipped: usize) -> TriMesh {
+        let mut mesh = crate::builtins::torus(1.0, 0.4, 40, 20);
+        mesh.triangles.drain(0..80);
+        mesh.triangles[flipped].swap(1, 2);
+        mesh
+    }
+
     /// The winding number of every triangle of `mesh` at `p`, summed.
     fn brute(mesh: &TriMesh, p: DVec3) -> f64 {
         mesh.triangles
@@ -808,10 +817,7 @@ mod tests {
     /// caps of a torus with a band of faces taken away and a flipped face.
     #[test]
     fn the_far_field_is_within_its_error_and_slope() {
-        let mut mesh = crate::builtins::torus(1.0, 0.4, 40, 20);
-        mesh.triangles.drain(0..80);
-        mesh.triangles[500].swap(1, 2);
-        let (_, caps) = close(&mesh).unwrap();
+        let (_, caps) = close(&holed_torus(500)).unwrap();
         assert_eq!(caps.loops, 4, "two band loops and the flipped face's twice");
         let mut rng = crate::rng::Rng::new(5);
         let mut far_taken = 0;

@@ -352,9 +352,7 @@ mod tests {
     /// the near rows' sub-samples are decided so.
     #[test]
     fn balls_certify_what_they_decide() {
-        let mut open = crate::builtins::torus(1.0, 0.4, 40, 20);
-        open.triangles.drain(0..80);
-        open.triangles[300].swap(1, 2);
+        let open = crate::voxel::caps::tests::holed_torus(300);
         let (_, caps) = close(&open).unwrap();
         let grid = Grid::around(open.bounds(), 20, 0.2);
         let k = 3;
@@ -396,12 +394,10 @@ mod tests {
             t.swap(1, 2);
         }
         let p = Progress::new();
-        // Open: a band of the torus's faces taken away leaves two loops.
-        let mut open = torus.clone();
-        open.triangles.drain(0..80);
-        // Open, and a face that disagrees with its neighbours: its edges
-        // are a boundary loop of multiplicity two, capped like a hole.
-        open.triangles[300].swap(1, 2);
+        // Open: a band of the torus's faces taken away leaves two loops,
+        // and a face that disagrees with its neighbours: its edges are a
+        // boundary loop of multiplicity two, capped like a hole.
+        let open = crate::voxel::caps::tests::holed_torus(300);
         for mesh in [&torus, &inward, &open] {
             assert!(applies(mesh));
             let solid = MeshSolid::new(mesh);
