@@ -663,7 +663,7 @@ fn split_at_junctions(
 }
 
 #[cfg(test)]
-pub(super) mod tests {
+pub(crate) mod tests {
     use super::*;
     use glam::Vec3;
 
